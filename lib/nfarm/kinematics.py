@@ -1,0 +1,207 @@
+"""Forward kinematics, the geometric Jacobian and manipulability of a DH chain, batched.
+
+Every function takes joint angles ``q (..., n)`` [rad] and works on the whole batch at once.
+Internally a pose is kept as component arrays — three column vectors ``X, Y, Z`` of the
+rotation and the origin ``p``, each ``(3, N)`` — so that one link step is a dozen vector
+operations over the batch instead of ``N`` small ``4×4`` products (which are slow in numpy).
+The batch is processed in chunks of :data:`CHUNK` configurations so the work stays in cache.
+
+Link transforms (see :mod:`nfarm.robot`), θ = q + offset:
+
+* standard: ``T_i = T_{i-1} · Rz(θ_i) · Tz(d_i) · Tx(a_i) · Rx(α_i)``
+* modified: ``T_i = T_{i-1} · Rx(α_i) · Tx(a_i) · Rz(θ_i) · Tz(d_i)``
+
+and the tool pose is ``T_0e = T_n · tool``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .robot import Robot
+from .urdf import to_urdf
+
+__all__ = ["fk", "fk_all", "jacobian", "manipulability", "min_singular_value", "to_urdf",
+           "CHUNK"]
+
+#: Configurations per chunk: small enough for every intermediate to stay in the L2 cache.
+CHUNK = 2048
+
+
+def _check_q(robot: Robot, q) -> np.ndarray:
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 0 or q.shape[-1] != robot.n:
+        raise ValueError(f"{robot.name}: q must have shape (..., {robot.n}), got {q.shape}")
+    return q
+
+
+class _Chain:
+    """Constant per-robot factors of the link steps (cosines and sines of α, tool columns)."""
+
+    def __init__(self, robot: Robot):
+        self.standard = robot.convention == "standard"
+        self.a, self.d, self.offset = robot.a, robot.d, robot.offset
+        self.ca, self.sa = np.cos(robot.alpha), np.sin(robot.alpha)
+        self.tool = robot.tool
+        self.n = robot.n
+
+    def frames(self, qT: np.ndarray, every: bool):
+        """Yield ``(k, X, Y, Z, p)`` for frames k = 0..n (only k = n unless ``every``).
+
+        ``qT (n, N)``; each of ``X, Y, Z, p`` is ``(3, N)``: the columns of ``R_0k`` and its
+        origin in base coordinates.
+        """
+        N = qT.shape[1]
+        theta = qT + self.offset[:, None]
+        ct, st = np.cos(theta), np.sin(theta)
+        X = np.zeros((3, N)); X[0] = 1.0
+        Y = np.zeros((3, N)); Y[1] = 1.0
+        Z = np.zeros((3, N)); Z[2] = 1.0
+        p = np.zeros((3, N))
+        if every:
+            yield 0, X, Y, Z, p
+        for i in range(self.n):
+            c, s, ca, sa, a, d = ct[i], st[i], self.ca[i], self.sa[i], self.a[i], self.d[i]
+            if self.standard:
+                # R ← R·Rz(θ)·Rx(α);  p ← p + d·z + a·x   (x after Rz, z before it)
+                X, Y = c * X + s * Y, c * Y - s * X
+                p = p + d * Z + a * X
+                Y, Z = ca * Y + sa * Z, ca * Z - sa * Y
+            else:
+                # R ← R·Rx(α)·Rz(θ);  p ← p + a·x + d·z   (x before Rx, z after it)
+                p = p + a * X
+                Y, Z = ca * Y + sa * Z, ca * Z - sa * Y
+                p = p + d * Z
+                X, Y = c * X + s * Y, c * Y - s * X
+            if every or i == self.n - 1:
+                yield i + 1, X, Y, Z, p
+
+    def tool_frame(self, X, Y, Z, p):
+        """Columns and origin of ``T_n · tool``."""
+        t = self.tool
+        cols = [t[0, j] * X + t[1, j] * Y + t[2, j] * Z for j in range(3)]
+        return (*cols, p + t[0, 3] * X + t[1, 3] * Y + t[2, 3] * Z)
+
+
+def _chunks(N: int):
+    for start in range(0, N, CHUNK):
+        yield slice(start, min(start + CHUNK, N))
+
+
+def _batch(robot: Robot, q):
+    q = _check_q(robot, q)
+    batch = q.shape[:-1]
+    qT = np.ascontiguousarray(q.reshape(-1, robot.n).T)
+    return batch, qT
+
+
+def _store_pose(out: np.ndarray, sl: slice, X, Y, Z, p) -> None:
+    """Write a pose into ``out (4, 4, N)`` [row, column, sample]."""
+    out[:3, 0, sl], out[:3, 1, sl], out[:3, 2, sl], out[:3, 3, sl] = X, Y, Z, p
+
+
+def _pose_buffer(*lead: int) -> np.ndarray:
+    out = np.zeros((*lead[:-1], 4, 4, lead[-1]))
+    out[..., 3, 3, :] = 1.0
+    return out
+
+
+def fk(robot: Robot, q) -> np.ndarray:
+    """Base-to-tool poses ``T_0e = A_1(q_1) ··· A_n(q_n) · tool``.
+
+    Args:
+        q: ``(..., n)`` joint angles [rad].
+    Returns:
+        ``(..., 4, 4)`` homogeneous transforms [m] (a transposed view of a component array).
+    """
+    batch, qT = _batch(robot, q)
+    chain, N = _Chain(robot), qT.shape[1]
+    out = _pose_buffer(N)
+    for sl in _chunks(N):
+        for _, X, Y, Z, p in chain.frames(qT[:, sl], every=False):
+            _store_pose(out, sl, *chain.tool_frame(X, Y, Z, p))
+    return np.moveaxis(out, -1, 0).reshape(*batch, 4, 4)
+
+
+def fk_all(robot: Robot, q) -> np.ndarray:
+    """Poses of every link frame ``T_0k``, k = 0..n (base first, the tool not included).
+
+    Args:
+        q: ``(..., n)`` joint angles [rad].
+    Returns:
+        ``(..., n + 1, 4, 4)`` homogeneous transforms; ``[..., 0, :, :]`` is the identity.
+    """
+    batch, qT = _batch(robot, q)
+    chain, N = _Chain(robot), qT.shape[1]
+    out = _pose_buffer(robot.n + 1, N)
+    for sl in _chunks(N):
+        for k, X, Y, Z, p in chain.frames(qT[:, sl], every=True):
+            _store_pose(out[k], sl, X, Y, Z, p)
+    return np.moveaxis(out, -1, 0).reshape(*batch, robot.n + 1, 4, 4)
+
+
+def jacobian(robot: Robot, q) -> np.ndarray:
+    """Geometric Jacobian of the tool frame origin, in base coordinates, linear rows first.
+
+    Column k of a revolute joint with unit axis ``z_k`` through the point ``o_k``::
+
+        J[:3, k] = z_k × (p_e − o_k),    J[3:, k] = z_k
+
+    where (standard DH) joint k turns about ``z`` of frame k−1, and (modified DH) about ``z`` of
+    frame k; ``p_e`` is the tool origin. So ``[ṗ_e; ω] = J q̇`` (Pinocchio's
+    ``LOCAL_WORLD_ALIGNED`` frame Jacobian).
+
+    Args:
+        q: ``(..., n)`` joint angles [rad].
+    Returns:
+        ``(..., 6, n)`` [m/rad for the linear rows, dimensionless for the angular rows].
+    """
+    batch, qT = _batch(robot, q)
+    chain, n, N = _Chain(robot), robot.n, qT.shape[1]
+    out = np.empty((6, n, N))
+    shift = 0 if chain.standard else 1  # joint k turns about frame k - 1 + shift
+    for sl in _chunks(N):
+        frames = list(chain.frames(qT[:, sl], every=True))
+        *_, p_e = chain.tool_frame(*frames[-1][1:])
+        for k in range(n):
+            *_, z, o = frames[k + shift]
+            r = p_e - o
+            out[0, k, sl] = z[1] * r[2] - z[2] * r[1]
+            out[1, k, sl] = z[2] * r[0] - z[0] * r[2]
+            out[2, k, sl] = z[0] * r[1] - z[1] * r[0]
+            out[3:, k, sl] = z
+    return np.moveaxis(out, -1, 0).reshape(*batch, 6, n)
+
+
+_ROWS = {"position": slice(0, 3), "orientation": slice(3, 6), "full": slice(0, 6)}
+
+
+def _singular_values(robot: Robot, q, part: str) -> np.ndarray:
+    if part not in _ROWS:
+        raise ValueError(f"part must be one of {', '.join(_ROWS)}, got {part!r}")
+    return np.linalg.svd(jacobian(robot, q)[..., _ROWS[part], :], compute_uv=False)
+
+
+def manipulability(robot: Robot, q, part: str = "position") -> np.ndarray:
+    """Yoshikawa's manipulability ``w`` of a part of the Jacobian: the product of its singular values.
+
+    For the ``m × n`` block ``J_p`` (``part`` = ``"position"``: rows 0–2, the default;
+    ``"orientation"``: rows 3–5; ``"full"``: all six) this is ``w = sqrt(det(J_p J_pᵀ))`` when
+    ``m <= n`` and ``sqrt(det(J_pᵀ J_p))`` when ``m > n`` (the full 6 × 5 Jacobian of a 5-DOF
+    arm), and zero exactly at a singularity of that block. The position part is the default
+    because its units are clean (m³ for three rows) and a 5-DOF arm's full Jacobian mixes
+    metres and radians.
+
+    Returns:
+        ``(...)`` manipulability.
+    """
+    return np.prod(_singular_values(robot, q, part), axis=-1)
+
+
+def min_singular_value(robot: Robot, q, part: str = "position") -> np.ndarray:
+    """Smallest singular value ``(...)`` of a part of the Jacobian (see :func:`manipulability`).
+
+    It is the distance of the block to the nearest rank-deficient matrix, and so a better
+    scaled measure of nearness to a singularity than ``w``.
+    """
+    return _singular_values(robot, q, part)[..., -1]

@@ -1,0 +1,83 @@
+"""Independent reference: the same robot as a Pinocchio model, built joint by joint from DH.
+
+Used by the tests, the benchmarks and the chapters to check nfarm's own algorithms against
+Pinocchio (Featherstone's spatial algebra, a different derivation from the DH recursions).
+The model is built with ``Model.addJoint`` from :func:`nfarm.urdf.joint_placements`, not from
+the URDF, so it also checks :func:`nfarm.urdf.to_urdf` (see the tests).
+
+Frames: ``dh_frame1``…``dh_framen`` (the DH link frames) and ``tool``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .robot import Robot
+from .urdf import joint_placements
+
+__all__ = ["PinocchioRobot", "pinocchio_model", "pinocchio_from_urdf"]
+
+
+@dataclass
+class PinocchioRobot:
+    """A Pinocchio model and data with the ids of the DH frames and of the tool frame."""
+
+    model: pin.Model
+    data: pin.Data
+    frame_ids: list[int]
+    tool_id: int
+
+    def fk(self, q: np.ndarray) -> np.ndarray:
+        """``T_0e`` (4×4) of one configuration ``q (n,)``."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[self.tool_id].homogeneous
+
+    def fk_all(self, q: np.ndarray) -> np.ndarray:
+        """``(n + 1, 4, 4)``: the base frame then every DH frame, for one ``q (n,)``."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return np.stack([np.eye(4)] + [self.data.oMf[f].homogeneous for f in self.frame_ids])
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """``(6, n)`` tool Jacobian in ``LOCAL_WORLD_ALIGNED`` (linear rows first)."""
+        pin.computeJointJacobians(self.model, self.data, q)
+        pin.updateFramePlacements(self.model, self.data)
+        return pin.getFrameJacobian(self.model, self.data, self.tool_id,
+                                    pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+
+
+def _se3(T: np.ndarray) -> pin.SE3:
+    return pin.SE3(np.array(T[:3, :3]), np.array(T[:3, 3]))
+
+
+def pinocchio_model(robot: Robot) -> PinocchioRobot:
+    """Build the Pinocchio model of ``robot`` (revolute-z joints, inertias, gravity, frames)."""
+    model = pin.Model()
+    model.name = robot.name
+    model.gravity.linear = np.array(robot.gravity)
+    J, B = joint_placements(robot)
+    frame_ids, parent = [], 0
+    for i in range(robot.n):
+        lo, hi = robot.qlim[i]
+        big = np.array([1e6])
+        parent = model.addJoint(parent, pin.JointModelRZ(), _se3(J[i]), robot.joint_names[i],
+                                big, big, np.array([lo]), np.array([hi]))
+        body = _se3(B[i])
+        inertia = pin.Inertia(float(robot.mass[i]), np.array(robot.com[i]),
+                              np.array(robot.inertia[i]))
+        model.appendBodyToJoint(parent, inertia, body)
+        frame_ids.append(model.addFrame(
+            pin.Frame(f"dh_frame{i + 1}", parent, body, pin.FrameType.OP_FRAME)))
+    tool_id = model.addFrame(
+        pin.Frame("tool", parent, _se3(B[-1] @ robot.tool), pin.FrameType.OP_FRAME))
+    return PinocchioRobot(model, model.createData(), frame_ids, tool_id)
+
+
+def pinocchio_from_urdf(urdf: str) -> PinocchioRobot:
+    """Load a URDF written by :func:`nfarm.urdf.to_urdf` into Pinocchio."""
+    model = pin.buildModelFromXML(urdf)
+    n = model.nq
+    frame_ids = [model.getFrameId(f"dh_frame{i + 1}") for i in range(n)]
+    return PinocchioRobot(model, model.createData(), frame_ids, model.getFrameId("tool"))
