@@ -44,8 +44,9 @@ class PinocchioRobot:
         """``(6, n)`` tool Jacobian in ``LOCAL_WORLD_ALIGNED`` (linear rows first)."""
         pin.computeJointJacobians(self.model, self.data, q)
         pin.updateFramePlacements(self.model, self.data)
-        return pin.getFrameJacobian(self.model, self.data, self.tool_id,
-                                    pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        J = pin.getFrameJacobian(self.model, self.data, self.tool_id,
+                                 pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        return J.reshape(6, self.model.nv)  # eigenpy gives (6,) for a one-joint chain
 
 
 def _se3(T: np.ndarray) -> pin.SE3:

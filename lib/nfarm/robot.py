@@ -176,7 +176,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
             fields[key].append(v.number(joint[key], f"{at}.{key}"))
         lo, hi = v.vector(joint["qlim"], f"{at}.qlim", 2)
         if not lo < hi:
-            v.fail(f"{at}.qlim", f"must satisfy lo < hi, got [{lo!r}, {hi!r}]")
+            v.fail(f"{at}.qlim", f"must satisfy lo < hi, got [{float(lo)!r}, {float(hi)!r}]")
         fields["qlim"].append((lo, hi))
         mass = v.number(joint["mass"], f"{at}.mass")
         if mass < 0:

@@ -102,8 +102,8 @@ def to_urdf(robot: Robot) -> str:
     """A URDF (XML string) of the chain: revolute joints with limits, inertials, visuals."""
     J, B = joint_placements(robot)
     n = robot.n
-    reach = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d))) or 1.0
-    radius = 0.04 * reach
+    size = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d)))
+    radius = 0.04 * max(size, 0.25)  # visuals in proportion, and visible on a tiny chain
     tool = B[-1] @ robot.tool
     lines = [f'<?xml version="1.0"?>', f'<robot name="{robot.name}">',
              '  <material name="link"><color rgba="0.85 0.55 0.15 1"/></material>',

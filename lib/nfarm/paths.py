@@ -1,0 +1,48 @@
+"""Project paths and atomic file output.
+
+``ROOT`` is the repository root (``lib/nfarm/`` is installed in editable mode, so the package
+knows where it lives). Relative paths given to notebooks and commands are resolved against it,
+so a notebook finds ``params/robots/intelbot5.yaml`` whatever its working directory.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+__all__ = ["ROOT", "FIGURES", "BUILD", "NOTEBOOKS", "PARAMS", "project_path", "atomic_path"]
+
+ROOT = Path(__file__).resolve().parents[2]
+FIGURES = ROOT / "figures"
+BUILD = ROOT / "build"
+NOTEBOOKS = ROOT / "notebooks"
+PARAMS = ROOT / "params"
+
+
+def project_path(path: str | os.PathLike) -> Path:
+    """``path`` itself if absolute, else resolved against the repository root."""
+    path = Path(path)
+    return path if path.is_absolute() else ROOT / path
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success rename it onto ``path``.
+
+    A reader never sees a half-written file: on an exception the temporary file is removed
+    and ``path`` is left as it was. Parent directories are created.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)

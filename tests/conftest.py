@@ -1,0 +1,79 @@
+"""Shared fixtures: the project's robots, random DH chains and their Pinocchio references."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
+
+from nfarm.paths import ROOT
+from nfarm.robot import ParamsWarning, Robot, load_robot, robot_from_dict
+from nfarm.rotations import quat_to_matrix
+
+# Deterministic property tests: the same examples on every run and every machine.
+settings.register_profile("nfarm", derandomize=True, deadline=None, max_examples=40,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("nfarm")
+
+ROBOT_FILES = sorted((ROOT / "params" / "robots").glob("*.yaml"))
+
+
+def load_quietly(path: Path) -> Robot:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ParamsWarning)
+        return load_robot(path)
+
+
+@pytest.fixture(params=ROBOT_FILES, ids=lambda p: p.stem)
+def robot(request) -> Robot:
+    """Every robot shipped in params/robots/."""
+    return load_quietly(request.param)
+
+
+@pytest.fixture
+def intelbot5() -> Robot:
+    return load_robot(ROOT / "params" / "robots" / "intelbot5.yaml")
+
+
+_SPECIAL_ANGLES = [0.0, np.pi / 2, -np.pi / 2, np.pi]
+
+
+def _angle():
+    return st.one_of(st.sampled_from(_SPECIAL_ANGLES), st.floats(-np.pi, np.pi))
+
+
+def _length():
+    return st.one_of(st.just(0.0), st.floats(-0.8, 0.8))
+
+
+@st.composite
+def random_chains(draw, min_joints: int = 1, max_joints: int = 7) -> Robot:
+    """A random revolute chain of either DH convention, with a random tool and inertias."""
+    n = draw(st.integers(min_joints, max_joints))
+    convention = draw(st.sampled_from(["standard", "modified"]))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    joints = []
+    for i in range(n):
+        lo = draw(st.floats(-np.pi, 0.0, exclude_max=True))
+        principal = rng.uniform(0.05, 0.1, 3)  # any two sum to more than the third: physical
+        R = quat_to_matrix(rng.normal(size=4))
+        inertia = R @ np.diag(principal) @ R.T
+        joints.append({
+            "a": draw(_length()), "alpha": draw(_angle()), "d": draw(_length()),
+            "offset": draw(_angle()), "qlim": [lo, draw(st.floats(0.0, np.pi, exclude_min=True))],
+            "mass": float(rng.uniform(0.1, 3.0)), "com": rng.uniform(-0.3, 0.3, 3).tolist(),
+            "inertia": [inertia[0, 0], inertia[1, 1], inertia[2, 2],
+                        inertia[0, 1], inertia[1, 2], inertia[0, 2]],
+        })
+    tool = np.eye(4)
+    if draw(st.booleans()):
+        tool[:3, :3] = quat_to_matrix(rng.normal(size=4))
+        tool[:3, 3] = rng.uniform(-0.2, 0.2, 3)
+    return robot_from_dict({
+        "name": f"random{n}{convention[0]}", "convention": convention,
+        "gravity": [0.0, 0.0, -9.81], "tool": tool.tolist(), "joints": joints,
+    }, source="<random chain>")

@@ -1,0 +1,130 @@
+"""Forward kinematics and Jacobians against Pinocchio, finite differences and known poses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from conftest import random_chains
+from nfarm.kinematics import fk, fk_all, jacobian, manipulability, min_singular_value
+from nfarm.pinocchio_ref import pinocchio_from_urdf, pinocchio_model
+from nfarm.robot import sample_configurations
+from nfarm.urdf import to_urdf
+
+TOL = 1e-12
+
+
+def reference(P, q):
+    """Pinocchio's fk, fk_all and jacobian, one configuration at a time."""
+    q = q.reshape(-1, q.shape[-1])
+    return (np.array([P.fk(x) for x in q]), np.array([P.fk_all(x) for x in q]),
+            np.array([P.jacobian(x) for x in q]))
+
+
+def assert_matches_pinocchio(robot, q):
+    T, frames, J = reference(pinocchio_model(robot), q)
+    np.testing.assert_allclose(fk(robot, q), T, rtol=0, atol=TOL)
+    np.testing.assert_allclose(fk_all(robot, q), frames, rtol=0, atol=TOL)
+    np.testing.assert_allclose(jacobian(robot, q), J, rtol=0, atol=TOL)
+
+
+def test_shipped_robots_match_pinocchio(robot):
+    assert_matches_pinocchio(robot, sample_configurations(robot, 200, seed=1))
+
+
+@given(random_chains(), st.integers(0, 2**32 - 1))
+def test_random_chains_match_pinocchio(robot, seed):
+    q = np.random.default_rng(seed).uniform(-2 * np.pi, 2 * np.pi, (8, robot.n))
+    assert_matches_pinocchio(robot, q)
+
+
+@given(random_chains())
+def test_urdf_loads_into_pinocchio_as_the_same_robot(robot):
+    """to_urdf → Pinocchio gives the same kinematics and dynamics as the model built from DH."""
+    direct, urdf = pinocchio_model(robot), pinocchio_from_urdf(to_urdf(robot))
+    urdf.model.gravity.linear = robot.gravity
+    rng = np.random.default_rng(0)
+    for q, v, a in rng.uniform(-2, 2, (5, 3, robot.n)):
+        np.testing.assert_allclose(urdf.fk_all(q), direct.fk_all(q), atol=TOL)
+        np.testing.assert_allclose(urdf.fk(q), direct.fk(q), atol=TOL)
+        tau_urdf = pin.rnea(urdf.model, urdf.data, q, v, a)
+        tau_direct = pin.rnea(direct.model, direct.data, q, v, a)
+        np.testing.assert_allclose(tau_urdf, tau_direct, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(urdf.model.lowerPositionLimit, robot.qlim[:, 0])
+    np.testing.assert_allclose(urdf.model.upperPositionLimit, robot.qlim[:, 1])
+
+
+@given(random_chains(), st.integers(0, 2**32 - 1))
+def test_jacobian_equals_central_differences(robot, seed):
+    """Linear rows: ∂p/∂q_k; angular rows: the rotation vector of R(q + h e_k) R(q − h e_k)ᵀ / 2h."""
+    q = np.random.default_rng(seed).uniform(-np.pi, np.pi, robot.n)
+    h = 1e-6
+    dq = h * np.eye(robot.n)
+    T_plus, T_minus = fk(robot, q + dq), fk(robot, q - dq)
+    linear = (T_plus[:, :3, 3] - T_minus[:, :3, 3]).T / (2 * h)
+    R_rel = T_plus[:, :3, :3] @ np.swapaxes(T_minus[:, :3, :3], -1, -2)
+    angular = np.stack([R_rel[:, 2, 1] - R_rel[:, 1, 2], R_rel[:, 0, 2] - R_rel[:, 2, 0],
+                        R_rel[:, 1, 0] - R_rel[:, 0, 1]]) / (4 * h)  # vee(R − Rᵀ)/2 ≈ 2h ω
+    np.testing.assert_allclose(jacobian(robot, q), np.vstack([linear, angular]), atol=1e-8)
+
+
+def test_intelbot5_ready_pose(intelbot5):
+    """STUDY.md: at q = 0 the tool centre point is at (0.180, 0, 0.195) m, gripper down."""
+    T = fk(intelbot5, np.zeros(5))
+    np.testing.assert_allclose(T[:3, 3], [0.180, 0.0, 0.195], atol=1e-15)
+    np.testing.assert_allclose(T[:3, 2], [0.0, 0.0, -1.0], atol=1e-15)
+
+
+@pytest.mark.parametrize("batch", [(), (1,), (7,), (2, 3), (3, 1, 4)])
+def test_batch_shapes(intelbot5, batch):
+    q = sample_configurations(intelbot5, batch, seed=2)
+    n = intelbot5.n
+    assert fk(intelbot5, q).shape == (*batch, 4, 4)
+    assert fk_all(intelbot5, q).shape == (*batch, n + 1, 4, 4)
+    assert jacobian(intelbot5, q).shape == (*batch, 6, n)
+    assert manipulability(intelbot5, q).shape == batch
+    flat = q.reshape(-1, n)
+    np.testing.assert_array_equal(fk(intelbot5, q).reshape(-1, 4, 4), fk(intelbot5, flat))
+
+
+def test_batches_larger_than_a_chunk_are_exact(intelbot5):
+    from nfarm import kinematics
+    q = sample_configurations(intelbot5, 2 * kinematics.CHUNK + 3, seed=3)
+    single = np.array([fk(intelbot5, x) for x in q[-5:]])
+    np.testing.assert_array_equal(fk(intelbot5, q)[-5:], single)
+
+
+@pytest.mark.parametrize("bad", [np.zeros(4), np.zeros((3, 6)), np.float64(0.0)])
+def test_wrong_q_shape_is_a_clear_error(intelbot5, bad):
+    for f in (fk, fk_all, jacobian):
+        with pytest.raises(ValueError, match=r"intelbot5: q must have shape \(\.\.\., 5\)"):
+            f(intelbot5, bad)
+
+
+def test_manipulability_is_yoshikawas_measure(robot):
+    q = sample_configurations(robot, 50, seed=4)
+    J = jacobian(robot, q)
+    Jp = J[:, :3]
+    np.testing.assert_allclose(manipulability(robot, q),
+                               np.sqrt(np.linalg.det(Jp @ np.swapaxes(Jp, 1, 2))), rtol=1e-9)
+    full = np.sqrt(np.linalg.det(np.swapaxes(J, 1, 2) @ J)) if robot.n < 6 else \
+        np.sqrt(np.abs(np.linalg.det(J @ np.swapaxes(J, 1, 2))))
+    np.testing.assert_allclose(manipulability(robot, q, part="full"), full, rtol=1e-8)
+    sigma = np.linalg.svd(Jp, compute_uv=False)[:, -1]
+    np.testing.assert_allclose(min_singular_value(robot, q), sigma, rtol=1e-12)
+
+
+def test_intelbot5_singularities(intelbot5):
+    """Elbow stretched (q3 = ±90°, upper arm and forearm in line) and the wrist centre on the
+    base axis are position singularities: w = 0 there, and only there, along a sweep."""
+    q = np.zeros((181, 5))
+    q[:, 2] = np.radians(np.arange(-90, 91))
+    q[:, 3] = -q[:, 2]  # keep the tool pointing along the forearm: the arm stretches fully
+    w = manipulability(intelbot5, q)
+    assert w[0] < 1e-12 and w[-1] < 1e-12
+    assert np.all(w[1:-1] > 1e-6)
+    with pytest.raises(ValueError, match="part must be one of"):
+        manipulability(intelbot5, q, part="linear")

@@ -1,0 +1,163 @@
+"""Loading and validating robot parameter files; one bad file per rule; the check-params CLI."""
+
+from __future__ import annotations
+
+import copy
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+import yaml
+
+from conftest import ROBOT_FILES, load_quietly
+from nfarm.__main__ import main
+from nfarm.paths import ROOT
+from nfarm.robot import ParamsError, ParamsWarning, load_robot, robot_from_dict, robot_to_dict
+
+INTELBOT5 = ROOT / "params" / "robots" / "intelbot5.yaml"
+PUMA560 = ROOT / "params" / "robots" / "puma560.yaml"
+
+
+def good() -> dict:
+    return yaml.safe_load(INTELBOT5.read_text())
+
+
+def test_intelbot5_has_the_values_of_the_study():
+    robot = load_robot(INTELBOT5)
+    assert (robot.name, robot.convention, robot.n) == ("intelbot5", "standard", 5)
+    np.testing.assert_allclose(robot.a, [0, 0.2, 0.18, 0, 0])
+    np.testing.assert_allclose(np.degrees(robot.alpha), [90, 0, 0, 90, 0])
+    np.testing.assert_allclose(robot.d, [0.105, 0, 0, 0, 0.11])
+    np.testing.assert_allclose(np.degrees(robot.offset), [0, 90, -90, 0, 0])
+    np.testing.assert_allclose(np.degrees(robot.qlim[:, 1]), [170, 90, 135, 110, 170])
+    np.testing.assert_allclose(robot.qlim[:, 0], -robot.qlim[:, 1])
+    np.testing.assert_allclose(robot.mass, [0.5, 0.35, 0.3, 0.15, 0.2])
+    np.testing.assert_allclose(robot.inertia[0], np.diag([5.1e-4, 1.0e-4, 5.1e-4]))
+    np.testing.assert_array_equal(robot.tool, np.eye(4))
+    assert not robot.a.flags.writeable
+
+
+def test_puma560_loads_with_a_triangle_inequality_warning():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_robot(PUMA560)
+    messages = [str(w.message) for w in caught if issubclass(w.category, ParamsWarning)]
+    # Link 1 (only Iyy) and, in the published numbers, link 3 (0.0125 + 0.066 < 0.086).
+    assert [m.split(": ")[1] for m in messages] == ["joints[0].inertia", "joints[2].inertia"]
+    assert all("triangle inequality" in m for m in messages)
+    assert robot.n == 6 and robot.mass[0] == 0.0
+
+
+@pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: p.stem)
+def test_dict_round_trip(path):
+    robot = load_quietly(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ParamsWarning)
+        again = robot_from_dict(robot_to_dict(robot))
+    for field in ("a", "alpha", "d", "offset", "qlim", "mass", "com", "inertia", "tool"):
+        np.testing.assert_array_equal(getattr(again, field), getattr(robot, field))
+
+
+def test_exponents_without_a_decimal_point_are_numbers(tmp_path):
+    """YAML 1.1 reads 5e-4 as a string; our loader reads it as the number users meant."""
+    text = INTELBOT5.read_text().replace("5.1e-4", "51e-5")
+    path = tmp_path / "exp.yaml"
+    path.write_text(text)
+    assert load_robot(path).inertia[0, 0, 0] == pytest.approx(5.1e-4)
+
+
+def edit(change):
+    data = good()
+    change(data)
+    return data
+
+
+def set_joint(i, key, value):
+    return lambda d: d["joints"][i].__setitem__(key, value)
+
+
+def drop(*path):
+    def change(d):
+        for key in path[:-1]:
+            d = d[key]
+        del d[path[-1]]
+    return change
+
+
+def set_top(key, value):
+    return lambda d: d.__setitem__(key, value)
+
+
+BAD = {
+    "missing name": (drop("name"), r"name: required field is missing"),
+    "missing joint field": (drop("joints", 1, "d"), r"joints\[1\]\.d: required field is missing"),
+    "unknown top key": (set_top("gravty", [0, 0, -9.81]), r"gravty: unknown field \(did you mean 'gravity'\?\)"),
+    "unknown joint key": (set_joint(2, "mas", 1.0), r"joints\[2\]\.mas: unknown field \(did you mean 'mass'\?\)"),
+    "bad convention": (set_top("convention", "craig"), r"convention: must be one of standard, modified, got 'craig'"),
+    "gravity length": (set_top("gravity", [0, -9.81]), r"gravity: must be a list of 3 numbers"),
+    "not a number": (set_joint(0, "a", "zero"), r"joints\[0\]\.a: must be a number, got 'zero'"),
+    "boolean": (set_joint(0, "d", True), r"joints\[0\]\.d: must be a number, got True"),
+    "nan": (set_joint(3, "offset", float("nan")), r"joints\[3\]\.offset: must be finite, got nan"),
+    "inf": (set_joint(1, "com", [0.0, float("inf"), 0.0]), r"joints\[1\]\.com\[1\]: must be finite, got inf"),
+    "limits order": (set_joint(2, "qlim", [1.0, -1.0]), r"joints\[2\]\.qlim: must satisfy lo < hi, got \[1\.0, -1\.0\]"),
+    "limits equal": (set_joint(2, "qlim", [0.5, 0.5]), r"joints\[2\]\.qlim: must satisfy lo < hi"),
+    "negative mass": (set_joint(2, "mass", -1.0), r"joints\[2\]\.mass: must be >= 0, got -1\.0"),
+    "inertia length": (set_joint(0, "inertia", [1, 1, 1]), r"joints\[0\]\.inertia: must be a list of 6 numbers"),
+    "inertia not psd": (set_joint(4, "inertia", [1e-4, 1e-4, 1e-4, 5e-4, 0, 0]), r"joints\[4\]\.inertia: must be positive semi-definite"),
+    "empty joints": (set_top("joints", []), r"joints: must be a non-empty list of joints"),
+    "joint not mapping": (lambda d: d["joints"].__setitem__(1, [0, 1]), r"joints\[1\]: must be a mapping"),
+    "tool shape": (set_top("tool", [[1, 0, 0], [0, 1, 0], [0, 0, 1]]), r"tool: must be a 4x4 matrix"),
+    "tool last row": (set_top("tool", [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 1, 1]]), r"tool\[3\]: last row must be \[0, 0, 0, 1\]"),
+    "tool not orthonormal": (set_top("tool", [[1, 0.1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), r"tool: rotation part must be orthonormal"),
+    "tool reflection": (set_top("tool", [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), r"tool: rotation part must have determinant \+1"),
+    "empty name": (set_top("name", " "), r"name: must be a non-empty string"),
+    "not a mapping": (lambda d: d.clear(), r"name: required field is missing"),
+}
+
+
+@pytest.mark.parametrize("rule", BAD)
+def test_each_rule_names_file_field_and_rule(tmp_path, rule):
+    change, message = BAD[rule]
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(edit(change)))
+    with pytest.raises(ParamsError, match=rf"^{path}: {message}"):
+        load_robot(path)
+    assert main(["check-params", str(path)]) == 2
+
+
+def test_yaml_syntax_error_gives_the_line(tmp_path):
+    path = tmp_path / "broken.yaml"
+    path.write_text("name: x\nconvention: standard\njoints: [\n  {a: 0,\n")
+    with pytest.raises(ParamsError, match=rf"^{path}:5:1: YAML syntax error"):
+        load_robot(path)
+
+
+def test_top_level_not_a_mapping(tmp_path):
+    path = tmp_path / "list.yaml"
+    path.write_text("- 1\n- 2\n")
+    with pytest.raises(ParamsError, match=rf"^{path}: must be a mapping of fields, got \[1, 2\]"):
+        load_robot(path)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ParamsError, match="nope.yaml: file not found"):
+        load_robot(tmp_path / "nope.yaml")
+
+
+def test_check_params_cli(tmp_path):
+    """One line per file on the real command line: ok, the error, exit 0 only if all are ok."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(edit(set_joint(2, "mass", -1.0))))
+    run = lambda *files: subprocess.run([sys.executable, "-m", "nfarm", "check-params", *map(str, files)],
+                                        capture_output=True, text=True)
+    ok = run(INTELBOT5, PUMA560)
+    assert ok.returncode == 0, ok.stderr
+    assert ok.stdout.splitlines() == [f"{INTELBOT5}: ok (intelbot5, 5 joints, standard DH)",
+                                      f"{PUMA560}: ok (puma560, 6 joints, standard DH)"]
+    assert "triangle inequality" in ok.stderr
+    mixed = run(INTELBOT5, bad, tmp_path / "missing.yaml")
+    assert mixed.returncode == 2
+    assert mixed.stderr.splitlines() == [f"{bad}: joints[2].mass: must be >= 0, got -1.0",
+                                         f"{tmp_path / 'missing.yaml'}: file not found"]
