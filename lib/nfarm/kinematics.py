@@ -21,8 +21,8 @@ import numpy as np
 from .robot import Robot
 from .urdf import to_urdf
 
-__all__ = ["fk", "fk_all", "jacobian", "manipulability", "min_singular_value", "to_urdf",
-           "CHUNK"]
+__all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "manipulability",
+           "min_singular_value", "to_urdf", "CHUNK"]
 
 #: Configurations per chunk: small enough for every intermediate to stay in the L2 cache.
 CHUNK = 4096
@@ -204,6 +204,24 @@ def jacobian(robot: Robot, q) -> np.ndarray:
             out[2, k, sl] = z[0] * r[1] - z[1] * r[0]
             out[3:, k, sl] = z
     return np.moveaxis(out, -1, 0).reshape(*batch, 6, n)
+
+
+def numerical_jacobian(robot: Robot, q, h: float = 1e-6) -> np.ndarray:
+    """The Jacobian ``(..., 6, n)`` by central differences of :func:`fk` (an independent check).
+
+    Linear rows ``(p(q + h e_k) − p(q − h e_k)) / 2h``; angular rows from the relative rotation
+    ``R_k = R(q + h e_k) R(q − h e_k)ᵀ ≈ exp(2h [ω_k]×)``, so ``ω_k ≈ vee(R_k − R_kᵀ) / 4h``.
+    Truncation error O(h²) (about 1e-11 for h = 1e-6 on an arm of metre size).
+    """
+    q = _check_q(robot, q)
+    step = h * np.eye(robot.n)
+    T_plus = fk(robot, q[..., None, :] + step)    # (..., n, 4, 4), one row per joint
+    T_minus = fk(robot, q[..., None, :] - step)
+    linear = (T_plus[..., :3, 3] - T_minus[..., :3, 3]) / (2 * h)
+    R = T_plus[..., :3, :3] @ np.swapaxes(T_minus[..., :3, :3], -1, -2)
+    angular = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                        R[..., 1, 0] - R[..., 0, 1]], axis=-1) / (4 * h)
+    return np.swapaxes(np.concatenate([linear, angular], axis=-1), -1, -2)
 
 
 _ROWS = {"position": slice(0, 3), "orientation": slice(3, 6), "full": slice(0, 6)}

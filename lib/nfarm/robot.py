@@ -40,6 +40,7 @@ __all__ = [
     "robot_from_dict",
     "robot_to_dict",
     "sample_configurations",
+    "dh_rows",
 ]
 
 CONVENTIONS = ("standard", "modified")
@@ -224,6 +225,18 @@ def sample_configurations(robot: Robot, size: int | tuple[int, ...], seed: int |
     size = (size,) if isinstance(size, int) else tuple(size)
     lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
     return lo + (hi - lo) * rng.random(size + (robot.n,))
+
+
+def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
+    """The DH table for people: column names and one row per joint, angles in degrees."""
+    prime = "" if robot.convention == "standard" else "_{i-1}"
+    columns = ["joint", "name", f"a{prime} [m]", f"alpha{prime} [deg]", "d [m]",
+               "offset [deg]", "q min [deg]", "q max [deg]", "mass [kg]"]
+    deg = np.degrees
+    rows = [[i + 1, robot.joint_names[i], robot.a[i], deg(robot.alpha[i]), robot.d[i],
+             deg(robot.offset[i]), deg(robot.qlim[i, 0]), deg(robot.qlim[i, 1]), robot.mass[i]]
+            for i in range(robot.n)]
+    return columns, rows
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,107 @@
+"""Figures of the study, saved byte-reproducibly.
+
+:func:`save_figure` fixes everything that would make two runs differ: the DPI, the PNG
+metadata (no software version, no timestamp) and the backend (Agg). Each plotting function
+returns a :class:`matplotlib.figure.Figure` and leaves saving to the caller.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+
+import matplotlib
+
+matplotlib.use("Agg", force=False)  # headless by default; a notebook's inline backend is kept
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from .kinematics import fk, fk_all  # noqa: E402
+from .paths import atomic_path  # noqa: E402
+from .robot import Robot  # noqa: E402
+
+__all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
+           "DPI"]
+
+#: Resolution of every saved figure.
+DPI = 110
+
+
+def save_figure(fig: Figure, out_dir: str | os.PathLike, name: str) -> str:
+    """Write ``fig`` to ``out_dir/name.png`` atomically and reproducibly; return the path."""
+    path = os.path.join(out_dir, f"{name}.png")
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI, metadata={"Software": None})
+    return path
+
+
+def draw_arm(ax, robot: Robot, q: np.ndarray, *, color: str = "C0", label: str | None = None,
+             frame_scale: float = 0.04) -> None:
+    """Draw the arm at ``q (n,)`` on a 3-D axes: links through the DH frame origins, the joints
+    as dots, and the tool frame as a red-green-blue triad (x, y, z)."""
+    frames = fk_all(robot, q)
+    T_0e = fk(robot, q)
+    points = np.vstack([frames[:, :3, 3], T_0e[:3, 3]])
+    ax.plot(*points.T, "-", color=color, lw=3, label=label, solid_capstyle="round")
+    ax.plot(*frames[:, :3, 3].T, "o", color="k", ms=4)
+    for axis, axis_color in zip(T_0e[:3, :3].T, ("r", "g", "b")):
+        tip = T_0e[:3, 3] + frame_scale * axis
+        ax.plot(*np.column_stack([T_0e[:3, 3], tip]), color=axis_color, lw=1.5)
+
+
+def _equal_3d(ax, points: np.ndarray) -> None:
+    center = (points.max(axis=0) + points.min(axis=0)) / 2
+    half = (points.max(axis=0) - points.min(axis=0)).max() / 2 * 1.1
+    ax.set(xlim=(center[0] - half, center[0] + half), ylim=(center[1] - half, center[1] + half),
+           zlim=(max(center[2] - half, points[:, 2].min() - 0.02), center[2] + half))
+    ax.set_box_aspect((1, 1, 1))
+
+
+def plot_arm_poses(robot: Robot, poses: Mapping[str, np.ndarray]) -> Figure:
+    """One 3-D panel per named configuration ``q (n,)`` [rad]."""
+    fig = plt.figure(figsize=(3.2 * len(poses), 3.6), layout="constrained")
+    reach = np.vstack([np.vstack([fk_all(robot, q)[:, :3, 3], fk(robot, q)[:3, 3]])
+                       for q in poses.values()])
+    for k, (name, q) in enumerate(poses.items()):
+        ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
+        draw_arm(ax, robot, np.asarray(q), color=f"C{k}")
+        _equal_3d(ax, np.vstack([reach, [[0, 0, 0]]]))
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("x [m]", fontsize=7)
+        ax.set_ylabel("y [m]", fontsize=7)
+        ax.set_zlabel("z [m]", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.view_init(elev=20, azim=-60)
+    return fig
+
+
+def plot_workspace(points: np.ndarray, *, title: str = "") -> Figure:
+    """Side (x–z) and top (x–y) views of a cloud of tool positions ``(N, 3)`` [m]."""
+    fig, (side, top) = plt.subplots(1, 2, figsize=(9, 4.2), layout="constrained")
+    style = dict(s=0.4, alpha=0.25, c="C0", linewidths=0, rasterized=True)
+    side.scatter(points[:, 0], points[:, 2], **style)
+    side.set(xlabel="x [m]", ylabel="z [m]", title="side view (x–z)", aspect="equal")
+    top.scatter(points[:, 0], points[:, 1], **style)
+    top.set(xlabel="x [m]", ylabel="y [m]", title="top view (x–y)", aspect="equal")
+    for ax in (side, top):
+        ax.plot(0, 0, "k+", ms=10)
+        ax.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def plot_map(ax, x_edges: np.ndarray, y_edges: np.ndarray, values: np.ndarray, *,
+             label: str, singular_level: float | None = None, cmap: str = "viridis"):
+    """A colour map of ``values (len(x_edges) − 1, len(y_edges) − 1)`` (NaN: no data) with an
+    optional contour at ``singular_level`` marking the near-singular region."""
+    mesh = ax.pcolormesh(x_edges, y_edges, values.T, cmap=cmap, shading="flat")
+    ax.figure.colorbar(mesh, ax=ax, label=label, shrink=0.85)
+    if singular_level is not None:
+        xc = (x_edges[:-1] + x_edges[1:]) / 2
+        yc = (y_edges[:-1] + y_edges[1:]) / 2
+        filled = np.where(np.isnan(values), np.inf, values)
+        ax.contour(xc, yc, filled.T, levels=[singular_level], colors="r", linewidths=1.2)
+    return mesh

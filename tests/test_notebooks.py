@@ -1,0 +1,50 @@
+"""Every chapter notebook: committed clean, thin parameters, and runs headlessly in smoke mode."""
+
+from __future__ import annotations
+
+import ast
+import json
+
+import pytest
+
+from nfarm.paths import NOTEBOOKS
+from nfarm.report import chapters, run_notebook
+
+NOTEBOOK_FILES = chapters(NOTEBOOKS)
+REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
+
+
+def test_there_are_chapters():
+    assert [nb.name for nb in NOTEBOOK_FILES][:1] == ["01_dh_model.ipynb"]
+
+
+@pytest.mark.parametrize("notebook", NOTEBOOK_FILES, ids=lambda p: p.stem)
+def test_committed_without_outputs_and_with_literal_parameters(notebook):
+    cells = json.loads(notebook.read_text())["cells"]
+    assert cells[0]["cell_type"] == "markdown" and "".join(cells[0]["source"]).startswith("# ")
+    for cell in cells:
+        if cell["cell_type"] == "code":
+            assert not cell["outputs"] and cell["execution_count"] is None, "strip the outputs"
+    tagged = [c for c in cells if "parameters" in c["metadata"].get("tags", [])]
+    assert len(tagged) == 1, "exactly one cell tagged 'parameters'"
+    names = set()
+    for node in ast.parse("".join(tagged[0]["source"])).body:
+        assert isinstance(node, ast.Assign), "the parameters cell holds assignments only"
+        ast.literal_eval(node.value)  # literals only: papermill replaces them
+        names |= {target.id for target in node.targets}
+    assert REQUIRED_PARAMETERS <= names
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("notebook", NOTEBOOK_FILES, ids=lambda p: p.stem)
+def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path):
+    out = tmp_path / "out"
+    run_notebook(notebook, tmp_path / notebook.name, {"smoke": True, "out_dir": str(out)})
+    prefix = notebook.name[:2]
+    figures = sorted(out.glob("*.png"))
+    tables = sorted((out / "tables").glob("*.csv"))
+    assert figures and tables
+    for path in figures + tables:
+        assert path.name.startswith(f"{prefix}_") and path.stat().st_size > 0
+    for table in tables:
+        assert table.with_suffix(".md").exists()
