@@ -16,6 +16,8 @@ and the tool pose is ``T_0e = T_n · tool``.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .robot import Robot
@@ -25,7 +27,7 @@ __all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "manipulability",
            "min_singular_value", "to_urdf", "CHUNK"]
 
 #: Configurations per chunk: small enough for every intermediate to stay in the L2 cache.
-CHUNK = 4096
+CHUNK = 8192
 
 
 def _check_q(robot: Robot, q) -> np.ndarray:
@@ -116,6 +118,12 @@ class _Chain:
         return (*cols, _comb((1, p), (t[0][3], X), (t[1][3], Y), (t[2][3], Z)))
 
 
+@functools.lru_cache(maxsize=64)
+def _chain(robot: Robot) -> _Chain:
+    """The per-robot constants, computed once (a Robot is immutable and hashed by identity)."""
+    return _Chain(robot)
+
+
 def _chunks(N: int):
     for start in range(0, N, CHUNK):
         yield slice(start, min(start + CHUNK, N))
@@ -148,7 +156,7 @@ def fk(robot: Robot, q) -> np.ndarray:
         ``(..., 4, 4)`` homogeneous transforms [m] (a transposed view of a component array).
     """
     batch, qT = _batch(robot, q)
-    chain, N = _Chain(robot), qT.shape[1]
+    chain, N = _chain(robot), qT.shape[1]
     out = _pose_buffer(N)
     for sl in _chunks(N):
         for _, X, Y, Z, p in chain.frames(qT[:, sl], every=False):
@@ -165,7 +173,7 @@ def fk_all(robot: Robot, q) -> np.ndarray:
         ``(..., n + 1, 4, 4)`` homogeneous transforms; ``[..., 0, :, :]`` is the identity.
     """
     batch, qT = _batch(robot, q)
-    chain, N = _Chain(robot), qT.shape[1]
+    chain, N = _chain(robot), qT.shape[1]
     out = _pose_buffer(robot.n + 1, N)
     for sl in _chunks(N):
         for k, X, Y, Z, p in chain.frames(qT[:, sl], every=True):
@@ -190,7 +198,7 @@ def jacobian(robot: Robot, q) -> np.ndarray:
         ``(..., 6, n)`` [m/rad for the linear rows, dimensionless for the angular rows].
     """
     batch, qT = _batch(robot, q)
-    chain, n, N = _Chain(robot), robot.n, qT.shape[1]
+    chain, n, N = _chain(robot), robot.n, qT.shape[1]
     out = np.empty((6, n, N))
     shift = 0 if chain.standard else 1  # joint k turns about frame k - 1 + shift
     for sl in _chunks(N):
