@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -11,9 +10,8 @@ from hypothesis import strategies as st
 from conftest import random_chains
 from nfarm.kinematics import (fk, fk_all, jacobian, manipulability, min_singular_value,
                               numerical_jacobian)
-from nfarm.pinocchio_ref import pinocchio_from_urdf, pinocchio_model
+from nfarm.pinocchio_ref import pinocchio_model
 from nfarm.robot import sample_configurations
-from nfarm.urdf import to_urdf
 
 TOL = 1e-12
 
@@ -40,22 +38,6 @@ def test_shipped_robots_match_pinocchio(robot):
 def test_random_chains_match_pinocchio(robot, seed):
     q = np.random.default_rng(seed).uniform(-2 * np.pi, 2 * np.pi, (8, robot.n))
     assert_matches_pinocchio(robot, q)
-
-
-@given(random_chains())
-def test_urdf_loads_into_pinocchio_as_the_same_robot(robot):
-    """to_urdf → Pinocchio gives the same kinematics and dynamics as the model built from DH."""
-    direct, urdf = pinocchio_model(robot), pinocchio_from_urdf(to_urdf(robot))
-    urdf.model.gravity.linear = robot.gravity
-    rng = np.random.default_rng(0)
-    for q, v, a in rng.uniform(-2, 2, (5, 3, robot.n)):
-        np.testing.assert_allclose(urdf.fk_all(q), direct.fk_all(q), atol=TOL)
-        np.testing.assert_allclose(urdf.fk(q), direct.fk(q), atol=TOL)
-        tau_urdf = pin.rnea(urdf.model, urdf.data, q, v, a)
-        tau_direct = pin.rnea(direct.model, direct.data, q, v, a)
-        np.testing.assert_allclose(tau_urdf, tau_direct, rtol=1e-10, atol=1e-10)
-    np.testing.assert_allclose(urdf.model.lowerPositionLimit, robot.qlim[:, 0])
-    np.testing.assert_allclose(urdf.model.upperPositionLimit, robot.qlim[:, 1])
 
 
 @given(random_chains(), st.integers(0, 2**32 - 1))
