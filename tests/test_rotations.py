@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from nfarm.rotations import (exp_so3, log_so3, matrix_to_quat, matrix_to_rpy, pose_error,
-                             quat_to_matrix, rpy_to_matrix)
+                             quat_to_matrix, quat_to_rpy, rpy_to_matrix, rpy_to_quat)
 
 unit_vectors = arrays(float, 3, elements=st.floats(-1, 1)).filter(
     lambda v: np.linalg.norm(v) > 1e-3).map(lambda v: v / np.linalg.norm(v))
@@ -60,6 +60,9 @@ def test_rpy_round_trip(rpy):
     R = rpy_to_matrix(rpy)
     assert_rotation(R)
     np.testing.assert_allclose(rpy_to_matrix(matrix_to_rpy(R)), R, atol=1e-12)
+    quat = rpy_to_quat(rpy)
+    np.testing.assert_allclose(quat, matrix_to_quat(R), atol=1e-15)
+    np.testing.assert_allclose(rpy_to_matrix(quat_to_rpy(quat)), R, atol=1e-12)
 
 
 def test_rpy_is_zyx_and_gimbal_lock_is_handled():

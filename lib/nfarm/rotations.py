@@ -18,8 +18,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 __all__ = [
-    "matrix_to_quat", "quat_to_matrix", "matrix_to_rpy", "rpy_to_matrix",
-    "log_so3", "exp_so3", "pose_error",
+    "matrix_to_quat", "quat_to_matrix", "matrix_to_rpy", "rpy_to_matrix", "quat_to_rpy",
+    "rpy_to_quat", "log_so3", "exp_so3", "pose_error",
 ]
 
 
@@ -60,6 +60,16 @@ def rpy_to_matrix(rpy: np.ndarray) -> np.ndarray:
     if rpy.shape[-1:] != (3,):
         raise ValueError(f"expected roll-pitch-yaw of shape (..., 3), got {rpy.shape}")
     return Rotation.from_euler("ZYX", rpy[..., ::-1]).as_matrix()
+
+
+def quat_to_rpy(quat: np.ndarray) -> np.ndarray:
+    """ZYX ``[roll, pitch, yaw]`` ``(..., 3)`` of quaternions ``(..., 4)`` ``[w, x, y, z]``."""
+    return matrix_to_rpy(quat_to_matrix(quat))
+
+
+def rpy_to_quat(rpy: np.ndarray) -> np.ndarray:
+    """Canonical quaternions ``(..., 4)`` ``[w, x, y, z]`` of ZYX ``[roll, pitch, yaw]`` ``(..., 3)``."""
+    return matrix_to_quat(rpy_to_matrix(rpy))
 
 
 def log_so3(R: np.ndarray) -> np.ndarray:
