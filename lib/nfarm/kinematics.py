@@ -23,8 +23,8 @@ import numpy as np
 from .robot import Robot
 from .urdf import to_urdf
 
-__all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "manipulability",
-           "min_singular_value", "to_urdf", "CHUNK"]
+__all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "pose_jacobian_T",
+           "manipulability", "min_singular_value", "to_urdf", "CHUNK"]
 
 #: Configurations per chunk: small enough for every intermediate to stay in the L2 cache.
 CHUNK = 8192
@@ -198,20 +198,38 @@ def jacobian(robot: Robot, q) -> np.ndarray:
         ``(..., 6, n)`` [m/rad for the linear rows, dimensionless for the angular rows].
     """
     batch, qT = _batch(robot, q)
+    _, J = pose_jacobian_T(robot, qT, pose=False)
+    return np.moveaxis(J, -1, 0).reshape(*batch, 6, robot.n)
+
+
+def pose_jacobian_T(robot: Robot, qT: np.ndarray, *, pose: bool = True):
+    """Tool pose and Jacobian in component layout, samples last (for solvers that iterate).
+
+    Args:
+        qT: ``(n, N)`` joint angles [rad], one column per sample.
+        pose: also return the pose.
+    Returns:
+        ``(T, J)``: ``T (4, 4, N)`` (row, column, sample; ``None`` unless ``pose``) and
+        ``J (6, n, N)``, as in :func:`fk` and :func:`jacobian`.
+    """
     chain, n, N = _chain(robot), robot.n, qT.shape[1]
-    out = np.empty((6, n, N))
+    J = np.empty((6, n, N))
+    T = _pose_buffer(N) if pose else None
     shift = 0 if chain.standard else 1  # joint k turns about frame k - 1 + shift
     for sl in _chunks(N):
         frames = list(chain.frames(qT[:, sl], every=True))
-        *_, p_e = chain.tool_frame(*frames[-1][1:])
+        tool = chain.tool_frame(*frames[-1][1:])
+        p_e = tool[-1]
+        if pose:
+            _store_pose(T, sl, *tool)
         for k in range(n):
             *_, z, o = frames[k + shift]
             r = p_e - o
-            out[0, k, sl] = z[1] * r[2] - z[2] * r[1]
-            out[1, k, sl] = z[2] * r[0] - z[0] * r[2]
-            out[2, k, sl] = z[0] * r[1] - z[1] * r[0]
-            out[3:, k, sl] = z
-    return np.moveaxis(out, -1, 0).reshape(*batch, 6, n)
+            J[0, k, sl] = z[1] * r[2] - z[2] * r[1]
+            J[1, k, sl] = z[2] * r[0] - z[0] * r[2]
+            J[2, k, sl] = z[0] * r[1] - z[1] * r[0]
+            J[3:, k, sl] = z
+    return T, J
 
 
 def numerical_jacobian(robot: Robot, q, h: float = 1e-6) -> np.ndarray:
