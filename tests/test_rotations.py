@@ -123,3 +123,23 @@ def test_log_map_matches_scipy_everywhere_including_next_to_pi():
     same_sign = np.einsum("ij,ij->i", ours, theirs) > 0
     np.testing.assert_allclose(ours[same_sign], theirs[same_sign], atol=1e-9)
     assert same_sign.mean() > 0.99
+
+
+def test_relative_log_matches_scipy():
+    from nfarm.rotations import relative_log_T
+    rng = np.random.default_rng(3)
+    R_b = Rotation.random(3000, rng=rng).as_matrix()
+    delta = np.concatenate([Rotation.random(1000, rng=rng).as_rotvec(),
+                            rng.normal(size=(1000, 3)) * 1e-7,
+                            exp_axis_angle_near_pi(rng, 1000)])
+    R_a = exp_so3(delta) @ R_b
+    components = lambda R: np.ascontiguousarray(np.moveaxis(R, 0, -1))  # noqa: E731
+    ours = relative_log_T(components(R_a), components(R_b)).T
+    np.testing.assert_allclose(exp_so3(ours), exp_so3(delta), atol=1e-13)
+    np.testing.assert_allclose(ours[:2000], log_so3(R_a @ np.swapaxes(R_b, 1, 2))[:2000], atol=1e-12)
+
+
+def exp_axis_angle_near_pi(rng, count):
+    axes = rng.normal(size=(count, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    return axes * (np.pi - 10.0 ** rng.uniform(-10, -1, (count, 1)))

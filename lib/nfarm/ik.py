@@ -39,13 +39,13 @@ import numpy as np
 from .kinematics import fk, pose_jacobian_T
 from .linalg import cholesky_solve_T, gram_T
 from .robot import Robot, sample_configurations
-from .rotations import log_so3_T
+from .rotations import relative_log_T
 
 __all__ = ["IKResult", "solve", "METHODS", "REASONS"]
 
 METHODS = ("lm", "dls", "pinv", "jt")
 REASONS = ("converged", "max_iter", "unreachable", "joint_limits")
-DEFAULT_MAX_ITER = {"lm": 50, "dls": 100, "pinv": 50, "jt": 2000}
+DEFAULT_MAX_ITER = {"lm": 25, "dls": 100, "pinv": 50, "jt": 2000}
 _CONVERGED, _MAX_ITER, _UNREACHABLE, _LIMITS = range(4)
 
 
@@ -161,24 +161,39 @@ class _Seeds:
     whose first attempt failed) and in fewer steps (6.5 against 8.5).
     """
 
-    def __init__(self, robot: Robot, T: np.ndarray, w: np.ndarray, size: int, seed: int):
+    def __init__(self, robot: Robot, T: np.ndarray, w: np.ndarray, size: int, seed: int,
+                 ranks: int):
         self.table = sample_configurations(robot, size, seed)
         ell = max(float(np.abs(robot.a).sum() + np.abs(robot.d).sum()) / robot.n, 1e-3)
         self.scale = np.concatenate([np.sqrt(w[:3]), np.full(9, ell * np.sqrt(w[3:].mean()))])
         self.targets = self._features(T)
         self.entries = self._features(fk(robot, self.table))
         self.norms = (self.entries * self.entries).sum(1)
+        # The `ranks` nearest entries of each target that restarts, nearest first (-1: not yet).
+        self.ranks = min(ranks, size)
+        self.order = np.full((T.shape[0], self.ranks), -1)
 
     def _features(self, poses: np.ndarray) -> np.ndarray:
         return np.concatenate([poses[:, :3, 3], poses[:, :3, :3].reshape(-1, 9)], axis=1) * self.scale
 
-    def configurations(self, target: np.ndarray, rank: np.ndarray) -> np.ndarray:
-        """The entries of the given ranks (0 = nearest) for the given targets: ``(len, n)``."""
-        distance = self.norms - 2.0 * self.targets[target] @ self.entries.T
-        if rank.max() == 0:
-            return self.table[np.argmin(distance, axis=1)]
-        order = np.argsort(distance, axis=1, kind="stable")
-        return self.table[order[np.arange(target.size), rank]]
+    def _distances(self, target: np.ndarray) -> np.ndarray:
+        return self.norms - 2.0 * self.targets[target] @ self.entries.T
+
+    def nearest(self, target: np.ndarray) -> np.ndarray:
+        """The nearest entry for each target: ``(len, n)``."""
+        return self.table[np.argmin(self._distances(target), axis=1)]
+
+    def ranked(self, target: np.ndarray, rank: np.ndarray) -> np.ndarray:
+        """The entry of the given rank (0 = nearest, < ``ranks``) for each target: ``(len, n)``."""
+        new = np.unique(target[self.order[target, 0] < 0])
+        if new.size:
+            d = self._distances(new)
+            k = self.ranks
+            part = np.argpartition(d, k - 1, axis=1)[:, :k] if k < d.shape[1] else \
+                np.broadcast_to(np.arange(d.shape[1]), d.shape)
+            rows = np.arange(new.size)[:, None]
+            self.order[new] = part[rows, np.argsort(d[rows, part], axis=1, kind="stable")]
+        return self.table[self.order[target, rank]]
 
 
 # --------------------------------------------------------------------------------------------
@@ -227,9 +242,9 @@ def _wrap_into_limits(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np
 
 def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
           tol_pos: float = 1e-9, tol_rot: float = 1e-9, max_iter: int | None = None,
-          restarts: int = 24, restart_batch: int = 8, respect_limits: bool = True,
+          restarts: int = 24, restart_batch: int = 16, respect_limits: bool = True,
           seed: int = 0, guess_table: int = 256,
-          lm_damping: str = "sugihara", lm_scale: float = 1.0, lm_bias: float = 1e-8,
+          lm_damping: str = "sugihara", lm_scale: float = 1.0, lm_bias: float = 1e-12,
           lm_lambda0: float = 1e-3,
           lm_factor: float = 10.0, dls_damping: float = 0.05, pinv_rcond: float = 1e-6,
           stall_rtol: float = 1e-3, stall_iters: int = 4, ortho_tol: float = 1e-9,
@@ -246,7 +261,7 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
             [1/rad²] (base axes); a zero drops that component. Default all ones.
         tol_pos, tol_rot: success thresholds on the weighted components' position [m] and
             orientation [rad] errors.
-        max_iter: steps per attempt (default 50 for lm and pinv, 100 for dls, 2000 for jt).
+        max_iter: steps per attempt (default 25 for lm, 50 for pinv, 100 for dls, 2000 for jt).
         restarts: attempts from random configurations after the first one fails.
         restart_batch: how many of those a target runs side by side.
         respect_limits: accept only solutions within the joint limits, and return a
@@ -283,10 +298,10 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
     first_rank = 1 if q_start is None else 0  # the table rank of the first restart
     if restarts + first_rank > guess_table:
         raise ValueError(f"restarts ({restarts}) must be below guess_table ({guess_table})")
-    seeds = _Seeds(robot, T.reshape(-1, 4, 4), w, guess_table, seed)
+    seeds = _Seeds(robot, T.reshape(-1, 4, 4), w, guess_table, seed, restarts + first_rank)
     if q_start is None:
         M = seeds.targets.shape[0]
-        q_start = seeds.configurations(np.arange(M), np.zeros(M, int))
+        q_start = seeds.nearest(np.arange(M))
     run = _Run(robot, T.reshape(-1, 4, 4), q_start, w, method, max_iter, restarts,
                restart_batch, respect_limits, seeds, first_rank, dict(lm_damping=lm_damping, lm_scale=lm_scale, lm_bias=lm_bias,
                lm_lambda0=lm_lambda0, lm_factor=lm_factor, dls_damping=dls_damping,
@@ -350,18 +365,24 @@ class _Run:
         """Pose error ``e (6, L)``, Jacobian ``(6, n, L)``, and per lane the position and
         orientation errors, of the weighted components ``(2, L)`` and in full ``(2, L)``."""
         T, J = pose_jacobian_T(self.robot, q)
-        R_rel = np.einsum("ikm,jkm->ijm", self.R_t[:, :, target], T[:3, :3])    # R_t Rᵀ
-        e = np.concatenate([self.p_t[:, target] - T[:3, 3], log_so3_T(R_rel)])
-        masked = e * self.mask[:, None]
-        weighted = np.sqrt(np.stack([(masked[:3] ** 2).sum(0), (masked[3:] ** 2).sum(0)]))
-        full = np.sqrt(np.stack([(e[:3] ** 2).sum(0), (e[3:] ** 2).sum(0)]))
-        return e, J, weighted, full
+        e = np.empty((6, target.size))
+        e[:3] = self.p_t[:, target] - T[:3, 3]
+        e[3:] = relative_log_T(self.R_t[:, :, target], T[:3, :3])       # log(R_t Rᵀ)
+        square = e * e
+        full = np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)]))
+        if self.mask.all():
+            return e, J, full, full
+        square *= self.mask[:, None]
+        return e, J, np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)])), full
 
     def _iteration(self):
         lanes = self.lanes
         t = lanes["target"]
         e, J, weighted, full = self._errors(lanes["q"], t)
-        es, Js = e * self.sw[:, None], J * self.sw[:, None, None]
+        if self.mask.all() and (self.sw == 1).all():
+            es, Js = e, J
+        else:
+            es, Js = e * self.sw[:, None], J * self.sw[:, None, None]
         E = 0.5 * (es * es).sum(0)
         if self.history is not None:
             row = np.full((2, self.best_E.size), np.inf)
@@ -445,7 +466,7 @@ class _Run:
         attempt = self.attempts[target] + np.arange(target.size) - np.repeat(np.cumsum(count) - count, count)
         self.attempts[again] += count
         self.live[again] += count
-        q = self.seeds.configurations(target, attempt + self.first_rank)
+        q = self.seeds.ranked(target, attempt + self.first_rank)
         new = self._new_lanes(target, q.T)
         self.lanes = {key: np.concatenate([value, new[key]], axis=-1)
                       for key, value in self.lanes.items()}

@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 
 __all__ = [
     "matrix_to_quat", "quat_to_matrix", "matrix_to_rpy", "rpy_to_matrix", "quat_to_rpy",
-    "rpy_to_quat", "log_so3", "log_so3_T", "exp_so3", "pose_error",
+    "rpy_to_quat", "log_so3", "log_so3_T", "relative_log_T", "exp_so3", "pose_error",
 ]
 
 
@@ -103,8 +103,29 @@ def log_so3_T(R: np.ndarray) -> np.ndarray:
     Near θ = π, ``v`` carries no accurate direction; there the axis comes from
     ``(R + Rᵀ)/2 − cos θ · I = (1 − cos θ) u uᵀ`` (its largest column), signed to agree with v.
     """
-    cos = np.clip((R[0, 0] + R[1, 1] + R[2, 2] - 1.0) * 0.5, -1.0, 1.0)
+    cos = (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) * 0.5
     v = 0.5 * np.stack([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    return _log(cos, v, lambda idx: R[:, :, idx])
+
+
+def relative_log_T(R_a: np.ndarray, R_b: np.ndarray) -> np.ndarray:
+    """``log(R_a R_bᵀ)`` in component layout (``(3, 3, M)`` each → ``(3, M)``), without forming
+    the product: with columns ``a_k``, ``b_k``, ``tr(R_a R_bᵀ) = Σ_ij (R_a)_ij (R_b)_ij`` and
+    ``vee(R_a R_bᵀ − R_b R_aᵀ) = Σ_k b_k × a_k``. Only targets near θ = π form the product."""
+    cos = ((R_a * R_b).sum(axis=(0, 1)) - 1.0) * 0.5
+    a, b = R_a, R_b
+    v = 0.5 * np.stack([
+        (b[1] * a[2] - b[2] * a[1]).sum(0),
+        (b[2] * a[0] - b[0] * a[2]).sum(0),
+        (b[0] * a[1] - b[1] * a[0]).sum(0),
+    ])
+    return _log(cos, v, lambda idx: np.einsum("ikm,jkm->ijm", R_a[:, :, idx], R_b[:, :, idx]))
+
+
+def _log(cos: np.ndarray, v: np.ndarray, rotation) -> np.ndarray:
+    """ω from ``cos θ (M,)``, ``v = sin θ · u (3, M)``; ``rotation(idx)`` gives ``R (3, 3, len)``
+    for the samples near π."""
+    cos = np.clip(cos, -1.0, 1.0)
     sin = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     theta = np.arctan2(sin, cos)
     small = sin < 1e-6
@@ -112,7 +133,7 @@ def log_so3_T(R: np.ndarray) -> np.ndarray:
     omega = scale * v
     near_pi = np.flatnonzero(cos < _NEAR_PI_COS)
     if near_pi.size:
-        Rn, c = R[:, :, near_pi], cos[near_pi]
+        Rn, c = rotation(near_pi), cos[near_pi]
         B = 0.5 * (Rn + np.swapaxes(Rn, 0, 1)) - c * np.eye(3)[:, :, None]
         k = np.argmax(np.stack([B[0, 0], B[1, 1], B[2, 2]]), axis=0)
         cols = np.arange(near_pi.size)
