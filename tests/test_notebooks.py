@@ -39,7 +39,10 @@ def test_committed_without_outputs_and_with_literal_parameters(notebook):
 @pytest.mark.parametrize("notebook", NOTEBOOK_FILES, ids=lambda p: p.stem)
 def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path):
     out = tmp_path / "out"
-    run_notebook(notebook, tmp_path / notebook.name, {"smoke": True, "out_dir": str(out)})
+    executed = tmp_path / notebook.name
+    run_notebook(notebook, executed, {"smoke": True, "out_dir": str(out)})
+    outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
+    assert any("image/png" in o.get("data", {}) for o in outputs), "figures show in the chapter"
     prefix = notebook.name[:2]
     figures = sorted(out.glob("*.png"))
     tables = sorted((out / "tables").glob("*.csv"))

@@ -1,8 +1,9 @@
 """Figures of the study, saved byte-reproducibly.
 
-:func:`save_figure` fixes everything that would make two runs differ: the DPI, the PNG
-metadata (no software version, no timestamp) and the backend (Agg). Each plotting function
-returns a :class:`matplotlib.figure.Figure` and leaves saving to the caller.
+:func:`save_figure` fixes everything that would make two runs differ: the DPI and the PNG
+metadata (no software version, no timestamp); PNGs are always rendered by Agg, whatever
+backend shows the figure. Each plotting function returns a
+:class:`matplotlib.figure.Figure` and leaves saving to the caller.
 """
 
 from __future__ import annotations
@@ -10,17 +11,13 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg", force=False)  # headless by default; a notebook's inline backend is kept
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from .kinematics import fk, fk_all  # noqa: E402
-from .paths import atomic_path  # noqa: E402
-from .robot import Robot  # noqa: E402
+from .kinematics import fk, fk_all
+from .paths import atomic_path
+from .robot import Robot
 
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
            "DPI"]
