@@ -456,10 +456,14 @@ class _Run:
         factor = self.options["lm_factor"]
         lanes["lam"] = np.where(accept, np.maximum(lanes["lam"] / factor, self.lam_floor),
                                 np.minimum(lanes["lam"] * factor, 1e15))
-        lanes["acc_q"][:, accept], lanes["acc_E"][accept] = lanes["q"][:, accept], E[accept]
-        lanes["acc_e"][:, accept], lanes["acc_J"][:, :, accept] = es[:, accept], Js[:, :, accept]
-        lanes["q"][:, ~accept] = lanes["acc_q"][:, ~accept]
-        return lanes["acc_e"], lanes["acc_J"], lanes["acc_E"]
+        # The fresh arrays become the accepted ones, with the old values put back where the
+        # step was rejected (usually few lanes).
+        r = np.flatnonzero(~accept)
+        if r.size:
+            lanes["q"][:, r] = lanes["acc_q"][:, r]
+            es[:, r], Js[:, :, r], E[r] = lanes["acc_e"][:, r], lanes["acc_J"][:, :, r], lanes["acc_E"][r]
+        lanes["acc_q"], lanes["acc_E"], lanes["acc_e"], lanes["acc_J"] = lanes["q"].copy(), E, es, Js
+        return es, Js, E
 
     def _restart_or_stop(self):
         """Targets with no live lane: start their next batch of attempts, or stop them."""
