@@ -198,3 +198,9 @@ def test_bad_options_are_clear_errors(intelbot5, kwargs, message):
 def test_q0_outside_the_limits_is_fine_when_limits_are_not_respected(intelbot5):
     T = good_targets(intelbot5, 1)[0]
     assert solve(intelbot5, T, np.full(5, 3.0), respect_limits=False).success
+
+
+def test_the_seed_table_is_not_the_users_sample(intelbot5):
+    """Targets drawn with the solver's own seed are not trivially in its table of starts."""
+    T = fk(intelbot5, sample_configurations(intelbot5, 50, 0))
+    assert np.median(solve(intelbot5, T, seed=0).iterations) >= 2

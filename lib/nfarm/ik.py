@@ -47,12 +47,13 @@ from .linalg import cholesky_solve_T, gram_T
 from .robot import Robot, sample_configurations
 from .rotations import relative_log_T
 
-__all__ = ["IKResult", "solve", "METHODS", "REASONS"]
+__all__ = ["IKResult", "solve", "solve_path", "METHODS", "REASONS"]
 
 METHODS = ("lm", "dls", "pinv", "jt")
 REASONS = ("converged", "max_iter", "unreachable", "joint_limits")
 DEFAULT_MAX_ITER = {"lm": 25, "dls": 100, "pinv": 50, "jt": 2000}
 _CONVERGED, _MAX_ITER, _UNREACHABLE, _LIMITS = range(4)
+_TABLE_STREAM = 0x1C7AB1E
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,22 @@ class IKResult:
     @property
     def success_rate(self) -> float:
         return float(np.mean(self.success))
+
+    def summary(self) -> dict:
+        """Success rate, iterations (median, 95th percentile), restarts per target, and the
+        median and largest errors of the solved targets, as plain numbers."""
+        ok = np.ravel(self.success)
+        solved = lambda x: np.ravel(x)[ok] if ok.any() else np.full(1, np.nan)  # noqa: E731
+        return {
+            "success": self.success_rate,
+            "median iterations": float(np.median(self.iterations)),
+            "p95 iterations": float(np.percentile(self.iterations, 95)),
+            "restarts per target": float(np.mean(self.restarts)),
+            "median position error [m]": float(np.median(solved(self.pos_error))),
+            "max position error [m]": float(np.max(solved(self.pos_error))),
+            "median orientation error [rad]": float(np.median(solved(self.rot_error))),
+            "max orientation error [rad]": float(np.max(solved(self.rot_error))),
+        }
 
 
 # --------------------------------------------------------------------------------------------
@@ -170,7 +187,9 @@ class _Seeds:
 
     def __init__(self, robot: Robot, T: np.ndarray, w: np.ndarray, size: int, seed: int,
                  ranks: int):
-        self.table = sample_configurations(robot, size, seed)
+        # A stream of its own: targets drawn by a user with the same seed must not be the
+        # table's entries (that would make every such target trivially solved).
+        self.table = sample_configurations(robot, size, np.random.default_rng([_TABLE_STREAM, seed]))
         ell = max(float(np.abs(robot.a).sum() + np.abs(robot.d).sum()) / robot.n, 1e-3)
         self.scale = np.concatenate([np.sqrt(w[:3]), np.full(9, ell * np.sqrt(w[3:].mean()))])
         self.targets = self._features(T)
@@ -503,3 +522,23 @@ class _Run:
             reason=np.array(REASONS)[self.reason].reshape(batch),
             history=history,
         )
+
+
+def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
+    """Solve a sequence of poses ``T_path (K, 4, 4)`` one after another, each from the previous
+    solution (the first from ``q0 (n,)``), so that the joint path stays on one branch.
+
+    ``options`` are those of :func:`solve` (restarts default to 0 here: a restart would jump
+    to another branch). Returns the results stacked along the path, shapes ``(K, ...)``.
+    """
+    options = {"restarts": 0, **options}
+    T_path = _check_targets(T_path, options.get("ortho_tol", 1e-9))
+    if T_path.ndim != 3:
+        raise ValueError(f"T_path must have shape (K, 4, 4), got {T_path.shape}")
+    results, q = [], np.asarray(q0, dtype=float)
+    for T in T_path:
+        result = solve(robot, T, q, **options)
+        results.append(result)
+        q = result.q
+    fields = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
+    return IKResult(**{f: np.stack([getattr(r, f) for r in results]) for f in fields})

@@ -20,7 +20,7 @@ from .paths import atomic_path
 from .robot import Robot
 
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
-           "DPI"]
+           "plot_convergence", "plot_joint_paths", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -102,3 +102,42 @@ def plot_map(ax, x_edges: np.ndarray, y_edges: np.ndarray, values: np.ndarray, *
         filled = np.where(np.isnan(values), np.inf, values)
         ax.contour(xc, yc, filled.T, levels=[singular_level], colors="r", linewidths=1.2)
     return mesh
+
+
+def plot_convergence(histories: Mapping[str, Mapping[str, np.ndarray]], *, floor: float = 1e-16) -> Figure:
+    """Error against iteration: one row per case, position and orientation side by side.
+
+    ``histories[case][label]`` is a ``(K, 2)`` history from ``solve(..., record_history=True)``
+    (position [m], orientation [rad]); errors are drawn on a log scale, clipped at ``floor``.
+    """
+    fig, axes = plt.subplots(len(histories), 2, figsize=(10, 3.2 * len(histories)),
+                             layout="constrained", squeeze=False)
+    for row, (case, curves) in zip(axes, histories.items()):
+        for k, (label, history) in enumerate(curves.items()):
+            steps = np.arange(len(history))
+            for ax, column in zip(row, (0, 1)):
+                ax.semilogy(steps, np.maximum(history[:, column], floor), "-", color=f"C{k}",
+                            label=label, lw=1.4)
+        for ax, what in zip(row, ("position error [m]", "orientation error [rad]")):
+            ax.axhline(1e-9, color="k", lw=0.8, ls=":")
+            ax.set(xlabel="iteration", ylabel=what, title=case)
+            ax.grid(alpha=0.3, which="both")
+    axes[0, 0].legend(fontsize=8)
+    return fig
+
+
+def plot_joint_paths(s: np.ndarray, paths: Mapping[str, np.ndarray], joint_names) -> Figure:
+    """Joint angles [deg] along a path parameter ``s (K,)``: one panel per joint, one line per
+    named solution ``(K, n)`` [rad]."""
+    n = len(joint_names)
+    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 3.0), layout="constrained", sharex=True)
+    for k, (label, q) in enumerate(paths.items()):
+        for j, ax in enumerate(axes):
+            ax.plot(s, np.degrees(q[:, j]), ".-" if k else "-", color=f"C{k}", label=label,
+                    ms=3, lw=1.2)
+    for ax, name in zip(axes, joint_names):
+        ax.set(title=name, xlabel="path parameter s")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("joint angle [deg]")
+    axes[0].legend(fontsize=7)
+    return fig
