@@ -39,6 +39,11 @@ def intelbot5() -> Robot:
     return load_robot(ROOT / "params" / "robots" / "intelbot5.yaml")
 
 
+@pytest.fixture
+def puma560() -> Robot:
+    return load_quietly(ROOT / "params" / "robots" / "puma560.yaml")
+
+
 _SPECIAL_ANGLES = [0.0, np.pi / 2, -np.pi / 2, np.pi]
 
 

@@ -1,0 +1,263 @@
+"""Inverse dynamics by the recursive Newton–Euler algorithm (Luh, Walker & Paul 1980), batched.
+
+The recursion runs over the joints; every quantity is a component array with the samples
+last (``(3, N)`` for a vector), so one recursion step is a few dozen vector operations over
+the whole batch. Both DH conventions share one formulation: the chain is split at the joint
+rotations (:func:`nfarm.urdf.joint_placements`), so that joint i turns its *joint frame* F_i
+about its own z axis, F_i = F_{i−1} · P_i · Rz(q_i) with a constant placement
+``P_i = (R_i, p_i)``. The inertial parameters of link i are moved once into F_i.
+
+With ``ᶦR = (R_i Rz(q_i))ᵀ`` (from F_{i−1} to F_i), ``ẑ = (0, 0, 1)``, centre of mass ``c_i``,
+mass ``m_i`` and inertia ``I_i`` about the centre of mass (all in F_i), Craig (2005), ch. 6:
+
+Outward, i = 1..n (base: ω₀ = ω̇₀ = 0, a₀ = −g, which adds gravity to every link)::
+
+    ω_i  = ᶦR ω_{i−1} + q̇_i ẑ
+    ω̇_i  = ᶦR ω̇_{i−1} + (ᶦR ω_{i−1}) × q̇_i ẑ + q̈_i ẑ
+    a_i  = ᶦR (a_{i−1} + ω̇_{i−1} × p_i + ω_{i−1} × (ω_{i−1} × p_i))
+    a_ci = a_i + ω̇_i × c_i + ω_i × (ω_i × c_i)
+    F_i  = m_i a_ci,    N_i = I_i ω̇_i + ω_i × (I_i ω_i)
+
+Inward, i = n..1 (``f_{n+1}, n_{n+1}``: the wrench the tool exerts on its environment)::
+
+    f_i = F_i + ᶦR_{i+1} f_{i+1}
+    n_i = N_i + ᶦR_{i+1} n_{i+1} + c_i × F_i + p_{i+1} × (ᶦR_{i+1} f_{i+1})
+    τ_i = n_i · ẑ
+
+where ``ᶦR_{i+1} = R_{i+1} Rz(q_{i+1})`` maps F_{i+1} to F_i.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from .kinematics import cos_sin
+from .robot import Robot
+from .urdf import joint_placements
+
+__all__ = ["rnea", "gravity_torques", "mass_matrix", "coriolis", "CHUNK"]
+
+#: Samples per chunk (keeps the working set in cache).
+CHUNK = 16384
+
+
+class _Links:
+    """Per-robot constants in joint frames: placements, masses, first and second moments."""
+
+    def __init__(self, robot: Robot):
+        J, B = joint_placements(robot)
+        n = robot.n
+        self.n = n
+        self.R = [_matrix(P[:3, :3]) for P in J]             # R_i: F_{i−1} → joint i, before Rz
+        self.RT = [_matrix(P[:3, :3].T) for P in J]
+        self.p = [_const(P[:3, 3]) for P in J]               # p_i in F_{i−1}
+        self.m = robot.mass.tolist()
+        self.c, self.I = [], []
+        for i in range(n):
+            R_B, p_B = B[i][:3, :3], B[i][:3, 3]
+            self.c.append(_const(R_B @ robot.com[i] + p_B))           # centre of mass in F_i
+            self.I.append(_matrix(R_B @ robot.inertia[i] @ R_B.T))    # about it, axes of F_i
+        self.tool = _const((B[-1] @ robot.tool)[:3, 3])      # tool origin in F_n
+        self.placements = [P[:3, :3] for P in J]            # for the tip wrench
+
+
+@functools.lru_cache(maxsize=64)
+def _links(robot: Robot) -> _Links:
+    return _Links(robot)
+
+
+# Vectors of the recursion are lists of three components, each an array over the samples or
+# ``None`` for an exact zero. Constants (placements, centres of mass, inertias) have many zero
+# entries, and the first links many zero velocities: skipping those terms halves the work.
+
+
+def _add(a, b):
+    return b if a is None else a if b is None else a + b
+
+
+def _sub(a, b):
+    return a if b is None else (-b if a is None else a - b)
+
+
+def _mul(x, a):
+    """``x · a`` for a sample array or scalar ``x`` and a component ``a`` (or None)."""
+    if a is None or (np.isscalar(x) and x == 0):
+        return None
+    return a if (np.isscalar(x) and x == 1) else x * a
+
+
+def _plus(u, v):
+    return [_add(a, b) for a, b in zip(u, v)]
+
+
+def _cross(u, v):
+    """``u × v`` of component lists."""
+    return [_sub(_mul2(u[1], v[2]), _mul2(u[2], v[1])),
+            _sub(_mul2(u[2], v[0]), _mul2(u[0], v[2])),
+            _sub(_mul2(u[0], v[1]), _mul2(u[1], v[0]))]
+
+
+def _mul2(a, b):
+    """Product of two components, each a sample array, a scalar constant, or None."""
+    if a is None or b is None:
+        return None
+    if np.isscalar(a):
+        return _mul(a, b)
+    if np.isscalar(b):
+        return _mul(b, a)
+    return a * b
+
+
+def _lin(M: list, v):
+    """``M v`` for a constant 3 × 3 ``M`` (nested lists, exact zeros and ones)."""
+    out = []
+    for row in M:
+        acc = None
+        for m, x in zip(row, v):
+            acc = _add(acc, _mul(m, x))
+        out.append(acc)
+    return out
+
+
+def _rz_T(c, s, v):
+    """``Rz(q)ᵀ v``."""
+    x, y, z = v
+    return [_add(_mul(c, x), _mul(s, y)), _sub(_mul(c, y), _mul(s, x)), z]
+
+
+def _rz(c, s, v):
+    """``Rz(q) v``."""
+    x, y, z = v
+    return [_sub(_mul(c, x), _mul(s, y)), _add(_mul(s, x), _mul(c, y)), z]
+
+
+def _const(v) -> list:
+    """A constant vector as components: scalars, exact zeros as None."""
+    return [None if x == 0 else float(x) for x in v]
+
+
+def _matrix(M) -> list:
+    """A constant matrix with cos/sin of right angles made exact (see kinematics._snap)."""
+    from .kinematics import _snap
+    return _snap(np.asarray(M)).tolist()
+
+
+def _check(robot: Robot, **arrays) -> tuple[tuple, dict]:
+    out = {}
+    for name, value in arrays.items():
+        value = np.asarray(value, dtype=float)
+        if value.ndim == 0 or value.shape[-1] != robot.n:
+            raise ValueError(f"{robot.name}: {name} must have shape (..., {robot.n}), got {value.shape}")
+        out[name] = value
+    try:
+        batch = np.broadcast_shapes(*(v.shape[:-1] for v in out.values()))
+    except ValueError:
+        shapes = ", ".join(f"{k} {v.shape}" for k, v in out.items())
+        raise ValueError(f"{robot.name}: batch shapes do not broadcast: {shapes}") from None
+    return batch, out
+
+
+def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None) -> np.ndarray:
+    """Joint torques ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q) + Jᵀ(q) f_tip`` by recursive Newton–Euler.
+
+    Args:
+        q, qd, qdd: ``(..., n)`` joint positions [rad], velocities [rad/s], accelerations
+            [rad/s²]; batch shapes broadcast.
+        gravity: ``(3,)`` gravity in the base frame [m/s²]; default the robot's.
+        f_tip: ``(..., 6)`` wrench ``[force; moment]`` that the **tool exerts on its
+            environment**, in base coordinates, the moment taken about the tool frame origin
+            [N, N·m]; it adds ``Jᵀ f_tip`` (J: :func:`nfarm.kinematics.jacobian`). Default none.
+    Returns:
+        ``(..., n)`` joint torques [N·m].
+    """
+    batch, a = _check(robot, q=q, qd=qd, qdd=qdd)
+    g = robot.gravity if gravity is None else np.asarray(gravity, dtype=float)
+    if g.shape != (3,) or not np.isfinite(g).all():
+        raise ValueError(f"gravity must be 3 finite numbers, got {g!r}")
+    flat = [np.ascontiguousarray(np.broadcast_to(a[k], (*batch, robot.n)).reshape(-1, robot.n).T)
+            for k in ("q", "qd", "qdd")]
+    wrench = None
+    if f_tip is not None:
+        f_tip = np.asarray(f_tip, dtype=float)
+        if f_tip.ndim == 0 or f_tip.shape[-1] != 6:
+            raise ValueError(f"f_tip must have shape (..., 6), got {f_tip.shape}")
+        wrench = np.ascontiguousarray(np.broadcast_to(f_tip, (*batch, 6)).reshape(-1, 6).T)
+    N = flat[0].shape[1]
+    tau = np.empty((robot.n, N))
+    links = _links(robot)
+    for start in range(0, N, CHUNK):
+        sl = slice(start, min(start + CHUNK, N))
+        tau[:, sl] = _rnea_T(links, *(x[:, sl] for x in flat), g,
+                             None if wrench is None else wrench[:, sl])
+    return tau.T.reshape(*batch, robot.n)
+
+
+def _rnea_T(L: _Links, q, qd, qdd, g, wrench):
+    """The recursion on ``(n, N)`` inputs; returns ``τ (n, N)``."""
+    n, N = q.shape
+    c, s = cos_sin(q)
+    w, dw, acc = [None] * 3, [None] * 3, _const(-g)
+    F, Nm = [], []
+    for i in range(n):
+        # Outward: velocities and accelerations of F_i, then the link's inertial wrench.
+        p, RT = L.p[i], L.RT[i]
+        acc = _rz_T(c[i], s[i], _lin(RT, _plus(acc, _plus(_cross(dw, p), _cross(w, _cross(w, p))))))
+        w = _rz_T(c[i], s[i], _lin(RT, w))
+        dw = _rz_T(c[i], s[i], _lin(RT, dw))
+        dw = _plus(dw, [_mul2(w[1], qd[i]), _mul2(_mul(-1.0, w[0]), qd[i]), qdd[i]])   # + (ᶦRω) × q̇ẑ + q̈ẑ
+        w = [w[0], w[1], _add(w[2], qd[i])]
+        cm, I = L.c[i], L.I[i]
+        a_c = _plus(acc, _plus(_cross(dw, cm), _cross(w, _cross(w, cm))))
+        F.append([_mul(L.m[i], x) for x in a_c])
+        Nm.append(_plus(_lin(I, dw), _cross(w, _lin(I, w))))
+    # Inward: forces and moments on each link from its parent (zero, or the tip wrench).
+    f, m = [None] * 3, [None] * 3
+    if wrench is not None:
+        f, m = _tip_wrench(L, c, s, wrench)
+    tau = np.empty((n, N))
+    for i in reversed(range(n)):
+        if i + 1 < n:
+            f = _lin(L.R[i + 1], _rz(c[i + 1], s[i + 1], f))
+            m = _plus(_lin(L.R[i + 1], _rz(c[i + 1], s[i + 1], m)), _cross(L.p[i + 1], f))
+        m = _plus(Nm[i], _plus(m, _cross(L.c[i], F[i])))
+        f = _plus(F[i], f)
+        tau[i] = 0.0 if m[2] is None else m[2]
+    return tau
+
+
+def _tip_wrench(L: _Links, c, s, wrench):
+    """The tool's wrench on its environment (base coordinates, moment about the tool origin)
+    in F_n, with the moment about the F_n origin."""
+    R = np.broadcast_to(np.eye(3)[:, :, None], (3, 3, c.shape[1]))      # R_0,F_i, columns
+    for i in range(L.n):
+        R = np.einsum("ijm,jk->ikm", R, L.placements[i])
+        R = np.stack([c[i] * R[:, 0] + s[i] * R[:, 1], c[i] * R[:, 1] - s[i] * R[:, 0], R[:, 2]], axis=1)
+    f = list(np.einsum("jim,jm->im", R, wrench[:3]))                    # R_0nᵀ f
+    m = _plus(list(np.einsum("jim,jm->im", R, wrench[3:])), _cross(L.tool, f))
+    return f, m
+
+
+def gravity_torques(robot: Robot, q) -> np.ndarray:
+    """``g(q) (..., n)``: the torques that hold the arm still against gravity [N·m]."""
+    q = np.asarray(q, dtype=float)
+    zero = np.zeros_like(q)
+    return rnea(robot, q, zero, zero)
+
+
+def coriolis(robot: Robot, q, qd) -> np.ndarray:
+    """``C(q, q̇) q̇ (..., n)``: Coriolis and centrifugal torques [N·m] (RNEA without gravity
+    and acceleration)."""
+    batch, a = _check(robot, q=q, qd=qd)
+    return rnea(robot, a["q"], a["qd"], np.zeros(robot.n), gravity=np.zeros(3))
+
+
+def mass_matrix(robot: Robot, q) -> np.ndarray:
+    """``M(q) (..., n, n)``, symmetric positive definite [kg m²]: column j is the RNEA torque
+    for ``q̈ = e_j`` with no velocity and no gravity (Walker & Orin's method 1)."""
+    batch, a = _check(robot, q=q)
+    n = robot.n
+    q = np.broadcast_to(a["q"][..., None, :], (*batch, n, n))   # one copy of q per column
+    columns = rnea(robot, q, np.zeros(n), np.eye(n), gravity=np.zeros(3))   # (..., j, i)
+    return np.swapaxes(columns, -1, -2)

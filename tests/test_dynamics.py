@@ -1,0 +1,127 @@
+"""Inverse dynamics against Pinocchio and against identities of rigid-body mechanics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from conftest import random_chains
+from nfarm.dynamics import coriolis, gravity_torques, mass_matrix, rnea
+from nfarm.kinematics import jacobian
+from nfarm.pinocchio_ref import pinocchio_model
+from nfarm.robot import sample_configurations
+from nfarm.trajectory import quintic
+
+RTOL = 1e-10
+
+
+def states(robot, count, seed):
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-np.pi, np.pi, (count, robot.n))
+    return q, rng.normal(size=(count, robot.n)) * 2, rng.normal(size=(count, robot.n)) * 5
+
+
+def assert_close(actual, expected):
+    scale = max(1.0, float(np.abs(expected).max()))
+    np.testing.assert_allclose(actual, expected, rtol=0, atol=RTOL * scale)
+
+
+def full(M_upper):
+    return np.triu(M_upper) + np.triu(M_upper, 1).T
+
+
+def check_against_pinocchio(robot, seed):
+    P = pinocchio_model(robot)
+    m, d = P.model, P.data
+    q, qd, qdd = states(robot, 20, seed)
+    assert_close(rnea(robot, q, qd, qdd), np.array([pin.rnea(m, d, *x) for x in zip(q, qd, qdd)]))
+    assert_close(mass_matrix(robot, q), np.array([full(pin.crba(m, d, x)) for x in q]))
+    assert_close(gravity_torques(robot, q), np.array([pin.computeGeneralizedGravity(m, d, x) for x in q]))
+    zero = np.zeros(robot.n)
+    expected_c = np.array([pin.rnea(m, d, a, b, zero) - pin.computeGeneralizedGravity(m, d, a) for a, b in zip(q, qd)])
+    assert_close(coriolis(robot, q, qd), expected_c)
+
+
+def test_shipped_robots_match_pinocchio(robot):
+    check_against_pinocchio(robot, seed=1)
+
+
+@given(random_chains(), st.integers(0, 2**32 - 1))
+def test_random_chains_match_pinocchio(robot, seed):
+    check_against_pinocchio(robot, seed)
+
+
+def test_puma560_published_gravity_check_values(puma560):
+    """../shared/data/puma560.md: at q = (0, π/4, −π, 0, π/4, 0), g ≈ (0, 31.64, 6.035, 0, 0.0283, 0)."""
+    for q3 in (-np.pi, np.pi):
+        g = gravity_torques(puma560, [0, np.pi / 4, q3, 0, np.pi / 4, 0])
+        np.testing.assert_allclose(g, [0, 31.64, 6.035, 0, 0.0283, 0], atol=5e-3)
+
+
+def test_tip_wrench_adds_jacobian_transpose(robot):
+    """τ(f_tip) − τ(0) = Jᵀ f_tip (virtual work), and Pinocchio's external forces agree."""
+    q, qd, qdd = states(robot, 10, 3)
+    wrench = np.random.default_rng(4).normal(size=(10, 6)) * [10, 10, 10, 1, 1, 1]
+    difference = rnea(robot, q, qd, qdd, f_tip=wrench) - rnea(robot, q, qd, qdd)
+    assert_close(difference, np.einsum("mki,mk->mi", jacobian(robot, q), wrench))
+    P = pinocchio_model(robot)
+    frame = P.model.frames[P.tool_id]
+    for k in range(3):
+        pin.framesForwardKinematics(P.model, P.data, q[k])
+        oMf = P.data.oMf[P.tool_id]
+        on_robot = pin.Force(-wrench[k, :3], -wrench[k, 3:])                 # world-aligned, at the tool
+        at_tool = pin.SE3(oMf.rotation, np.zeros(3)).actInv(on_robot)         # tool axes
+        at_joint = frame.placement.act(at_tool)                               # parent joint frame
+        fext = [pin.Force.Zero() for _ in range(P.model.njoints)]
+        fext[frame.parentJoint] = at_joint
+        expected = pin.rnea(P.model, P.data, q[k], qd[k], qdd[k], fext)
+        assert_close(rnea(robot, q[k], qd[k], qdd[k], f_tip=wrench[k]), expected)
+
+
+def test_mass_matrix_is_symmetric_positive_definite(robot):
+    M = mass_matrix(robot, sample_configurations(robot, 200, 5))
+    np.testing.assert_allclose(M, np.swapaxes(M, -1, -2), atol=1e-14)
+    assert np.linalg.eigvalsh(M).min() > 0
+
+
+def test_kinetic_energy_rate_equals_power_of_non_gravity_torques(intelbot5):
+    """Along any motion, d/dt ½ q̇ᵀ M q̇ = q̇ᵀ (τ − g(q)) (the Coriolis terms do no work)."""
+    trajectory = quintic(np.zeros(5), np.radians([80, 40, -70, 50, 120]), 0, 0, 0.0, 2.0, 1e-3)
+    q, qd, qdd = trajectory.q, trajectory.qd, trajectory.qdd
+    tau = rnea(intelbot5, q, qd, qdd)
+    kinetic = 0.5 * np.einsum("ki,kij,kj->k", qd, mass_matrix(intelbot5, q), qd)
+    rate = np.gradient(kinetic, trajectory.t)
+    power = np.einsum("ki,ki->k", qd, tau - gravity_torques(intelbot5, q))
+    np.testing.assert_allclose(rate[2:-2], power[2:-2], atol=1e-5 * np.abs(power).max())
+
+
+def test_batch_shapes_and_broadcasting(intelbot5):
+    q = sample_configurations(intelbot5, (2, 3), 6)
+    assert rnea(intelbot5, q, np.zeros(5), np.zeros(5)).shape == (2, 3, 5)
+    assert mass_matrix(intelbot5, q).shape == (2, 3, 5, 5)
+    assert rnea(intelbot5, np.zeros(5), np.zeros(5), np.zeros(5)).shape == (5,)
+    single = rnea(intelbot5, q[1, 2], q[0, 0], q[0, 1])
+    np.testing.assert_array_equal(rnea(intelbot5, q, q[0, 0], q[0, 1])[1, 2], single)
+
+
+def test_gravity_override(intelbot5):
+    q = sample_configurations(intelbot5, 5, 7)
+    zero = np.zeros(5)
+    np.testing.assert_allclose(rnea(intelbot5, q, zero, zero, gravity=np.zeros(3)), 0, atol=1e-15)
+    np.testing.assert_allclose(rnea(intelbot5, q, zero, zero, gravity=2 * intelbot5.gravity),
+                               2 * gravity_torques(intelbot5, q), rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(q=np.zeros(4)), r"q must have shape \(\.\.\., 5\)"),
+    (dict(qd=np.zeros((2, 5)), q=np.zeros((3, 5))), r"batch shapes do not broadcast"),
+    (dict(gravity=[0, 9.81]), r"gravity must be 3 finite numbers"),
+    (dict(f_tip=np.zeros(3)), r"f_tip must have shape \(\.\.\., 6\)"),
+])
+def test_bad_input(intelbot5, kwargs, message):
+    args = dict(q=np.zeros(5), qd=np.zeros(5), qdd=np.zeros(5)) | kwargs
+    with pytest.raises(ValueError, match=message):
+        rnea(intelbot5, args.pop("q"), args.pop("qd"), args.pop("qdd"), **args)

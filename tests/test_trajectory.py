@@ -1,0 +1,127 @@
+"""Joint trajectories: boundary conditions, continuity, limits, bad input; rerun recordings."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import warnings
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from nfarm.dynamics import rnea
+from nfarm.recording import record_trajectory
+from nfarm.trajectory import (TrajectoryLimitWarning, cubic, line_path, quintic, time_grid,
+                              via_points)
+
+Q0, QF = np.radians([0, 10, -20, 30, 0]), np.radians([90, 45, -60, 30, 120])
+V0, VF = np.radians([0, 5, 0, -5, 0]), np.radians([10, 0, 0, 0, -10])
+
+
+def test_time_grid_as_the_seed_gui():
+    t = time_grid(0.0, 6.0, 0.2)
+    assert len(t) == 31 and t[0] == 0.0 and t[-1] == 6.0
+    np.testing.assert_allclose(np.diff(t), 0.2)
+    np.testing.assert_allclose(time_grid(0, 1, 0.3), [0, 0.3, 0.6, 0.9, 1.0])
+
+
+def test_cubic_boundary_conditions():
+    tr = cubic(Q0, QF, V0, VF, 0.0, 6.0, 0.2)
+    np.testing.assert_allclose(tr.q[[0, -1]], [Q0, QF], atol=1e-14)
+    np.testing.assert_allclose(tr.qd[[0, -1]], [V0, VF], atol=1e-14)
+    assert np.ptp(tr.qddd, axis=0).max() < 1e-12, "a cubic has constant jerk"
+
+
+def test_quintic_boundary_conditions_and_smooth_start():
+    acc0, accf = np.radians([1, 0, 0, 0, 2]), np.radians([0, -1, 0, 0, 0])
+    tr = quintic(Q0, QF, V0, VF, 1.0, 4.0, 0.01, acc0=acc0, accf=accf)
+    np.testing.assert_allclose(tr.q[[0, -1]], [Q0, QF], atol=1e-13)
+    np.testing.assert_allclose(tr.qd[[0, -1]], [V0, VF], atol=1e-13)
+    np.testing.assert_allclose(tr.qdd[[0, -1]], [acc0, accf], atol=1e-12)
+
+
+@pytest.mark.parametrize("make", [cubic, quintic])
+def test_derivatives_are_consistent(make):
+    tr = make(Q0, QF, V0, VF, 0.0, 2.0, 1e-3)
+    np.testing.assert_allclose(np.gradient(tr.q, tr.t, axis=0)[1:-1], tr.qd[1:-1], atol=1e-5)
+    np.testing.assert_allclose(np.gradient(tr.qd, tr.t, axis=0)[1:-1], tr.qdd[1:-1], atol=1e-5)
+
+
+def test_via_points_pass_through_with_continuous_velocity_and_acceleration():
+    times = [0.0, 1.0, 2.5, 4.0]
+    points = np.radians([[0, 0, 0, 0, 0], [30, 20, -40, 10, 60], [-10, 40, -80, 30, 0], [45, 10, -30, 0, 90]])
+    tr = via_points(times, points, 0.05, v0=0, vf=0)
+    for t_k, p_k in zip(times, points):
+        np.testing.assert_allclose(tr.q[np.argmin(np.abs(tr.t - t_k))], p_k, atol=1e-12)
+    np.testing.assert_allclose(tr.qd[[0, -1]], 0, atol=1e-12)
+    assert np.abs(np.diff(tr.qd, axis=0)).max() < 0.5 and np.abs(np.diff(tr.qdd, axis=0)).max() < 1.0
+
+
+def test_leaving_the_limits_is_reported_not_clipped(intelbot5):
+    with pytest.warns(TrajectoryLimitWarning, match=r"joint 2 leaves its limits .* from t = "):
+        tr = cubic([0, 0, 0, 0, 0], [0, 2.0, 0, 0, 0], 0, 0, 0.0, 2.0, 0.1, qlim=intelbot5.qlim)
+    (violation,) = tr.violations
+    assert violation.joint == 1 and violation.worst == pytest.approx(2.0)
+    assert tr.t[np.flatnonzero(tr.q[:, 1] > intelbot5.qlim[1, 1])[0]] == violation.t_start
+    assert tr.q[-1, 1] == pytest.approx(2.0), "not clipped"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert cubic(Q0, QF, V0, VF, 0, 6, 0.2, qlim=intelbot5.qlim).violations == ()
+
+
+@pytest.mark.parametrize("args, message", [
+    ((0, 1, 0, 0, 1.0, 1.0, 0.1), r"tf must be > t0"),
+    ((0, 1, 0, 0, 0.0, 1.0, 0.0), r"dt must be > 0 and <= tf − t0"),
+    ((0, 1, 0, 0, 0.0, 1.0, 2.0), r"dt must be > 0 and <= tf − t0"),
+    ((0, np.nan, 0, 0, 0.0, 1.0, 0.1), r"qf must be finite"),
+    ((np.zeros(5), np.zeros(4), 0, 0, 0.0, 1.0, 0.1), r"mismatched shapes"),
+    ((0, 1, 0, 0, 0.0, np.inf, 0.1), r"tf must be a finite number"),
+])
+def test_bad_input(args, message):
+    for make in (cubic, quintic):
+        with pytest.raises(ValueError, match=message):
+            make(*args)
+
+
+def test_via_points_bad_input():
+    with pytest.raises(ValueError, match="times must increase strictly"):
+        via_points([0, 2, 1], np.zeros((3, 2)), 0.1)
+    with pytest.raises(ValueError, match=r"times must be \(m,\)"):
+        via_points([0, 1], np.zeros((3, 2)), 0.1)
+
+
+def test_line_path_endpoints_and_constant_speed():
+    T_a, T_b = np.eye(4), np.eye(4)
+    T_b[:3, 3] = [1.0, 2.0, 3.0]
+    T_b[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+    path = line_path(T_a, T_b, 11)
+    np.testing.assert_allclose(path[[0, -1]], [T_a, T_b], atol=1e-15)
+    np.testing.assert_allclose(np.diff(path[:, :3, 3], axis=0), np.full((10, 3), [0.1, 0.2, 0.3]), atol=1e-15)
+
+
+def chunk_rows(rrd) -> Counter:
+    printed = subprocess.run([sys.executable, "-m", "rerun", "rrd", "print", str(rrd)],
+                             capture_output=True, text=True, check=True).stdout
+    rows = Counter()
+    for count, entity in re.findall(r"with (\d+) rows .* - (/\S+) - data columns", printed):
+        rows[entity] += int(count)
+    return rows
+
+
+def test_recording_holds_the_robot_and_every_time_step(intelbot5, tmp_path):
+    tr = cubic(Q0, QF, V0, VF, 0.0, 6.0, 0.2)
+    tau = rnea(intelbot5, tr.q, tr.qd, tr.qdd)
+    path = record_trajectory(intelbot5, tr, tmp_path / "move.rrd", tau=tau, name="move", seed=3)
+    subprocess.run([sys.executable, "-m", "rerun", "rrd", "verify", str(path)], check=True,
+                   capture_output=True)
+    rows = chunk_rows(path)
+    K = len(tr.t)
+    assert rows["/intelbot5"] >= 1 and any(e.startswith("/intelbot5/visual_geometries/link5") for e in rows)
+    for joint in intelbot5.joint_names:
+        assert rows[f"/transforms/{joint}"] == K
+        for key in ("q", "qd", "tau"):
+            assert rows[f"/joints/{joint}/{key}"] == K
+    assert rows["/tool_path"] == K
+    assert list(tmp_path.iterdir()) == [path], "no temporary files left"
