@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import json
 
+import papermill
 import pytest
 
 from nfarm.paths import NOTEBOOKS
@@ -40,7 +41,10 @@ def test_committed_without_outputs_and_with_literal_parameters(notebook):
 def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path):
     out = tmp_path / "out"
     executed = tmp_path / notebook.name
-    run_notebook(notebook, executed, {"smoke": True, "out_dir": str(out)})
+    parameters = {"smoke": True, "out_dir": str(out)}
+    if "recordings_dir" in papermill.inspect_notebook(str(notebook)):
+        parameters["recordings_dir"] = str(tmp_path / "recordings")
+    run_notebook(notebook, executed, parameters)
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
     assert any("image/png" in o.get("data", {}) for o in outputs), "figures show in the chapter"
     prefix = notebook.name[:2]

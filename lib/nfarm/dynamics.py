@@ -40,7 +40,7 @@ from .urdf import joint_placements
 __all__ = ["rnea", "gravity_torques", "mass_matrix", "coriolis", "CHUNK"]
 
 #: Samples per chunk (keeps the working set in cache).
-CHUNK = 16384
+CHUNK = 32768
 
 
 class _Links:

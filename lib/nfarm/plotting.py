@@ -20,7 +20,8 @@ from .paths import atomic_path
 from .robot import Robot
 
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
-           "plot_convergence", "plot_joint_paths", "DPI"]
+           "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
+           "plot_motion", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -140,4 +141,51 @@ def plot_joint_paths(s: np.ndarray, paths: Mapping[str, np.ndarray], joint_names
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("joint angle [deg]")
     axes[0].legend(fontsize=7)
+    return fig
+
+
+def plot_profiles(t: np.ndarray, profiles: Mapping[str, np.ndarray], joint_names) -> Figure:
+    """One panel per named profile ``(K, n)`` against time ``t (K,)``, one line per joint
+    (angles are shown in degrees: pass values in radians)."""
+    fig, axes = plt.subplots(1, len(profiles), figsize=(4.2 * len(profiles), 3.4),
+                             layout="constrained", squeeze=False)
+    for ax, (label, values) in zip(axes[0], profiles.items()):
+        for j, name in enumerate(joint_names):
+            ax.plot(t, np.degrees(values[:, j]), ".-", ms=3, lw=1.2, label=name)
+        ax.set(xlabel="t [s]", ylabel=label, title=label.split(" [")[0])
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    return fig
+
+
+def plot_per_joint(t: np.ndarray, series: Mapping[str, np.ndarray], joint_names, *,
+                   ylabel: str) -> Figure:
+    """One panel per joint, one line per named series ``(K, n)`` against time ``t (K,)``."""
+    n = len(joint_names)
+    fig, axes = plt.subplots(1, n, figsize=(2.9 * n, 3.0), layout="constrained", sharex=True)
+    for k, (label, values) in enumerate(series.items()):
+        for j, ax in enumerate(axes):
+            ax.plot(t, values[:, j], color=f"C{k}", lw=1.5 if k else 2.2, label=label,
+                    ls="-" if k == 0 else "--")
+    for ax, name in zip(axes, joint_names):
+        ax.set(title=name, xlabel="t [s]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel(ylabel)
+    axes[0].legend(fontsize=7)
+    return fig
+
+
+def plot_motion(robot: Robot, q: np.ndarray, *, frames: int = 5) -> Figure:
+    """The arm at ``frames`` instants of a motion ``q (K, n)`` and the path its tool draws."""
+    fig = plt.figure(figsize=(5.5, 5), layout="constrained")
+    ax = fig.add_subplot(projection="3d")
+    tip = fk(robot, q)[:, :3, 3]
+    for k, index in enumerate(np.linspace(0, len(q) - 1, frames).round().astype(int)):
+        draw_arm(ax, robot, q[index], color=plt.cm.viridis(k / max(frames - 1, 1)))
+    ax.plot(*tip.T, color="C1", lw=2, label="tool path")
+    points = np.vstack([tip, fk_all(robot, q[:: max(len(q) // 20, 1)])[..., :3, 3].reshape(-1, 3)])
+    _equal_3d(ax, np.vstack([points, [[0, 0, 0]]]))
+    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
+    ax.legend(fontsize=8)
+    ax.view_init(elev=25, azim=-55)
     return fig
