@@ -21,7 +21,7 @@ from .robot import Robot
 
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
-           "plot_motion", "DPI"]
+           "plot_motion", "plot_learning_curves", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -188,4 +188,24 @@ def plot_motion(robot: Robot, q: np.ndarray, *, frames: int = 5) -> Figure:
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
     ax.legend(fontsize=8)
     ax.view_init(elev=25, azim=-55)
+    return fig
+
+
+def plot_learning_curves(models: Mapping[str, object]) -> Figure:
+    """Training (and validation) RMSE and Jang's step size per epoch, one column per named
+    fitted :class:`nfarm.anfis.ANFIS`."""
+    fig, axes = plt.subplots(2, len(models), figsize=(4.2 * len(models), 5.2),
+                             layout="constrained", squeeze=False, sharex="col")
+    for (name, model), (top, bottom) in zip(models.items(), axes.T):
+        epochs = np.arange(1, len(model.loss_curve_) + 1)
+        top.semilogy(epochs, model.loss_curve_, label="training")
+        if model.val_loss_curve_:
+            top.semilogy(epochs, model.val_loss_curve_, label="checking")
+            top.axvline(model.best_epoch_ + 1, color="k", lw=0.8, ls=":", label="kept")
+        top.set(title=name, ylabel="RMSE")
+        top.legend(fontsize=8)
+        bottom.plot(epochs, model.step_size_curve_, color="C2")
+        bottom.set(xlabel="epoch", ylabel="step size k")
+        for ax in (top, bottom):
+            ax.grid(alpha=0.3, which="both")
     return fig

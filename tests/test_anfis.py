@@ -1,0 +1,186 @@
+"""ANFIS: gradients, hybrid learning on Jang's examples, persistence, conventions, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nfarm import jang
+from nfarm.anfis import ANFIS, ANFISMulti, load, mf_gradients, mf_values
+
+
+@pytest.mark.parametrize("kind, params", [
+    ("gbell", np.array([[1.5, 2.0, -1.0], [0.7, 1.3, 0.5], [2.0, 0.8, 3.0]])),
+    ("gauss", np.array([[1.2, -1.0], [0.4, 0.5], [2.5, 3.0]])),
+])
+def test_membership_derivatives_match_central_differences(kind, params):
+    x = np.linspace(-4, 6, 101)
+    analytic = mf_gradients(kind, x, params, mf_values(kind, x, params))
+    h = 1e-6
+    for k in range(params.shape[0]):
+        for p in range(params.shape[1]):
+            up, down = params.copy(), params.copy()
+            up[k, p] += h
+            down[k, p] -= h
+            numeric = (mf_values(kind, x, up)[:, k] - mf_values(kind, x, down)[:, k]) / (2 * h)
+            np.testing.assert_allclose(analytic[:, k, p], numeric, atol=1e-7)
+
+
+@pytest.mark.parametrize("mf", ["gbell", "gauss"])
+@pytest.mark.parametrize("partition", ["grid", "fcm", "subtractive"])
+def test_premise_gradient_matches_finite_differences_of_the_error(mf, partition):
+    """Every premise parameter: ∂E/∂θ of the network (consequents fixed) by central differences."""
+    rng = np.random.default_rng(0)
+    X = rng.uniform(-1, 1, (80, 2))
+    y = np.sin(2 * X[:, 0]) + X[:, 1] ** 2
+    model = ANFIS(n_mfs=[2, 3], mf=mf, partition=partition, n_rules=3, radius=0.6, epochs=1,
+                  random_state=0)
+    mfs, rules = model._initial_structure(X, y, [2, 3])
+    mu, factors, w, total, w_bar = model._layers(X, mfs, rules)
+    theta = model._least_squares(model._design(w_bar, X), y).reshape(len(rules), 3)
+    analytic = model._premise_gradient(X, y, mfs, rules, mu, factors, total, w_bar, theta)
+    error = lambda m: ((y - model._predict_with(X, m, rules, theta)) ** 2).sum()  # noqa: E731
+    h = 1e-6
+    for i, params in enumerate(mfs):
+        for k, p in np.ndindex(params.shape):
+            up = [q.copy() for q in mfs]
+            down = [q.copy() for q in mfs]
+            up[i][k, p] += h
+            down[i][k, p] -= h
+            numeric = (error(up) - error(down)) / (2 * h)
+            assert analytic[i][k, p] == pytest.approx(numeric, rel=1e-5, abs=1e-7), (i, k, p)
+
+
+def test_hybrid_learning_lowers_the_training_error_on_sinc():
+    X, z = jang.sinc_data()
+    model = ANFIS(n_mfs=4, epochs=100).fit(X, z)
+    assert len(model.rules_) == 16
+    assert model.loss_curve_[-1] < 0.7 * model.loss_curve_[0]
+    assert model.step_size_curve_[-1] != model.step_size_curve_[0], "Jang's step-size rule acted"
+
+
+def test_jang_three_input_example_reaches_below_0_1_percent():
+    X, y, Xc, yc = jang.three_input_data()
+    model = ANFIS(n_mfs=2, epochs=200).fit(X, y)
+    assert len(model.rules_) == 8
+    assert jang.ape(y, model.predict(X)) < 0.1
+    assert jang.ape(yc, model.predict(Xc)) < 1.5
+
+
+def test_validation_keeps_the_best_epoch():
+    X, y, Xc, yc = jang.three_input_data()
+    model = ANFIS(n_mfs=2, epochs=30).fit(X, y, Xc, yc)
+    assert len(model.val_loss_curve_) == model.n_epochs_ == 30
+    assert model.best_epoch_ == int(np.argmin(model.val_loss_curve_))
+    assert jang.rmse(yc, model.predict(Xc)) == pytest.approx(min(model.val_loss_curve_), rel=1e-9)
+
+
+def test_error_goal_stops_early():
+    X, y, *_ = jang.three_input_data()
+    model = ANFIS(epochs=100, error_goal=1.0).fit(X, y)
+    assert model.n_epochs_ < 100 and model.loss_curve_[-1] <= 1.0
+
+
+@pytest.mark.parametrize("solver", ["normal", "lstsq"])
+def test_solvers_agree(solver):
+    X, y, *_ = jang.three_input_data()
+    reference = ANFIS(epochs=5).fit(X, y).predict(X)
+    np.testing.assert_allclose(ANFIS(epochs=5, solver=solver).fit(X, y).predict(X), reference, rtol=1e-6)
+
+
+@pytest.mark.parametrize("partition, extra", [("fcm", dict(n_rules=4)), ("subtractive", dict(radius=0.5))])
+def test_clustering_partitions_learn(partition, extra):
+    X, y, Xc, yc = jang.three_input_data()
+    model = ANFIS(partition=partition, mf="gauss", epochs=30, random_state=1, **extra).fit(X, y)
+    assert model.rules_.shape[1] == 3 and (model.rules_ == model.rules_[:, :1]).all()
+    assert model.score(Xc, yc) > 0.95
+
+
+def test_save_load_round_trip_is_bit_for_bit(tmp_path):
+    X, y, Xc, yc = jang.three_input_data()
+    model = ANFIS(n_mfs=[2, 3, 2], epochs=8, feature_names=["x", "y", "z"]).fit(X, y, Xc, yc)
+    model.save(tmp_path / "m.json")
+    again = load(tmp_path / "m.json")
+    np.testing.assert_array_equal(again.predict(Xc), model.predict(Xc))
+    assert again.get_params() == model.get_params() | {"n_mfs": [2, 3, 2], "feature_names": ["x", "y", "z"]}
+    assert again.loss_curve_ == model.loss_curve_
+
+
+def test_determinism_with_random_state():
+    X, y, *_ = jang.three_input_data()
+    a = ANFIS(partition="fcm", n_rules=4, epochs=5, random_state=3).fit(X, y).predict(X)
+    b = ANFIS(partition="fcm", n_rules=4, epochs=5, random_state=3).fit(X, y).predict(X)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_estimator_conventions():
+    model = ANFIS(n_mfs=3, epochs=7)
+    params = model.get_params()
+    assert params["n_mfs"] == 3 and params["epochs"] == 7
+    clone = ANFIS(**params)
+    assert clone.get_params() == params
+    assert model.set_params(epochs=9) is model and model.epochs == 9
+    assert not hasattr(model, "consequents_"), "__init__ only stores arguments"
+    with pytest.raises(ValueError, match="unknown parameter 'epoch'"):
+        model.set_params(epoch=3)
+    try:
+        from sklearn.base import clone as sk_clone
+    except ImportError:
+        return
+    assert sk_clone(model).get_params() == model.get_params()
+
+
+def test_describe_and_plot():
+    X, y, *_ = jang.three_input_data()
+    model = ANFIS(epochs=2, feature_names=["x", "y", "z"]).fit(X, y)
+    text = model.describe()
+    assert text.count("\n") == 7 and text.startswith("Rule 1: IF x is MF1 AND y is MF1 AND z is MF1 THEN y = ")
+    fig = model.plot_mfs()
+    assert len(fig.axes) == 3
+
+
+def test_multi_output_fits_one_model_per_column(tmp_path):
+    X, y, Xc, yc = jang.three_input_data()
+    Y = np.column_stack([y, np.sqrt(y)])
+    multi = ANFISMulti(n_mfs=2, epochs=5).fit(X, Y)
+    assert len(multi.models_) == 2
+    np.testing.assert_allclose(multi.predict(X)[:, 1], ANFIS(n_mfs=2, epochs=5).fit(X, np.sqrt(y)).predict(X))
+    multi.save(tmp_path / "multi.json")
+    np.testing.assert_array_equal(load(tmp_path / "multi.json").predict(Xc), multi.predict(Xc))
+
+
+X3, Y3, *_ = jang.three_input_data()
+
+
+@pytest.mark.parametrize("args, kwargs, message", [
+    ((np.r_[X3[:-1], [[np.nan, 1, 1]]], Y3), {}, r"X contains NaN or inf \(first in row 215\)"),
+    ((X3, np.r_[Y3[:-1], np.inf]), {}, r"y contains NaN or inf"),
+    ((X3, Y3[:-1]), {}, r"y must have shape \(216,\) to match X"),
+    ((X3[:, 0], Y3), {}, r"X must be a 2-D array"),
+    ((X3[::11], Y3[::11]), {}, r"20 samples are fewer than the 32 consequent parameters"),
+    ((np.c_[X3, np.ones(216)], Y3), {}, r"input 3 \(x4\) is constant"),
+    ((X3, Y3), dict(mf="triangle"), r"mf must be one of gbell, gauss"),
+    ((X3, Y3), dict(partition="kmeans"), r"partition must be one of grid, fcm, subtractive"),
+    ((X3, Y3), dict(n_mfs=[2, 2]), r"n_mfs must be an integer >= 1 or one per input \(3\)"),
+    ((X3, Y3), dict(epochs=0), r"epochs must be an integer >= 1"),
+    ((X3, Y3), dict(partition="fcm"), r"partition 'fcm' needs n_rules >= 2"),
+    ((X3, Y3), dict(memory_budget=1e4), r"would need about .* GB, over memory_budget"),
+    ((X3, Y3), dict(solver="qr"), r"solver must be one of normal, lstsq"),
+])
+def test_bad_input_is_refused_before_any_work(args, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        ANFIS(**({"epochs": 1} | kwargs)).fit(*args)
+
+
+def test_predict_checks():
+    with pytest.raises(ValueError, match="not fitted yet"):
+        ANFIS().predict(X3)
+    model = ANFIS(epochs=1).fit(X3, Y3)
+    with pytest.raises(ValueError, match="X has 2 inputs, the model was fitted with 3"):
+        model.predict(X3[:, :2])
+
+
+def test_load_refuses_other_files(tmp_path):
+    (tmp_path / "x.json").write_text('{"format": "other"}')
+    with pytest.raises(ValueError, match="not an nfarm ANFIS model"):
+        load(tmp_path / "x.json")
