@@ -18,11 +18,11 @@ does not). Both keep the last accepted point and retry from it with ν times the
 a step that raised E (for Sugihara's rule, a multiplier ≥ 1 of s·E + w̄): far from a solution,
 and always for an unreachable target, the Gauss–Newton model is poor and an unguarded step can
 climb. Measured on 10 000 reachable intelbot5 targets (``benchmarks/bench_ik.py``), Sugihara's
-rule needs fewer steps for the same success (8.7 against 9.5 per target), so it is the
+rule needs fewer steps for the same success (8.1 against 9.0 per target), so it is the
 default. Our constants differ from Sugihara's (s = 1, w̄ = 1e-3): s = 0.1 takes bolder steps
-far from the target (8.7 against 10.2 steps per target), and w̄ = 1e-12 lets the steps become
+far from the target (8.1 against 9.5 steps per target), and w̄ = 1e-12 lets the steps become
 Gauss–Newton near targets next to a singularity, where w̄ = 1e-8 slows convergence to a crawl
-(0.05 % of the targets then run out of steps).
+(0.06 % of the targets then run out of steps).
 
 A 5-DOF arm cannot reach most 6-D poses. A target is ``success`` when the weighted position
 and orientation errors are within ``tol_pos`` and ``tol_rot`` at a configuration within the
