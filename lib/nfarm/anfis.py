@@ -165,6 +165,7 @@ class ANFIS:
         memory_budget: bytes the N × R × (n + 1) design matrix (and its companions) may take.
         random_state: seed for the clustering partitions.
         feature_names: names of the inputs (default ``x1``, ``x2``, …), used by ``describe``.
+        progress: show a progress bar over the epochs (tqdm; in a notebook, a widget).
 
     Learned attributes: ``mfs_`` (per input, ``(m_i, p)`` parameters), ``rules_ (R, n)``
     (the function of each input in each rule), ``consequents_ (R, n + 1)``,
@@ -177,7 +178,7 @@ class ANFIS:
                  step_size: float = 0.01, step_increase: float = 1.1, step_decrease: float = 0.9,
                  error_goal: float = 0.0, solver: str = "normal", ridge: float = 1e-12,
                  memory_budget: float = 2e9, random_state: int | None = None,
-                 feature_names: Sequence[str] | None = None):
+                 feature_names: Sequence[str] | None = None, progress: bool = False):
         self.n_mfs = n_mfs
         self.mf = mf
         self.partition = partition
@@ -193,6 +194,7 @@ class ANFIS:
         self.memory_budget = memory_budget
         self.random_state = random_state
         self.feature_names = feature_names
+        self.progress = progress
 
     # -- scikit-learn conventions ------------------------------------------------------------
 
@@ -373,7 +375,11 @@ class ANFIS:
         self.loss_curve_, self.val_loss_curve_, self.step_size_curve_ = [], [], []
         step = float(self.step_size)
         best = (np.inf, None)
-        for epoch in range(self.epochs):
+        epochs = range(self.epochs)
+        if self.progress:
+            from tqdm.auto import tqdm
+            epochs = tqdm(epochs, desc="ANFIS epochs", leave=False)
+        for epoch in epochs:
             mu, factors, w, total, w_bar = self._layers(X, mfs, rules)
             theta = self._least_squares(self._design(w_bar, X), y).reshape(R, n + 1)
             rmse = float(np.sqrt(np.mean((self._output(w_bar, X, theta) - y) ** 2)))
