@@ -33,7 +33,7 @@ import functools
 
 import numpy as np
 
-from .kinematics import cos_sin
+from .kinematics import cos_sin, snap_right_angles
 from .robot import Robot
 from .urdf import joint_placements
 
@@ -139,9 +139,8 @@ def _const(v) -> list:
 
 
 def _matrix(M) -> list:
-    """A constant matrix with cos/sin of right angles made exact (see kinematics._snap)."""
-    from .kinematics import _snap
-    return _snap(np.asarray(M)).tolist()
+    """A constant matrix with cos/sin of right angles made exact."""
+    return snap_right_angles(np.asarray(M)).tolist()
 
 
 def _check(robot: Robot, **arrays) -> tuple[tuple, dict]:

@@ -24,7 +24,8 @@ from .robot import Robot
 from .urdf import to_urdf
 
 __all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "pose_jacobian_T",
-           "manipulability", "min_singular_value", "to_urdf", "CHUNK"]
+           "manipulability", "min_singular_value", "to_urdf", "cos_sin", "snap_right_angles",
+           "CHUNK"]
 
 #: Configurations per chunk: small enough for every intermediate to stay in the L2 cache.
 CHUNK = 8192
@@ -37,7 +38,7 @@ def _check_q(robot: Robot, q) -> np.ndarray:
     return q
 
 
-def _snap(x: np.ndarray) -> np.ndarray:
+def snap_right_angles(x: np.ndarray) -> np.ndarray:
     """Make cos/sin of exact right angles exactly 0 or ±1 (cos(π/2) is 6e-17 in floating point),
     so the link steps can skip those terms."""
     x = np.where(np.abs(x) < 1e-15, 0.0, x)
@@ -78,8 +79,8 @@ class _Chain:
     def __init__(self, robot: Robot):
         self.standard = robot.convention == "standard"
         self.a, self.d, self.offset = robot.a.tolist(), robot.d.tolist(), robot.offset
-        self.ca, self.sa = _snap(np.cos(robot.alpha)).tolist(), _snap(np.sin(robot.alpha)).tolist()
-        self.tool = _snap(robot.tool).tolist()
+        self.ca, self.sa = snap_right_angles(np.cos(robot.alpha)).tolist(), snap_right_angles(np.sin(robot.alpha)).tolist()
+        self.tool = snap_right_angles(robot.tool).tolist()
         self.n = robot.n
 
     def frames(self, qT: np.ndarray, every: bool):
