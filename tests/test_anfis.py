@@ -38,7 +38,8 @@ def test_premise_gradient_matches_finite_differences_of_the_error(mf, partition)
     mfs, rules = model._initial_structure(X, y, [2, 3])
     mu, factors, w, total, w_bar = model._layers(X, mfs, rules)
     theta = model._least_squares(model._design(w_bar, X), y).reshape(len(rules), 3)
-    analytic = model._premise_gradient(X, y, mfs, rules, mu, factors, total, w_bar, theta)
+    f = model._rule_outputs(X, theta)
+    analytic = model._premise_gradient(X, y, mfs, rules, mu, factors, total, f, (w_bar * f).sum(1))
     error = lambda m: ((y - model._predict_with(X, m, rules, theta)) ** 2).sum()  # noqa: E731
     h = 1e-6
     for i, params in enumerate(mfs):

@@ -317,11 +317,10 @@ class ANFIS:
         G[np.diag_indices_from(G)] += self.ridge * max(np.trace(G), 1e-300) / len(G) + 1e-300
         return scipy.linalg.solve(G, A.T @ y, assume_a="pos", check_finite=False)
 
-    def _premise_gradient(self, X, y, mfs, rules, mu, factors, total, w_bar, theta):
-        """``∇E`` of ``E = Σ (y − ŷ)²`` with respect to every premise parameter, per input."""
+    def _premise_gradient(self, X, y, mfs, rules, mu, factors, total, f, y_hat):
+        """``∇E`` of ``E = Σ (y − ŷ)²`` with respect to every premise parameter, per input
+        (``f (N, R)`` the rule outputs, ``y_hat`` the network's output)."""
         n, N, R = factors.shape
-        f = np.column_stack([X, np.ones(N)]) @ theta.T                 # rule outputs (N, R)
-        y_hat = (w_bar * f).sum(axis=1)
         dE_dw = (-2.0 * (y - y_hat) / np.where(total > 0, total, 1.0))[:, None] * (f - y_hat[:, None])
         # ∂w_r/∂μ_i = product of the rule's other factors (prefix × suffix products).
         prefix = np.cumprod(np.concatenate([np.ones((1, N, R)), factors[:-1]]), axis=0)
@@ -361,12 +360,12 @@ class ANFIS:
         if constant.size:
             raise ValueError(f"input {constant[0]} ({self._names(n)[constant[0]]}) is constant: "
                              f"membership functions need a range")
-        R = math.prod(n_mfs) if self.partition == "grid" else None
-        if R is not None:
-            self._check_size(len(X), R, n)
+        if self.partition == "grid":      # refuse before building anything
+            self._check_size(len(X), math.prod(n_mfs), n)
         mfs, rules = self._initial_structure(X, y, n_mfs)
         R = len(rules)
-        self._check_size(len(X), R, n)
+        if self.partition != "grid":      # the clustering decided the number of rules
+            self._check_size(len(X), R, n)
 
         self.n_features_in_ = n
         self.feature_names_in_ = np.array(self._names(n), dtype=object)
@@ -382,7 +381,9 @@ class ANFIS:
         for epoch in epochs:
             mu, factors, w, total, w_bar = self._layers(X, mfs, rules)
             theta = self._least_squares(self._design(w_bar, X), y).reshape(R, n + 1)
-            rmse = float(np.sqrt(np.mean((self._output(w_bar, X, theta) - y) ** 2)))
+            f = self._rule_outputs(X, theta)
+            y_hat = (w_bar * f).sum(axis=1)
+            rmse = float(np.sqrt(np.mean((y_hat - y) ** 2)))
             self.loss_curve_.append(rmse)
             self.step_size_curve_.append(step)
             score = rmse
@@ -393,7 +394,7 @@ class ANFIS:
                 best = (score, ([p.copy() for p in mfs], theta, epoch))
             if rmse <= self.error_goal or epoch == self.epochs - 1:
                 break
-            gradient = self._premise_gradient(X, y, mfs, rules, mu, factors, total, w_bar, theta)
+            gradient = self._premise_gradient(X, y, mfs, rules, mu, factors, total, f, y_hat)
             norm = math.sqrt(sum(float((g * g).sum()) for g in gradient))
             if norm > 0:
                 mfs = [self._keep_valid(p - step * g / norm, p) for p, g in zip(mfs, gradient)]
@@ -435,12 +436,12 @@ class ANFIS:
     # -- prediction ---------------------------------------------------------------------------
 
     @staticmethod
-    def _output(w_bar, X, theta):
-        f = np.column_stack([X, np.ones(len(X))]) @ theta.T
-        return (w_bar * f).sum(axis=1)
+    def _rule_outputs(X, theta):
+        """``f_r = p_r · x + p_r0`` for every sample and rule: ``(N, R)``."""
+        return np.column_stack([X, np.ones(len(X))]) @ theta.T
 
     def _predict_with(self, X, mfs, rules, theta):
-        return self._output(self._layers(X, mfs, rules)[4], X, theta)
+        return (self._layers(X, mfs, rules)[4] * self._rule_outputs(X, theta)).sum(axis=1)
 
     def _check_fitted(self):
         if not hasattr(self, "consequents_"):
