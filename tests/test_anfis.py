@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from nfarm import jang
-from nfarm.anfis import ANFIS, ANFISMulti, load, mf_gradients, mf_values
+from nfarm.anfis import ANFIS, ANFISMulti, load
+from nfarm.fuzzy import mf_gradients, mf_values
 
 
 @pytest.mark.parametrize("kind, params", [

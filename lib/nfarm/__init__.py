@@ -3,7 +3,7 @@ kinematics, recursive Newton–Euler dynamics and ANFIS (Jang 1993).
 
 Modules: :mod:`~nfarm.robot` (parameters and validation), :mod:`~nfarm.kinematics`,
 :mod:`~nfarm.rotations`, :mod:`~nfarm.ik`, :mod:`~nfarm.dynamics`, :mod:`~nfarm.trajectory`,
-:mod:`~nfarm.anfis`, :mod:`~nfarm.jang` (Jang's benchmark problems), :mod:`~nfarm.urdf`,
+:mod:`~nfarm.anfis` (with :mod:`~nfarm.fuzzy`), :mod:`~nfarm.jang` (Jang's benchmark problems), :mod:`~nfarm.urdf`,
 :mod:`~nfarm.recording` (rerun), :mod:`~nfarm.workspace`, :mod:`~nfarm.linalg`,
 :mod:`~nfarm.pinocchio_ref` (the independent reference model), :mod:`~nfarm.plotting`,
 :mod:`~nfarm.report` (the notebook pipeline), :mod:`~nfarm.paths`.

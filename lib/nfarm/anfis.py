@@ -37,108 +37,16 @@ from collections.abc import Sequence
 
 import numpy as np
 import scipy.linalg
-from skfuzzy import gaussmf, gbellmf
 
+from .fuzzy import (MF_TYPES, cluster_params, grid_params, mf_gradients, mf_values,
+                    subtractive_clustering)
 from .paths import atomic_path
 
 __all__ = ["ANFIS", "ANFISMulti", "MF_TYPES", "PARTITIONS", "SOLVERS", "load"]
 
-MF_TYPES = ("gbell", "gauss")
 PARTITIONS = ("grid", "fcm", "subtractive")
 SOLVERS = ("normal", "lstsq")
-_MF_PARAMS = {"gbell": ("a", "b", "c"), "gauss": ("sigma", "c")}
 _FORMAT = "nfarm-anfis-1"
-
-
-# --------------------------------------------------------------------------------------------
-# Membership functions: values from scikit-fuzzy, parameter derivatives by hand
-
-
-def mf_values(kind: str, x: np.ndarray, params: np.ndarray) -> np.ndarray:
-    """Membership grades ``(N, m)`` of ``x (N,)`` in ``m`` functions with ``params (m, p)``."""
-    x = x[:, None]
-    if kind == "gbell":
-        return gbellmf(x, params[:, 0], params[:, 1], params[:, 2])
-    return gaussmf(x, params[:, 1], params[:, 0])
-
-
-def mf_gradients(kind: str, x: np.ndarray, params: np.ndarray, mu: np.ndarray) -> np.ndarray:
-    """``∂μ/∂θ (N, m, p)`` for the parameters of :func:`mf_values` (``mu`` its values).
-
-    Generalised bell, ``μ = 1 / (1 + |u|^{2b})`` with ``u = (x − c)/a`` and
-    ``μ(1 − μ) = |u|^{2b} μ²``::
-
-        ∂μ/∂a = 2b |u|^{2b} μ² / a,   ∂μ/∂b = −2 ln|u| · |u|^{2b} μ²,
-        ∂μ/∂c = 2b sign(u) |u|^{2b−1} μ² / a            (all 0 where u = 0)
-
-    Gaussian, ``μ = exp(−(x − c)² / 2σ²)``::
-
-        ∂μ/∂σ = μ (x − c)² / σ³,   ∂μ/∂c = μ (x − c) / σ²
-    """
-    x = x[:, None]
-    if kind == "gbell":
-        a, b, c = params[:, 0], params[:, 1], params[:, 2]
-        u = (x - c) / a
-        au = np.abs(u)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            powered = au ** (2 * b)
-            mu2 = mu * mu
-            d_a = 2 * b * powered * mu2 / a
-            d_b = np.where(au > 0, -2 * np.log(np.where(au > 0, au, 1.0)) * powered * mu2, 0.0)
-            d_c = np.where(au > 0, 2 * b * np.sign(u) * au ** (2 * b - 1) * mu2 / a, 0.0)
-        return np.stack([d_a, d_b, d_c], axis=-1)
-    sigma, c = params[:, 0], params[:, 1]
-    diff = x - c
-    return np.stack([mu * diff**2 / sigma**3, mu * diff / sigma**2], axis=-1)
-
-
-def _grid_params(kind: str, lo: float, hi: float, m: int) -> np.ndarray:
-    """MATLAB ``genfis1``: ``m`` functions evenly over ``[lo, hi]``, neighbours crossing at 0.5."""
-    centres = np.linspace(lo, hi, m) if m > 1 else np.array([(lo + hi) / 2])
-    half = (hi - lo) / (2 * (m - 1)) if m > 1 else (hi - lo) / 2
-    if kind == "gbell":
-        return np.column_stack([np.full(m, half), np.full(m, 2.0), centres])
-    return np.column_stack([np.full(m, half / math.sqrt(2 * math.log(2))), centres])
-
-
-def _cluster_params(kind: str, centres: np.ndarray, sigmas: np.ndarray) -> np.ndarray:
-    """One function per cluster: Gaussian ``(σ, c)``, or the bell with the same half width."""
-    if kind == "gauss":
-        return np.column_stack([sigmas, centres])
-    return np.column_stack([sigmas * math.sqrt(2 * math.log(2)), np.full_like(sigmas, 2.0), centres])
-
-
-def subtractive_clustering(data: np.ndarray, radius: float, *, squash: float = 1.25,
-                           accept: float = 0.5, reject: float = 0.15, block: int = 2048) -> np.ndarray:
-    """Cluster centres by Chiu's (1994) subtractive clustering of ``data (N, d)``, scaled to
-    the unit hypercube: potentials ``P_i = Σ_j exp(−4‖x_i − x_j‖²/r_a²)``, the highest taken as
-    a centre and its influence (radius ``squash · r_a``) subtracted, with Chiu's accept/reject
-    thresholds. Returns centres ``(k, d)`` in data units. Memory O(N · block)."""
-    lo, span = data.min(axis=0), np.ptp(data, axis=0)
-    z = (data - lo) / np.where(span > 0, span, 1.0)
-    alpha, beta = 4.0 / radius**2, 4.0 / (squash * radius) ** 2
-    potential = np.empty(len(z))
-    for start in range(0, len(z), block):
-        d2 = ((z[start:start + block, None, :] - z[None, :, :]) ** 2).sum(-1)
-        potential[start:start + block] = np.exp(-alpha * d2).sum(1)
-    centres, first = [], potential.max()
-    while True:
-        k = int(np.argmax(potential))
-        p = potential[k]
-        if p > accept * first:
-            pass
-        elif p < reject * first:
-            break
-        else:
-            d_min = min(np.sqrt(((z[k] - c) ** 2).sum()) for c in centres)
-            if d_min / radius + p / first < 1.0:
-                potential[k] = 0.0
-                continue
-        centres.append(z[k].copy())
-        potential -= p * np.exp(-beta * ((z - z[k]) ** 2).sum(1))
-        if len(centres) >= len(z) or potential.max() <= 0:
-            break
-    return np.array(centres) * np.where(span > 0, span, 1.0) + lo
 
 
 # --------------------------------------------------------------------------------------------
@@ -272,7 +180,7 @@ class ANFIS:
     def _initial_structure(self, X, y, n_mfs):
         lo, hi = X.min(axis=0), X.max(axis=0)
         if self.partition == "grid":
-            mfs = [_grid_params(self.mf, lo[i], hi[i], n_mfs[i]) for i in range(X.shape[1])]
+            mfs = [grid_params(self.mf, lo[i], hi[i], n_mfs[i]) for i in range(X.shape[1])]
             rules = np.array(list(itertools.product(*(range(m) for m in n_mfs))), dtype=int)
             return mfs, rules
         data = np.column_stack([X, y])
@@ -288,7 +196,7 @@ class ANFIS:
             centres = subtractive_clustering(data, self.radius)[:, :-1]
             sigmas = np.broadcast_to(self.radius * (hi - lo) / math.sqrt(8.0), centres.shape)
         R = len(centres)
-        mfs = [_cluster_params(self.mf, centres[:, i], sigmas[:, i]) for i in range(X.shape[1])]
+        mfs = [cluster_params(self.mf, centres[:, i], sigmas[:, i]) for i in range(X.shape[1])]
         rules = np.tile(np.arange(R)[:, None], (1, X.shape[1]))
         return mfs, rules
 
