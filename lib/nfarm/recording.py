@@ -37,7 +37,8 @@ def record_trajectory(robot: Robot, trajectory: Trajectory, path: str | os.PathL
 
     Entities: ``/{robot.name}`` (the URDF), ``/transforms/{joint}`` (joint motion),
     ``/tool_path`` (line strip of the tool origin so far), ``/joints/{joint}/q``, ``…/qd`` and,
-    with ``tau (K, n)`` [N·m], ``…/tau``.
+    with ``tau (K, n)`` [N·m], ``…/tau``. The growing line strip stores K(K + 1)/2 points: a few
+    thousand samples are fine, resample longer trajectories first.
     """
     t, q = trajectory.t, trajectory.q
     if tau is not None and np.shape(tau) != q.shape:
