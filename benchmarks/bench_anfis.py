@@ -32,7 +32,7 @@ def problems():
     yield "7 inputs, 128 rules, 10 000 samples", X[:10_000], y[:10_000], X[10_000:], y[10_000:], 2, 3, "rmse"
 
 
-def measure(name, fit_predict, X, y, Xc, yc, epochs, metric):
+def measure(fit_predict, X, y, Xc, yc, epochs, metric):
     start = time.perf_counter()
     predict = fit_predict()
     ms = (time.perf_counter() - start) / epochs * 1e3
@@ -49,12 +49,12 @@ def main() -> None:
     rows = []
     for name, X, y, Xc, yc, n_mfs, epochs, metric in problems():
         ours = lambda: ANFIS(n_mfs=n_mfs, epochs=epochs).fit(X, y).predict  # noqa: E731
-        ms, error = measure(name, ours, X, y, Xc, yc, epochs, metric)
+        ms, error = measure(ours, X, y, Xc, yc, epochs, metric)
         other_ms, other_error, ratio = "", "not installed: .venv/bin/pip install -e '.[bench]'", ""
         if ANFISRegressor is not None:
             theirs = lambda: ANFISRegressor(n_mfs=n_mfs, mf_type="bell", optimizer="hybrid",  # noqa: E731
                                             epochs=epochs, random_state=0).fit(X, y).predict
-            other_ms, other_error = measure(name, theirs, X, y, Xc, yc, epochs, metric)
+            other_ms, other_error = measure(theirs, X, y, Xc, yc, epochs, metric)
             ratio = other_ms / ms
         rows.append([name, epochs, ms, error, other_ms, other_error, ratio])
     print(Table(["problem", "epochs", "nfarm ms/epoch", "nfarm error", "anfis-toolbox ms/epoch",

@@ -6,7 +6,6 @@ per-configuration throughput of Pinocchio's loop.
 
 from __future__ import annotations
 
-import numpy as np
 import pinocchio as pin
 
 from common import seconds_per_call

@@ -62,7 +62,7 @@ def random_chains(draw, min_joints: int = 1, max_joints: int = 7) -> Robot:
     convention = draw(st.sampled_from(["standard", "modified"]))
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
     joints = []
-    for i in range(n):
+    for _ in range(n):
         lo = draw(st.floats(-np.pi, 0.0, exclude_max=True))
         principal = rng.uniform(0.05, 0.1, 3)  # any two sum to more than the third: physical
         R = quat_to_matrix(rng.normal(size=4))

@@ -105,7 +105,7 @@ def to_urdf(robot: Robot) -> str:
     size = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d)))
     radius = 0.04 * max(size, 0.25)  # visuals in proportion, and visible on a tiny chain
     tool = B[-1] @ robot.tool
-    lines = [f'<?xml version="1.0"?>', f'<robot name="{robot.name}">',
+    lines = ['<?xml version="1.0"?>', f'<robot name="{robot.name}">',
              '  <material name="link"><color rgba="0.85 0.55 0.15 1"/></material>',
              '  <link name="base_link">',
              _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>']
