@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
 from nfarm import jang
-from nfarm.anfis import ANFIS, ANFISMulti, load
+from nfarm.anfis import ANFIS, ANFISMulti, ANFISWarning, load
+from nfarm.reading import ParamsError
 from nfarm.fuzzy import mf_gradients, mf_values
 
 
@@ -165,7 +168,8 @@ X3, Y3, *_ = jang.three_input_data()
     ((X3, Y3), dict(partition="kmeans"), r"partition must be one of grid, fcm, subtractive"),
     ((X3, Y3), dict(n_mfs=[2, 2]), r"n_mfs must be an integer >= 1 or one per input \(3\)"),
     ((X3, Y3), dict(epochs=0), r"epochs must be an integer >= 1"),
-    ((X3, Y3), dict(partition="fcm"), r"partition 'fcm' needs n_rules >= 2"),
+    ((X3, Y3), dict(n_mfs=2.5), r"n_mfs must be an integer >= 1 or one per input \(3\), got 2.5"),
+    ((X3, Y3), dict(partition="fcm"), r"partition 'fcm' needs n_rules \(an integer\) >= 2"),
     ((X3, Y3), dict(memory_budget=1e4), r"would need about .* GB, over memory_budget"),
     ((X3, Y3), dict(solver="qr"), r"solver must be one of normal, lstsq"),
 ])
@@ -182,7 +186,91 @@ def test_predict_checks():
         model.predict(X3[:, :2])
 
 
-def test_load_refuses_other_files(tmp_path):
-    (tmp_path / "x.json").write_text('{"format": "other"}')
-    with pytest.raises(ValueError, match="not an nfarm ANFIS model"):
+def _saved(tmp_path):
+    model = ANFIS(epochs=2).fit(X3, Y3)
+    return model, json.loads(json.dumps(model.to_dict()))
+
+
+def _edit(data, path, value):
+    *head, last = path
+    for key in head:
+        data = data[key]
+    if value is _DELETE:
+        del data[last]
+    else:
+        data[last] = value
+
+
+_DELETE = object()
+
+
+@pytest.mark.parametrize("path, value, message", [
+    (("state",), _DELETE, r"x.json: state: required field is missing"),
+    (("params", "learning_rate"), 0.1, r"x.json: params.learning_rate: unknown field"),
+    (("params", "mf"), "gauss", r"x.json: state.mfs\[0\]: must be a N × 2 array of numbers"),
+    (("state", "rules", 0, 1), -1, r"x.json: state.rules\[0\]\[1\]: must index one of input 1's "
+                                   r"2 functions \(0..1\), got -1"),
+    (("state", "rules", 3, 0), 2, r"state.rules\[3\]\[0\]: must index one of input 0's"),
+    (("state", "consequents", 2, 0), None, r"state.consequents: must be a 8 × 4 array of numbers"),
+    (("state", "consequents", 0), [1.0, 2.0], r"state.consequents: must be a 8 × 4 array"),
+    (("state", "mfs", 1, 0, 0), -1.0, r"state.mfs\[1\]: must hold at least one gbell function "
+                                      r"with positive widths"),
+    (("state", "feature_names"), [], r"state.feature_names: must be a list of 1 to 10000 items"),
+    (("state", "best_epoch"), 7, r"state.best_epoch: must be <= 1, got 7"),
+    (("format",), "other", r"x.json: format: must be 'nfarm-anfis-1'"),
+    (("params", "n_mfs"), 2.5, r"x.json: params: n_mfs must be an integer >= 1"),
+])
+def test_load_validates_an_edited_model(tmp_path, path, value, message):
+    """A saved model is checked like a parameter file: every edit is one error naming the
+    file and the field, never a silently different model."""
+    _, data = _saved(tmp_path)
+    _edit(data, path, value)
+    (tmp_path / "x.json").write_text(json.dumps(data))
+    with pytest.raises(ParamsError, match=message):
         load(tmp_path / "x.json")
+
+
+def test_load_refuses_nan_consequents(tmp_path):
+    _, data = _saved(tmp_path)
+    text = json.dumps(data).replace(str(data["state"]["consequents"][0][0]), "NaN", 1)
+    (tmp_path / "x.json").write_text(text)
+    with pytest.raises(ParamsError, match=r"x.json: NaN is not a number JSON allows"):
+        load(tmp_path / "x.json")
+
+
+@pytest.mark.parametrize("content, message", [
+    ('{"format": "other"}', r"x.json: class: must be 'ANFIS' or 'ANFISMulti'"),
+    ("[1, 2]", r"x.json: must be 'ANFIS' or 'ANFISMulti' \(an nfarm ANFIS model\), got \[1, 2\]"),
+    ('{"format": "nfarm-anfis-1", "class": "ANFIS", "params": {}}', r"x.json: state: required field"),
+    ('{"format": "nfarm-anfis-1", "class": "ANFISMulti", "params": {}, "models": []}',
+     r"x.json: models: must be a list of 1 to 10000 items, got 0"),
+    ("[" * 5000 + "]" * 5000, r"x.json: nested deeper than 32 levels"),
+    ("{", r"x.json:1:2: not valid JSON"),
+    (b"\x89PNG\r\n\x1a\n\x00\xff", r"x.json: not UTF-8 text \(byte 0"),
+])
+def test_load_refuses_other_files(tmp_path, content, message):
+    path = tmp_path / "x.json"
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    with pytest.raises(ParamsError, match=message):
+        load(path)
+
+
+def test_load_refuses_special_files():
+    with pytest.raises(ParamsError, match=r"/dev/zero: must be a regular file"):
+        load("/dev/zero")
+
+
+def test_predict_far_outside_the_data_warns():
+    model = ANFIS(epochs=1, mf="gauss").fit(X3, Y3)     # Gaussians underflow to exactly 0
+    with pytest.warns(ANFISWarning, match=r"1 of 2 inputs \(first: row 1\) fire no rule"):
+        y = model.predict(np.array([X3[0], [1e3, 1e3, 1e3]]))
+    assert y[1] == 0.0
+
+
+def test_clustering_is_bounded_before_the_work():
+    rng = np.random.default_rng(0)
+    X = rng.random((5000, 2))
+    with pytest.raises(ValueError, match=r"5000 samples are fewer than the 6000 consequent"):
+        ANFIS(partition="fcm", n_rules=2000).fit(X, X.sum(1))
+    with pytest.raises(ValueError, match=r"radius 0.001 finds more than \d+ clusters"):
+        ANFIS(partition="subtractive", radius=1e-3).fit(X[:1500], X[:1500].sum(1))

@@ -187,7 +187,19 @@ def test_bad_target_index_in_a_2d_batch(intelbot5):
     (dict(weights=np.zeros(6)), r"weights must be finite, >= 0 and not all zero"),
     (dict(method="newton"), r"method must be one of lm, dls, pinv, jt"),
     (dict(lm_damping="fixed"), r"lm_damping must be 'sugihara' or 'marquardt'"),
-    (dict(tol_pos=0.0), r"tol_pos must be > 0"),
+    (dict(tol_pos=0.0), r"tol_pos must be a finite number > 0, got 0.0"),
+    # Options that once turned a reachable target into "unreachable", or switched a check off.
+    (dict(pinv_rcond=np.nan), r"pinv_rcond must be a finite number > 0 and < 1, got nan"),
+    (dict(lm_scale=-1), r"lm_scale must be a finite number >= 0, got -1"),
+    (dict(lm_bias=np.nan), r"lm_bias must be a finite number >= 0, got nan"),
+    (dict(lm_factor=0), r"lm_factor must be a finite number > 1, got 0"),
+    (dict(lm_lambda0=np.nan), r"lm_lambda0 must be a finite number > 0, got nan"),
+    (dict(dls_damping=np.inf), r"dls_damping must be a finite number > 0, got inf"),
+    (dict(ortho_tol=np.nan), r"ortho_tol must be a finite number > 0 and < 1, got nan"),
+    (dict(lm_scale=0, lm_bias=0), r"lm_scale and lm_bias must not both be 0"),
+    (dict(restarts=2.5), r"restarts must be an integer >= 0, got 2.5"),
+    (dict(seed=-1), r"seed must be an integer >= 0, got -1"),
+    (dict(chunk=0), r"chunk must be an integer >= 1, got 0"),
     (dict(restarts=300), r"restarts \(300\) must be below guess_table \(256\)"),
 ])
 def test_bad_options_are_clear_errors(intelbot5, kwargs, message):
@@ -204,3 +216,21 @@ def test_the_seed_table_is_not_the_users_sample(intelbot5):
     """Targets drawn with the solver's own seed are not trivially in its table of starts."""
     T = fk(intelbot5, sample_configurations(intelbot5, 50, 0))
     assert np.median(solve(intelbot5, T, seed=0).iterations) >= 2
+
+
+def test_empty_batch_gives_an_empty_result(intelbot5):
+    result = solve(intelbot5, np.zeros((0, 4, 4)))
+    assert result.q.shape == (0, 5) and result.success.shape == (0,) and result.reason.shape == (0,)
+    result = solve(intelbot5, np.zeros((3, 0, 4, 4)), record_history=True)
+    assert result.q.shape == (3, 0, 5) and result.history.shape == (3, 0, 0, 2)
+
+
+def test_chunks_do_not_change_any_target_s_result(intelbot5):
+    """Targets are solved in bounded chunks; each result is the same whatever the chunk size."""
+    q = sample_configurations(intelbot5, 37, seed=5)
+    T = fk(intelbot5, q).reshape(37, 4, 4)
+    T[::7, :3, 3] += 0.3                          # some unreachable targets, with restarts
+    whole = solve(intelbot5, T)
+    parts = solve(intelbot5, T, chunk=8)
+    for field in ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason"):
+        np.testing.assert_array_equal(getattr(parts, field), getattr(whole, field), err_msg=field)

@@ -111,3 +111,11 @@ def test_intelbot5_singularities(intelbot5):
     assert np.all(w[1:-1] > 1e-6)
     with pytest.raises(ValueError, match="part must be one of"):
         manipulability(intelbot5, q, part="linear")
+
+
+@pytest.mark.parametrize("q, kind", [("abcde", "text"), ([True] * 5, "booleans"),
+                                     (np.zeros(5) + 1j, "complex numbers"), ([None] * 5, "objects")])
+def test_fk_refuses_what_is_not_real_numbers(intelbot5, q, kind):
+    """Not cast: a complex angle's imaginary part would be dropped, None would become NaN."""
+    with pytest.raises(ValueError, match=f"intelbot5: q must hold real numbers, got {kind}"):
+        fk(intelbot5, q)

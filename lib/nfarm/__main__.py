@@ -21,6 +21,11 @@ def check_params(files: list[str]) -> int:
                 print(exc, file=sys.stderr)
                 status = 2
                 continue
+            except Exception as exc:  # noqa: BLE001 — a bug of ours: report it, check the rest
+                print(f"{path}: internal error while checking ({type(exc).__name__}: {exc}); "
+                      f"please report it", file=sys.stderr)
+                status = 2
+                continue
         for warning in caught:
             print(f"warning: {warning.message}", file=sys.stderr)
         print(f"{path}: ok ({robot.name}, {robot.n} joints, {robot.convention} DH)")

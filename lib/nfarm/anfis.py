@@ -33,7 +33,9 @@ import itertools
 import json
 import math
 import os
+import warnings
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -41,8 +43,9 @@ import scipy.linalg
 from .fuzzy import (MF_TYPES, cluster_params, grid_params, mf_gradients, mf_values,
                     subtractive_clustering)
 from .paths import atomic_path
+from .reading import Validator, load_json, show
 
-__all__ = ["ANFIS", "ANFISMulti", "MF_TYPES", "PARTITIONS", "SOLVERS", "load"]
+__all__ = ["ANFIS", "ANFISMulti", "ANFISWarning", "MF_TYPES", "PARTITIONS", "SOLVERS", "load"]
 
 PARTITIONS = ("grid", "fcm", "subtractive")
 SOLVERS = ("normal", "lstsq")
@@ -51,6 +54,10 @@ _FORMAT = "nfarm-anfis-1"
 
 # --------------------------------------------------------------------------------------------
 # The estimator
+
+
+class ANFISWarning(UserWarning):
+    """A prediction is not backed by the training data (no rule fires)."""
 
 
 class ANFIS:
@@ -145,10 +152,17 @@ class ANFIS:
             raise ValueError(f"error_goal must be >= 0, got {self.error_goal!r}")
         if not (self.ridge >= 0 and math.isfinite(self.ridge)):
             raise ValueError(f"ridge must be >= 0, got {self.ridge!r}")
-        if self.partition == "fcm" and not (isinstance(self.n_rules, (int, np.integer)) and self.n_rules >= 2):
-            raise ValueError(f"partition 'fcm' needs n_rules >= 2, got {self.n_rules!r}")
-        n_mfs = [self.n_mfs] * n_features if isinstance(self.n_mfs, (int, np.integer)) else list(self.n_mfs)
-        if len(n_mfs) != n_features or not all(isinstance(m, (int, np.integer)) and m >= 1 for m in n_mfs):
+        if self.partition == "fcm" and not (isinstance(self.n_rules, (int, np.integer))
+                                            and not isinstance(self.n_rules, bool) and self.n_rules >= 2):
+            raise ValueError(f"partition 'fcm' needs n_rules (an integer) >= 2, got {self.n_rules!r}")
+        if isinstance(self.n_mfs, (int, np.integer)) and not isinstance(self.n_mfs, bool):
+            n_mfs = [self.n_mfs] * n_features
+        elif isinstance(self.n_mfs, (Sequence, np.ndarray)) and not isinstance(self.n_mfs, str):
+            n_mfs = list(self.n_mfs)
+        else:
+            n_mfs = []
+        if len(n_mfs) != n_features or not all(isinstance(m, (int, np.integer))
+                                               and not isinstance(m, bool) and m >= 1 for m in n_mfs):
             raise ValueError(f"n_mfs must be an integer >= 1 or one per input ({n_features}), got {self.n_mfs!r}")
         if self.feature_names is not None and len(self.feature_names) != n_features:
             raise ValueError(f"feature_names has {len(self.feature_names)} names for {n_features} inputs")
@@ -193,7 +207,15 @@ class ANFIS:
             sigmas = np.sqrt(np.maximum(spread, 1e-12 * (hi - lo) ** 2))      # (c, n)
             centres = centres[:, :-1]
         else:
-            centres = subtractive_clustering(data, self.radius)[:, :-1]
+            centres = subtractive_clustering(data, self.radius,
+                                             max_centres=self._max_rules(len(X), X.shape[1]))
+            if centres is None:
+                raise ValueError(
+                    f"subtractive clustering with radius {self.radius!r} finds more than "
+                    f"{self._max_rules(len(X), X.shape[1])} clusters, more rules than {len(X)} "
+                    f"samples of {X.shape[1]} inputs can fit within memory_budget: use a larger "
+                    f"radius or more data")
+            centres = centres[:, :-1]
             sigmas = np.broadcast_to(self.radius * (hi - lo) / math.sqrt(8.0), centres.shape)
         R = len(centres)
         mfs = [cluster_params(self.mf, centres[:, i], sigmas[:, i]) for i in range(X.shape[1])]
@@ -268,12 +290,14 @@ class ANFIS:
         if constant.size:
             raise ValueError(f"input {constant[0]} ({self._names(n)[constant[0]]}) is constant: "
                              f"membership functions need a range")
-        if self.partition == "grid":      # refuse before building anything
+        # Refuse before building anything: the grid and fcm rule counts are known; subtractive
+        # clustering stops (with the same error) once it finds more centres than fit.
+        if self.partition == "grid":
             self._check_size(len(X), math.prod(n_mfs), n)
+        elif self.partition == "fcm":
+            self._check_size(len(X), int(self.n_rules), n)
         mfs, rules = self._initial_structure(X, y, n_mfs)
         R = len(rules)
-        if self.partition != "grid":      # the clustering decided the number of rules
-            self._check_size(len(X), R, n)
 
         self.n_features_in_ = n
         self.feature_names_in_ = np.array(self._names(n), dtype=object)
@@ -311,15 +335,23 @@ class ANFIS:
         self.n_epochs_ = len(self.loss_curve_)
         return self
 
+    def _max_rules(self, N, n):
+        """The most rules that N samples of n inputs can fit within the memory budget."""
+        R = N // (n + 1)
+        while R > 0 and self._bytes_needed(N, R, n) > self.memory_budget:
+            R = min(R - 1, int(R * 0.9))
+        return max(R, 0)
+
     def _check_size(self, N, R, n):
         if N < R * (n + 1):
             raise ValueError(f"{N} samples are fewer than the {R * (n + 1)} consequent parameters "
                              f"({R} rules × {n + 1}): use fewer rules or more data")
         need = self._bytes_needed(N, R, n)
         if need > self.memory_budget:
-            raise ValueError(f"{N} samples × {R} rules × {n + 1} would need about {need / 1e9:.2f} GB, "
-                             f"over memory_budget = {self.memory_budget / 1e9:.2f} GB: use fewer "
-                             f"samples or rules, or raise memory_budget")
+            raise ValueError(f"{N} samples × {R} rules × {n + 1} would need about "
+                             f"{need / 1e9:.2f} GB, over memory_budget = "
+                             f"{self.memory_budget / 1e9:.2f} GB: use fewer samples or rules, "
+                             f"or raise memory_budget")
 
     def _keep_valid(self, new, old):
         """Widths stay positive (at least 1e-3 of their value before the step); bell slopes too."""
@@ -361,7 +393,13 @@ class ANFIS:
         X, _ = self._check_data(X, None)
         if X.shape[1] != self.n_features_in_:
             raise ValueError(f"X has {X.shape[1]} inputs, the model was fitted with {self.n_features_in_}")
-        return self._predict_with(X, self.mfs_, self.rules_, self.consequents_)
+        _, _, _, total, w_bar = self._layers(X, self.mfs_, self.rules_)
+        silent = np.flatnonzero(total == 0)
+        if silent.size:
+            warnings.warn(ANFISWarning(
+                f"{silent.size} of {len(X)} inputs (first: row {silent[0]}) fire no rule — "
+                f"far outside the training data — and are predicted as 0"), stacklevel=2)
+        return (w_bar * self._rule_outputs(X, self.consequents_)).sum(axis=1)
 
     def score(self, X, y) -> float:
         """Coefficient of determination R² of the predictions."""
@@ -420,19 +458,51 @@ class ANFIS:
                           "mfs_initial": [p.tolist() for p in self.mfs_initial_]}}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "ANFIS":
-        if data.get("format") != _FORMAT or data.get("class") != cls.__name__:
-            raise ValueError(f"not an {cls.__name__} saved by nfarm ({_FORMAT})")
-        model = cls(**data["params"])
-        s = data["state"]
-        model.mfs_ = [np.array(p, dtype=float) for p in s["mfs"]]
-        model.mfs_initial_ = [np.array(p, dtype=float) for p in s["mfs_initial"]]
-        model.rules_ = np.array(s["rules"], dtype=int)
-        model.consequents_ = np.array(s["consequents"], dtype=float)
-        model.feature_names_in_ = np.array(s["feature_names"], dtype=object)
-        model.n_features_in_ = len(s["feature_names"])
-        model.loss_curve_, model.val_loss_curve_ = s["loss_curve"], s["val_loss_curve"]
-        model.step_size_curve_, model.best_epoch_ = s["step_size_curve"], s["best_epoch"]
+    def from_dict(cls, data: Any, source: str = "<dict>") -> "ANFIS":
+        """The model that :meth:`to_dict` described, checked like a parameter file: schema,
+        shapes, finite values, index ranges (errors name ``source`` and the field)."""
+        v = Validator(source)
+        _check_header(v, data, cls.__name__, "", ("params", "state"))
+        s = v.mapping(data["state"], "state", dict.fromkeys(_STATE_KEYS, True))
+        names = [v.string(x, f"state.feature_names[{i}]")
+                 for i, x in enumerate(v.sequence(s["feature_names"], "state.feature_names",
+                                                  min_len=1, max_len=10_000))]
+        n = len(names)
+        params = _check_params(v, data["params"], "params", n_features=n)
+        model = cls(**params)
+        p = 3 if params["mf"] == "gbell" else 2
+        mfs = {}
+        for key in ("mfs", "mfs_initial"):
+            mfs[key] = [v.array(m, f"state.{key}[{i}]", (None, p)) for i, m in
+                        enumerate(v.sequence(s[key], f"state.{key}", min_len=n, max_len=n))]
+            for i, m in enumerate(mfs[key]):
+                if len(m) == 0 or (m[:, 0] <= 0).any() or (p == 3 and (m[:, 1] <= 0).any()):
+                    v.fail(f"state.{key}[{i}]", f"must hold at least one {params['mf']} function "
+                                                f"with positive widths{' and slopes' if p == 3 else ''}")
+        sizes = np.array([len(m) for m in mfs["mfs"]])
+        if not np.array_equal(sizes, [len(m) for m in mfs["mfs_initial"]]):
+            v.fail("state.mfs_initial", "must have as many functions per input as state.mfs")
+        rules = v.array(s["rules"], "state.rules", (None, n), integer=True)
+        if len(rules) == 0:
+            v.fail("state.rules", "must hold at least one rule")
+        bad = (rules < 0) | (rules >= sizes)
+        if bad.any():
+            r, i = np.argwhere(bad)[0]
+            v.fail(f"state.rules[{r}][{i}]", f"must index one of input {i}'s {sizes[i]} "
+                                             f"functions (0..{sizes[i] - 1}), got {rules[r, i]}")
+        consequents = v.array(s["consequents"], "state.consequents", (len(rules), n + 1))
+        curves = {key: v.array(s[key], f"state.{key}", (None,)).tolist()
+                  for key in ("loss_curve", "val_loss_curve", "step_size_curve")}
+        if not curves["loss_curve"]:
+            v.fail("state.loss_curve", "must hold the training error of at least one epoch")
+        best = v.integer(s["best_epoch"], "state.best_epoch", lo=0, hi=len(curves["loss_curve"]) - 1)
+        model.mfs_, model.mfs_initial_ = mfs["mfs"], mfs["mfs_initial"]
+        model.rules_ = rules.astype(int)
+        model.consequents_ = consequents
+        model.feature_names_in_ = np.array(names, dtype=object)
+        model.n_features_in_ = n
+        model.loss_curve_, model.val_loss_curve_ = curves["loss_curve"], curves["val_loss_curve"]
+        model.step_size_curve_, model.best_epoch_ = curves["step_size_curve"], best
         model.n_epochs_ = len(model.loss_curve_)
         return model
 
@@ -479,11 +549,12 @@ class ANFISMulti:
                 "models": [m.to_dict() for m in self.models_]}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "ANFISMulti":
-        if data.get("format") != _FORMAT or data.get("class") != cls.__name__:
-            raise ValueError(f"not an ANFISMulti saved by nfarm ({_FORMAT})")
-        multi = cls(**data["params"])
-        multi.models_ = [ANFIS.from_dict(m) for m in data["models"]]
+    def from_dict(cls, data: Any, source: str = "<dict>") -> "ANFISMulti":
+        v = Validator(source)
+        _check_header(v, data, cls.__name__, "", ("params", "models"))
+        multi = cls(**_check_params(v, data["params"], "params", n_features=None))
+        models = v.sequence(data["models"], "models", min_len=1, max_len=10_000)
+        multi.models_ = [ANFIS.from_dict(m, f"{source}: models[{k}]") for k, m in enumerate(models)]
         return multi
 
     def save(self, path: str | os.PathLike) -> None:
@@ -502,13 +573,45 @@ def _plain(value):
     return value
 
 
-def load(path: str | os.PathLike) -> ANFIS | ANFISMulti:
-    """Read a model written by ``save``."""
+_STATE_KEYS = ("mfs", "rules", "consequents", "feature_names", "loss_curve", "val_loss_curve",
+               "step_size_curve", "best_epoch", "mfs_initial")
+
+
+def _check_header(v: Validator, data: Any, cls_name: str, at: str, keys: tuple[str, ...]) -> None:
+    v.mapping(data, at, {"format": True, "class": True, **dict.fromkeys(keys, True)})
+    if data["format"] != _FORMAT:
+        v.fail("format", f"must be {_FORMAT!r} (an nfarm ANFIS model), got {show(data['format'])}")
+    if data["class"] != cls_name:
+        v.fail("class", f"must be {cls_name!r}, got {show(data['class'])}")
+
+
+def _check_params(v: Validator, params: Any, at: str, n_features: int | None) -> dict:
+    """The saved constructor parameters, valid for a model of ``n_features`` inputs."""
+    names = ANFIS._param_names()
+    v.mapping(params, at, dict.fromkeys(names, False))
+    model = ANFIS(**params)
     try:
-        data = json.loads(open(path, encoding="utf-8").read())
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: cannot read an ANFIS model: {exc}") from None
-    kind = {"ANFIS": ANFIS, "ANFISMulti": ANFISMulti}.get(data.get("class"))
-    if kind is None or data.get("format") != _FORMAT:
-        raise ValueError(f"{path}: not an nfarm ANFIS model (format {data.get('format')!r})")
-    return kind.from_dict(data)
+        if n_features is not None:
+            model._check_options(n_features)
+        elif model.mf not in MF_TYPES:
+            raise ValueError(f"mf must be one of {', '.join(MF_TYPES)}, got {show(model.mf)}")
+    except (ValueError, TypeError) as exc:
+        v.fail(at, str(exc))
+    return model.get_params()
+
+
+def load(path: str | os.PathLike) -> ANFIS | ANFISMulti:
+    """Read a model written by ``save``, checked like a parameter file.
+
+    Raises:
+        ParamsError: the file is not a regular file of at most 64 MB, not JSON, or not a
+            valid nfarm ANFIS model; the message names the file and the field.
+    """
+    data = load_json(path, what="ANFIS model")
+    kind = {"ANFIS": ANFIS, "ANFISMulti": ANFISMulti}.get(data.get("class")) \
+        if isinstance(data, dict) else None
+    if kind is None:
+        Validator(str(path)).fail("class" if isinstance(data, dict) else "",
+                                  f"must be 'ANFIS' or 'ANFISMulti' (an nfarm ANFIS model), got "
+                                  f"{show(data.get('class') if isinstance(data, dict) else data)}")
+    return kind.from_dict(data, str(path))

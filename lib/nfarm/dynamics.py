@@ -34,7 +34,7 @@ import functools
 import numpy as np
 
 from .kinematics import cos_sin, snap_right_angles
-from .robot import Robot
+from .robot import Robot, joint_array
 from .urdf import joint_placements
 
 __all__ = ["rnea", "gravity_torques", "mass_matrix", "coriolis", "CHUNK"]
@@ -146,10 +146,7 @@ def _matrix(M) -> list:
 def _check(robot: Robot, **arrays) -> tuple[tuple, dict]:
     out = {}
     for name, value in arrays.items():
-        value = np.asarray(value, dtype=float)
-        if value.ndim == 0 or value.shape[-1] != robot.n:
-            raise ValueError(f"{robot.name}: {name} must have shape (..., {robot.n}), got {value.shape}")
-        out[name] = value
+        out[name] = joint_array(robot, value, name)
     try:
         batch = np.broadcast_shapes(*(v.shape[:-1] for v in out.values()))
     except ValueError:

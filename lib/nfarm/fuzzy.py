@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.spatial.distance import cdist
 from skfuzzy import gaussmf, gbellmf
 
 __all__ = ["MF_TYPES", "mf_values", "mf_gradients", "grid_params", "cluster_params",
@@ -72,19 +73,25 @@ def cluster_params(kind: str, centres: np.ndarray, sigmas: np.ndarray) -> np.nda
 
 
 def subtractive_clustering(data: np.ndarray, radius: float, *, squash: float = 1.25,
-                           accept: float = 0.5, reject: float = 0.15, block: int = 2048) -> np.ndarray:
+                           accept: float = 0.5, reject: float = 0.15, block: int = 2048,
+                           max_centres: int | None = None) -> np.ndarray | None:
     """Cluster centres by Chiu's (1994) subtractive clustering of ``data (N, d)``, scaled to
     the unit hypercube: potentials ``P_i = Σ_j exp(−4‖x_i − x_j‖²/r_a²)``, the highest taken as
     a centre and its influence (radius ``squash · r_a``) subtracted, with Chiu's accept/reject
-    thresholds. Returns centres ``(k, d)`` in data units. Memory O(N · block)."""
+    thresholds. Returns centres ``(k, d)`` in data units, or ``None`` as soon as more than
+    ``max_centres`` are found (a tiny radius would otherwise make every point a centre, at
+    O(N) work each). Memory O(N · block)."""
     lo, span = data.min(axis=0), np.ptp(data, axis=0)
     z = (data - lo) / np.where(span > 0, span, 1.0)
     alpha, beta = 4.0 / radius**2, 4.0 / (squash * radius) ** 2
     potential = np.empty(len(z))
-    for start in range(0, len(z), block):
-        d2 = ((z[start:start + block, None, :] - z[None, :, :]) ** 2).sum(-1)
-        potential[start:start + block] = np.exp(-alpha * d2).sum(1)
-    centres, first = [], potential.max()
+    rows = max(1, min(block, (1 << 22) // max(len(z), 1)))       # ≤ 32 MB of distances
+    for start in range(0, len(z), rows):
+        d2 = cdist(z[start:start + rows], z, "sqeuclidean")
+        potential[start:start + rows] = np.exp(-alpha * d2).sum(1)
+    limit = len(z) if max_centres is None else min(len(z), max_centres)
+    centres = np.empty((limit + 1, z.shape[1]))
+    k_found, first = 0, potential.max()
     while True:
         k = int(np.argmax(potential))
         p = potential[k]
@@ -93,12 +100,15 @@ def subtractive_clustering(data: np.ndarray, radius: float, *, squash: float = 1
         elif p < reject * first:
             break
         else:
-            d_min = min(np.sqrt(((z[k] - c) ** 2).sum()) for c in centres)
+            d_min = np.sqrt(((centres[:k_found] - z[k]) ** 2).sum(1).min())
             if d_min / radius + p / first < 1.0:
                 potential[k] = 0.0
                 continue
-        centres.append(z[k].copy())
+        centres[k_found] = z[k]
+        k_found += 1
+        if k_found > limit:                     # only when max_centres < len(z)
+            return None
         potential -= p * np.exp(-beta * ((z - z[k]) ** 2).sum(1))
-        if len(centres) >= len(z) or potential.max() <= 0:
+        if k_found >= len(z) or potential.max() <= 0:
             break
-    return np.array(centres) * np.where(span > 0, span, 1.0) + lo
+    return centres[:k_found] * np.where(span > 0, span, 1.0) + lo

@@ -54,6 +54,7 @@ REASONS = ("converged", "max_iter", "unreachable", "joint_limits")
 DEFAULT_MAX_ITER = {"lm": 25, "dls": 100, "pinv": 50, "jt": 2000}
 _CONVERGED, _MAX_ITER, _UNREACHABLE, _LIMITS = range(4)
 _TABLE_STREAM = 0x1C7AB1E
+_FIELDS = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
 
 
 @dataclass(frozen=True)
@@ -277,7 +278,7 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
           lm_lambda0: float = 1e-3,
           lm_factor: float = 10.0, dls_damping: float = 0.05, pinv_rcond: float = 1e-6,
           stall_rtol: float = 1e-2, stall_iters: int = 4, ortho_tol: float = 1e-9,
-          record_history: bool = False) -> IKResult:
+          record_history: bool = False, chunk: int = 8192) -> IKResult:
     """Solve ``fk(robot, q) = T_target`` for a batch of targets.
 
     Args:
@@ -304,6 +305,9 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
             ``1 − stall_rtol`` below its best for ``stall_iters`` steps.
         ortho_tol: largest accepted ``|RᵀR − I|`` of a target rotation.
         record_history: keep the errors of every iteration (for small batches).
+        chunk: targets solved together. Memory is about 2.6 KB per target of a chunk (lanes,
+            Jacobians, the seed table's distances), so the default bounds a solve to ~25 MB
+            whatever the batch; each target's result does not depend on the chunk size.
 
     Raises:
         ValueError: a bad target, initial guess, weight vector or option; the message names
@@ -313,13 +317,22 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if lm_damping not in ("sugihara", "marquardt"):
         raise ValueError(f"lm_damping must be 'sugihara' or 'marquardt', got {lm_damping!r}")
-    for name, value in (("tol_pos", tol_pos), ("tol_rot", tol_rot), ("dls_damping", dls_damping)):
-        if not value > 0:
-            raise ValueError(f"{name} must be > 0, got {value!r}")
-    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else int(max_iter)
-    if max_iter < 1 or restarts < 0 or restart_batch < 1:
-        raise ValueError(f"max_iter and restart_batch must be >= 1 and restarts >= 0, got "
-                         f"{max_iter}, {restart_batch}, {restarts}")
+    for name, value, lo, hi in (("tol_pos", tol_pos, 0, None), ("tol_rot", tol_rot, 0, None),
+                                ("dls_damping", dls_damping, 0, None),
+                                ("pinv_rcond", pinv_rcond, 0, 1), ("lm_lambda0", lm_lambda0, 0, None),
+                                ("lm_factor", lm_factor, 1, None), ("ortho_tol", ortho_tol, 0, 1),
+                                ("stall_rtol", stall_rtol, 0, 1)):
+        _check_number(name, value, lo, hi, open_lo=True)
+    for name, value in (("lm_scale", lm_scale), ("lm_bias", lm_bias)):
+        _check_number(name, value, 0, None, open_lo=False)
+    if lm_damping == "sugihara" and lm_scale == 0 and lm_bias == 0:
+        raise ValueError("lm_scale and lm_bias must not both be 0 (no damping at all)")
+    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else max_iter
+    for name, value, lo in (("max_iter", max_iter, 1), ("restarts", restarts, 0),
+                            ("restart_batch", restart_batch, 1), ("seed", seed, 0),
+                            ("guess_table", guess_table, 1), ("stall_iters", stall_iters, 1),
+                            ("chunk", chunk, 1)):
+        _check_integer(name, value, lo)
     T = _check_targets(T_target, ortho_tol)
     batch = T.shape[:-2]
     q_start = _check_q0(robot, q0, batch, respect_limits)
@@ -327,16 +340,60 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
     first_rank = 1 if q_start is None else 0  # the table rank of the first restart
     if restarts + first_rank > guess_table:
         raise ValueError(f"restarts ({restarts}) must be below guess_table ({guess_table})")
-    seeds = _Seeds(robot, T.reshape(-1, 4, 4), w, guess_table, seed, restarts + first_rank)
-    if q_start is None:
-        M = seeds.targets.shape[0]
-        q_start = seeds.nearest(np.arange(M))
-    run = _Run(robot, T.reshape(-1, 4, 4), q_start, w, method, max_iter, restarts,
-               restart_batch, respect_limits, seeds, first_rank, dict(lm_damping=lm_damping, lm_scale=lm_scale, lm_bias=lm_bias,
-               lm_lambda0=lm_lambda0, lm_factor=lm_factor, dls_damping=dls_damping,
-               pinv_rcond=pinv_rcond), stall_rtol, stall_iters, tol_pos, tol_rot,
-               record_history)
-    return run.result(batch)
+    T = T.reshape(-1, 4, 4)
+    options = dict(lm_damping=lm_damping, lm_scale=lm_scale, lm_bias=lm_bias,
+                   lm_lambda0=lm_lambda0, lm_factor=lm_factor, dls_damping=dls_damping,
+                   pinv_rcond=pinv_rcond)
+    # Targets are independent: solving them in chunks bounds the memory and gives the same
+    # result for each target whatever the chunk size.
+    if T.shape[0] == 0:
+        empty = {f: np.zeros((*batch, robot.n) if f == "q" else batch,
+                             dtype={"success": bool, "iterations": int, "restarts": int,
+                                    "reason": np.array(REASONS).dtype}.get(f, float))
+                 for f in _FIELDS}
+        return IKResult(**empty, history=np.zeros((*batch, 0, 2)) if record_history else None)
+    results = []
+    for start in range(0, T.shape[0], chunk):
+        part = slice(start, start + chunk)
+        seeds = _Seeds(robot, T[part], w, guess_table, seed, restarts + first_rank)
+        q_part = seeds.nearest(np.arange(seeds.targets.shape[0])) if q_start is None \
+            else q_start[part]
+        run = _Run(robot, T[part], q_part, w, method, max_iter, restarts, restart_batch,
+                   respect_limits, seeds, first_rank, options, stall_rtol, stall_iters,
+                   tol_pos, tol_rot, record_history)
+        results.append(run.result((q_part.shape[0],)))
+    return _concatenate(results, batch, robot.n)
+
+
+def _check_number(name, value, lo, hi, open_lo):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(value) or (value <= lo if open_lo else value < lo) \
+            or (hi is not None and value >= hi):
+        bounds = f"{'>' if open_lo else '>='} {lo}" + ("" if hi is None else f" and < {hi}")
+        raise ValueError(f"{name} must be a finite number {bounds}, got {value!r}")
+
+
+def _check_integer(name, value, lo):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise ValueError(f"{name} must be an integer >= {lo}, got {value!r}")
+
+
+def _concatenate(results: list[IKResult], batch: tuple, n: int) -> IKResult:
+    """The chunks' results as one result of shape ``batch``."""
+    if len(results) == 1:
+        r = results[0]
+        history = None if r.history is None else r.history.reshape((*batch, *r.history.shape[-2:]))
+        return IKResult(**{f: getattr(r, f).reshape((*batch, *getattr(r, f).shape[1:]))
+                           for f in _FIELDS}, history=history)
+    out = {f: np.concatenate([getattr(r, f) for r in results]) for f in _FIELDS}
+    history = None
+    if results[0].history is not None:
+        K = max(r.history.shape[1] for r in results)
+        history = np.concatenate([np.pad(r.history, ((0, 0), (0, K - r.history.shape[1]), (0, 0)),
+                                         constant_values=np.nan) for r in results])
+        history = history.reshape((*batch, K, 2))
+    return IKResult(**{f: v.reshape((*batch, *v.shape[1:])) for f, v in out.items()},
+                    history=history)
 
 
 class _Run:
@@ -543,5 +600,4 @@ def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
         result = solve(robot, T, q, **options)
         results.append(result)
         q = result.q
-    fields = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
-    return IKResult(**{f: np.stack([getattr(r, f) for r in results]) for f in fields})
+    return IKResult(**{f: np.stack([getattr(r, f) for r in results]) for f in _FIELDS})

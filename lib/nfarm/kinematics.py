@@ -20,7 +20,7 @@ import functools
 
 import numpy as np
 
-from .robot import Robot
+from .robot import Robot, joint_array
 from .urdf import to_urdf
 
 __all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "pose_jacobian_T",
@@ -32,10 +32,7 @@ CHUNK = 16384
 
 
 def _check_q(robot: Robot, q) -> np.ndarray:
-    q = np.asarray(q, dtype=float)
-    if q.ndim == 0 or q.shape[-1] != robot.n:
-        raise ValueError(f"{robot.name}: q must have shape (..., {robot.n}), got {q.shape}")
-    return q
+    return joint_array(robot, q, "q")
 
 
 def snap_right_angles(x: np.ndarray) -> np.ndarray:

@@ -21,16 +21,15 @@ Conventions (SI units, radians):
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
-import re
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
+
+from .reading import ParamsError, ParamsWarning, Validator, load_yaml, show
 
 __all__ = [
     "ParamsError",
@@ -40,6 +39,7 @@ __all__ = [
     "robot_from_dict",
     "robot_to_dict",
     "sample_configurations",
+    "joint_array",
     "dh_rows",
 ]
 
@@ -49,14 +49,8 @@ TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
 JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
               "com": True, "inertia": True, "name": False}
 ORTHONORMAL_TOL = 1e-9
-
-
-class ParamsError(ValueError):
-    """A parameter file breaks a rule; the message names the file, the field and the rule."""
-
-
-class ParamsWarning(UserWarning):
-    """A parameter file is accepted but something in it is physically suspicious."""
+INERTIA_RTOL = 1e-12
+MAX_PLAUSIBLE_LENGTH = 10.0   # [m]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -109,48 +103,24 @@ class Robot:
 
 
 # --------------------------------------------------------------------------------------------
-# YAML loading
-
-
-class _Loader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that also reads ``1e-4`` as a float (YAML 1.2), not as a string."""
-
-
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-                   |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-                   |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
-                   |[-+]?\.(?:inf|Inf|INF)
-                   |\.(?:nan|NaN|NAN))$""", re.X),
-    list("-+0123456789."),
-)
+# Loading
 
 
 def load_robot(path: str | Path) -> Robot:
     """Load and validate a robot parameter file (YAML; schema in ``params/README.md``).
 
+    The file goes through :func:`nfarm.reading.load_yaml` (regular file, size limit, no
+    duplicate keys, bounded aliases and nesting, YAML 1.2 decimal numbers).
+
     Raises:
         ParamsError: the file is missing, is not valid YAML, or breaks a schema rule; the
             message names the file, the field and the rule (and the line for YAML errors).
     Warns:
-        ParamsWarning: an inertia that violates the triangle inequality.
+        ParamsWarning: an inertia that violates the triangle inequality; an implausible
+            value (an angle beyond 2π, a length beyond 10 m: degrees or millimetres by mistake?).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ParamsError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ParamsError(f"{path}: cannot read: {exc}") from None
-    try:
-        data = yaml.load(text, Loader=_Loader)  # noqa: S506 — a SafeLoader subclass
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ParamsError(f"{where}: YAML syntax error: {problem}") from None
-    return robot_from_dict(data, source=str(path))
+    return robot_from_dict(load_yaml(path, what="robot file"), source=str(path))
 
 
 def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
@@ -158,32 +128,39 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
     v = _Validator(source)
     v.mapping(data, "", TOP_KEYS)
     name = v.string(data["name"], "name")
-    convention = data["convention"]
-    if convention not in CONVENTIONS:
-        v.fail("convention", f"must be one of {', '.join(CONVENTIONS)}, got {convention!r}")
-    gravity = v.vector(data["gravity"], "gravity", 3)
+    convention = v.choice(data["convention"], "convention", CONVENTIONS)
+    gravity = np.array(v.vector(data["gravity"], "gravity", 3))
     tool = v.pose(data["tool"], "tool") if data.get("tool") is not None else np.eye(4)
+    for k in range(3):
+        v.plausible(float(tool[k, 3]), f"tool[{k}][3]", "length")
     description = v.string(data["description"], "description", allow_empty=True) \
         if "description" in data else ""
 
     joints = data["joints"]
     if not isinstance(joints, list) or not joints:
-        v.fail("joints", f"must be a non-empty list of joints, got {_show(joints)}")
+        v.fail("joints", f"must be a non-empty list of joints, got {show(joints)}")
     fields: dict[str, list] = {k: [] for k in JOINT_KEYS}
     for i, joint in enumerate(joints):
         at = f"joints[{i}]"
         v.mapping(joint, at, JOINT_KEYS)
-        for key in ("a", "alpha", "d", "offset"):
+        for key, kind in (("a", "length"), ("alpha", "angle"), ("d", "length"),
+                          ("offset", "angle")):
             fields[key].append(v.number(joint[key], f"{at}.{key}"))
+            v.plausible(fields[key][-1], f"{at}.{key}", kind)
         lo, hi = v.vector(joint["qlim"], f"{at}.qlim", 2)
         if not lo < hi:
-            v.fail(f"{at}.qlim", f"must satisfy lo < hi, got [{float(lo)!r}, {float(hi)!r}]")
+            v.fail(f"{at}.qlim", f"must satisfy lo < hi, got [{lo!r}, {hi!r}]")
+        if max(abs(lo), abs(hi)) > 2 * math.pi:
+            v.fail(f"{at}.qlim", f"must lie within [-2π, 2π] rad, got [{lo!r}, {hi!r}] "
+                                 f"(degrees by mistake?)")
         fields["qlim"].append((lo, hi))
         mass = v.number(joint["mass"], f"{at}.mass")
         if mass < 0:
             v.fail(f"{at}.mass", f"must be >= 0, got {mass!r}")
         fields["mass"].append(mass)
         fields["com"].append(v.vector(joint["com"], f"{at}.com", 3))
+        for k, c in enumerate(fields["com"][-1]):
+            v.plausible(c, f"{at}.com[{k}]", "length")
         fields["inertia"].append(v.inertia(joint["inertia"], f"{at}.inertia"))
         jname = joint.get("name", f"q{i + 1}")
         fields["name"].append(v.string(jname, f"{at}.name"))
@@ -227,6 +204,19 @@ def sample_configurations(robot: Robot, size: int | tuple[int, ...], seed: int |
     return lo + (hi - lo) * rng.random(size + (robot.n,))
 
 
+def joint_array(robot: Robot, value, name: str = "q") -> np.ndarray:
+    """``value`` as a float array of shape ``(..., n)``, or a one-line ``ValueError``: real
+    numbers only (booleans, complex numbers, strings and ``None`` are refused, not cast)."""
+    array = value if isinstance(value, np.ndarray) else np.asarray(value)
+    if array.dtype.kind not in "iuf":
+        kind = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
+                "O": "objects"}.get(array.dtype.kind, array.dtype.name)
+        raise ValueError(f"{robot.name}: {name} must hold real numbers, got {kind} ({show(value)})")
+    if array.ndim == 0 or array.shape[-1] != robot.n:
+        raise ValueError(f"{robot.name}: {name} must have shape (..., {robot.n}), got {array.shape}")
+    return array.astype(float, copy=False)
+
+
 def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
     """The DH table for people: column names and one row per joint, angles in degrees."""
     prime = "" if robot.convention == "standard" else "_{i-1}"
@@ -243,54 +233,12 @@ def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
 # Validation
 
 
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-class _Validator:
-    """Checks one field at a time; every failure names the source, the field and the rule."""
-
-    def __init__(self, source: str):
-        self.source = source
-
-    def fail(self, field: str, rule: str):
-        prefix = f"{self.source}: {field}: " if field else f"{self.source}: "
-        raise ParamsError(prefix + rule)
-
-    def mapping(self, data: Any, at: str, keys: dict[str, bool]) -> None:
-        if not isinstance(data, Mapping):
-            self.fail(at, f"must be a mapping of fields, got {_show(data)}")
-        for key in data:
-            if key not in keys:
-                close = difflib.get_close_matches(str(key), list(keys), n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else \
-                    f" (allowed: {', '.join(keys)})"
-                self.fail(f"{at}.{key}" if at else str(key), f"unknown field{hint}")
-        for key, required in keys.items():
-            if required and key not in data:
-                self.fail(f"{at}.{key}" if at else key, "required field is missing")
-
-    def string(self, value: Any, at: str, allow_empty: bool = False) -> str:
-        if not isinstance(value, str) or not (value.strip() or allow_empty):
-            self.fail(at, f"must be a non-empty string, got {_show(value)}")
-        return value
-
-    def number(self, value: Any, at: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(at, f"must be a number, got {_show(value)}")
-        if not math.isfinite(value):
-            self.fail(at, f"must be finite, got {value!r}")
-        return float(value)
-
-    def vector(self, value: Any, at: str, length: int) -> np.ndarray:
-        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != length:
-            self.fail(at, f"must be a list of {length} numbers, got {_show(value)}")
-        return np.array([self.number(x, f"{at}[{k}]") for k, x in enumerate(value)])
+class _Validator(Validator):
+    """The shared field checks plus a robot's own: poses and inertias."""
 
     def pose(self, value: Any, at: str) -> np.ndarray:
-        if not isinstance(value, Sequence) or len(value) != 4:
-            self.fail(at, f"must be a 4x4 matrix (list of 4 rows), got {_show(value)}")
+        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 4:
+            self.fail(at, f"must be a 4x4 matrix (list of 4 rows), got {show(value)}")
         T = np.array([self.vector(row, f"{at}[{r}]", 4) for r, row in enumerate(value)])
         if not np.array_equal(T[3], [0.0, 0.0, 0.0, 1.0]):
             self.fail(f"{at}[3]", f"last row must be [0, 0, 0, 1], got {T[3].tolist()}")
@@ -306,18 +254,30 @@ class _Validator:
     def inertia(self, value: Any, at: str) -> np.ndarray:
         if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 6:
             self.fail(at, f"must be a list of 6 numbers [Ixx, Iyy, Izz, Ixy, Iyz, Ixz], "
-                          f"got {_show(value)}")
+                          f"got {show(value)}")
         ixx, iyy, izz, ixy, iyz, ixz = (self.number(x, f"{at}[{k}]") for k, x in enumerate(value))
         inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
         principal = np.linalg.eigvalsh(inertia)
-        tol = 1e-12 * max(1.0, float(np.abs(principal).max()))
+        # Relative to the inertia's own scale: a 1e-20 kg m² part is as much a body as a
+        # 1 kg m² one (eigvalsh is accurate to ~1e-16 of the largest moment).
+        tol = INERTIA_RTOL * float(np.abs(principal).max())
         if principal[0] < -tol:
             self.fail(at, f"must be positive semi-definite, got principal moments "
-                          f"{np.round(principal, 12).tolist()}")
+                          f"{[float(f'{p:.6g}') for p in principal]}")
         p1, p2, p3 = principal
         if p1 + p2 < p3 - tol:
-            warnings.warn(ParamsWarning(
-                f"{self.source}: {at}: principal moments {np.round(principal, 12).tolist()} "
-                f"break the triangle inequality (I1 + I2 >= I3): not a physical rigid body; "
-                f"accepted as given"), stacklevel=4)
+            self.warn(at, f"principal moments {[float(f'{p:.6g}') for p in principal]} break "
+                          f"the triangle inequality (I1 + I2 >= I3): not a physical rigid body; "
+                          f"accepted as given")
         return inertia
+
+    def warn(self, at: str, message: str) -> None:
+        warnings.warn(ParamsWarning(f"{self.source}: {at}: {message}"), stacklevel=5)
+
+    def plausible(self, value: float, at: str, kind: str) -> None:
+        """Warn about an angle beyond 2π or a length beyond 10 m (a unit slip?)."""
+        if kind == "angle" and abs(value) > 2 * math.pi:
+            self.warn(at, f"{value!r} rad is more than a full turn: an angle in degrees?")
+        elif kind == "length" and abs(value) > MAX_PLAUSIBLE_LENGTH:
+            self.warn(at, f"{value!r} m is over {MAX_PLAUSIBLE_LENGTH:g} m: a length in "
+                          f"millimetres?")

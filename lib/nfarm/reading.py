@@ -1,0 +1,378 @@
+"""The one reading path for files a user hands to nfarm: parameter files (YAML), saved models
+and data-set descriptions (JSON).
+
+Every reader here checks, before parsing, that the path is a **regular file** (a FIFO would
+block forever, ``/dev/zero`` never ends) of at most ``max_bytes``; it parses with bounds on
+nesting depth and on the number of nodes after alias expansion (a 1 KB "billion laughs"
+document otherwise expands to 10⁹ items), and reports every failure as one
+:class:`ParamsError` line naming the file, the field and the rule broken::
+
+    params/robots/x.yaml:12:3: duplicate key 'mass' (first at line 9)
+    params/robots/x.yaml: joints[2].mass: must be >= 0, got -1.0
+
+YAML is read with the YAML 1.2 core schema's *decimal* numbers only, and ``true``/``false`` as
+booleans: ``5e-4`` is a number (YAML 1.1 reads it as text), while YAML 1.1's base-60
+``1:30`` (= 90), hexadecimal ``0x10``, octal ``010``, ``yes``/``no``/``on``/``off`` and dates
+stay text, so the schema check rejects them instead of accepting a number the author did not
+mean. Duplicate keys are errors (PyYAML silently keeps the last).
+
+:class:`Validator` holds the per-field checks the robot, study and model schemas share.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+import os
+import re
+import reprlib
+import stat
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+__all__ = ["ParamsError", "ParamsWarning", "read_bytes", "load_yaml", "load_json", "Validator",
+           "show", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES"]
+
+MAX_BYTES = 1 << 20        # 1 MiB: a robot file is ~2 KB, a saved 128-rule model ~100 KB
+MAX_DEPTH = 32             # nesting levels (a robot file uses 4)
+MAX_NODES = 200_000        # scalars, lists and mappings after alias expansion
+
+
+class ParamsError(ValueError):
+    """A file breaks a rule; the message names the file, the field and the rule."""
+
+
+class ParamsWarning(UserWarning):
+    """A file is accepted but something in it is physically suspicious."""
+
+
+_repr = reprlib.Repr()
+_repr.maxlevel, _repr.maxlist, _repr.maxtuple, _repr.maxdict = 2, 4, 4, 4
+_repr.maxstring, _repr.maxother, _repr.maxlong = 40, 40, 40
+
+
+def show(value: Any) -> str:
+    """A short repr of a value read from a file, for error messages (bounded work and length,
+    whatever the value: a nested or shared structure is cut at two levels and four items)."""
+    text = _repr.repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+# --------------------------------------------------------------------------------------------
+# Bytes
+
+
+def read_bytes(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES, what: str = "file") -> bytes:
+    """The bytes of a regular file of at most ``max_bytes``.
+
+    The file is opened non-blocking and checked with ``fstat`` on the open descriptor, so a
+    FIFO, a device or a directory is refused without reading it (and without a race between
+    checking and opening).
+    """
+    path = Path(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise ParamsError(f"{path}: file not found") from None
+    except OSError as exc:
+        raise ParamsError(f"{path}: cannot open: {exc.strerror}") from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            kind = "a directory" if stat.S_ISDIR(info.st_mode) else "a FIFO" \
+                if stat.S_ISFIFO(info.st_mode) else "a device or special file"
+            raise ParamsError(f"{path}: must be a regular file, got {kind}")
+        if info.st_size > max_bytes:
+            raise ParamsError(f"{path}: file is {info.st_size} bytes, over the limit of "
+                              f"{max_bytes} for a {what}")
+        with os.fdopen(fd, "rb", closefd=True) as stream:
+            fd = -1
+            data = stream.read(max_bytes + 1)
+    except OSError as exc:
+        raise ParamsError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
+    if len(data) > max_bytes:   # grew while we read
+        raise ParamsError(f"{path}: file is over the limit of {max_bytes} bytes for a {what}")
+    return data
+
+
+def _text(path: Path, data: bytes) -> str:
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ParamsError(f"{path}: not UTF-8 text (byte {exc.start}: "
+                          f"{data[exc.start:exc.start + 1]!r}); is it a binary file?") from None
+
+
+# --------------------------------------------------------------------------------------------
+# YAML
+
+
+_INT = re.compile(r"^[-+]?[0-9]+$")
+_FLOAT = re.compile(r"""^(?:[-+]?(?:[0-9]+\.[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?
+                        |[-+]?[0-9]+[eE][-+]?[0-9]+
+                        |[-+]?\.(?:inf|Inf|INF)
+                        |\.(?:nan|NaN|NAN))$""", re.X)
+_BOOL = re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$")
+_NULL = re.compile(r"^(?:~|null|Null|NULL|)$")
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader with YAML 1.2 decimal numbers and booleans, duplicate keys refused, and
+    bounded nesting and alias expansion."""
+
+    max_depth = MAX_DEPTH
+    max_nodes = MAX_NODES
+
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._depth = 0
+        self._sizes: dict[int, int] = {}   # expanded size of each anchored node
+        self._total = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            anchor = event.anchor
+            if anchor in self.anchors:
+                self._count(self._sizes.get(id(self.anchors[anchor]), 1), event.start_mark)
+            return super().compose_node(parent, index)
+        self._depth += 1
+        if self._depth > self.max_depth:
+            mark = self.peek_event().start_mark
+            raise yaml.composer.ComposerError(
+                None, None, f"nested deeper than {self.max_depth} levels", mark)
+        before = self._total
+        try:
+            node = super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+        self._count(1, node.start_mark)
+        self._sizes[id(node)] = self._total - before
+        return node
+
+    def _count(self, size: int, mark) -> None:
+        self._total += size
+        if self._total > self.max_nodes:
+            raise yaml.composer.ComposerError(
+                None, None, f"more than {self.max_nodes} values once aliases are expanded "
+                            f"(an alias bomb?)", mark)
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen: dict[Any, Any] = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    raise yaml.constructor.ConstructorError(
+                        None, None, "merge keys '<<' are not supported", key_node.start_mark)
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    hash(key)
+                except TypeError:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, "a key must be a plain value", key_node.start_mark) from None
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {show(key)} (first at line "
+                                    f"{seen[key].start_mark.line + 1})", key_node.start_mark)
+                seen[key] = key_node
+        return super().construct_mapping(node, deep=deep)
+
+
+# Replace the YAML 1.1 implicit resolvers for numbers, booleans, null and dates by YAML 1.2
+# decimal ones: other scalars stay strings.
+_REPLACED = {"tag:yaml.org,2002:int", "tag:yaml.org,2002:float", "tag:yaml.org,2002:bool",
+             "tag:yaml.org,2002:null", "tag:yaml.org,2002:timestamp"}
+_Loader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag not in _REPLACED]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()}
+_Loader.add_implicit_resolver("tag:yaml.org,2002:bool", _BOOL, list("tTfF"))
+_Loader.add_implicit_resolver("tag:yaml.org,2002:int", _INT, list("-+0123456789"))
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789."))
+_Loader.add_implicit_resolver("tag:yaml.org,2002:null", _NULL, ["~", "n", "N", ""])
+
+
+def _construct_int(loader, node):
+    return int(loader.construct_scalar(node))
+
+
+def _construct_float(loader, node):
+    text = loader.construct_scalar(node).lower()
+    if text.lstrip("+-") == ".inf":
+        return -math.inf if text.startswith("-") else math.inf
+    if text == ".nan":
+        return math.nan
+    return float(text)
+
+
+_Loader.add_constructor("tag:yaml.org,2002:int", _construct_int)
+_Loader.add_constructor("tag:yaml.org,2002:float", _construct_float)
+
+
+def load_yaml(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES, what: str = "parameter file"
+              ) -> Any:
+    """Parse a YAML file through the checks of this module (module docstring)."""
+    path = Path(path)
+    text = _text(path, read_bytes(path, max_bytes=max_bytes, what=what))
+    try:
+        return yaml.load(text, Loader=_Loader)  # noqa: S506 — a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        if problem.startswith(("duplicate key", "nested deeper", "more than", "merge keys",
+                               "a key must")):
+            raise ParamsError(f"{where}: {problem}") from None
+        raise ParamsError(f"{where}: YAML syntax error: {problem}") from None
+    except RecursionError:  # pragma: no cover — the depth bound comes first
+        raise ParamsError(f"{path}: nested too deeply") from None
+
+
+# --------------------------------------------------------------------------------------------
+# JSON
+
+
+def _json_constant(name: str):
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _json_depth(value: Any, limit: int) -> None:
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if depth > limit:
+            raise ValueError(f"nested deeper than {limit} levels")
+        if isinstance(item, dict):
+            stack.extend((v, depth + 1) for v in item.values())
+        elif isinstance(item, list):
+            stack.extend((v, depth + 1) for v in item)
+
+
+def load_json(path: str | os.PathLike, *, max_bytes: int = 64 << 20, max_depth: int = MAX_DEPTH,
+              what: str = "JSON file") -> Any:
+    """Parse a JSON file (regular, at most ``max_bytes``, nesting at most ``max_depth``;
+    ``NaN``/``Infinity`` refused)."""
+    path = Path(path)
+    text = _text(path, read_bytes(path, max_bytes=max_bytes, what=what))
+    try:
+        data = json.loads(text, parse_constant=_json_constant)
+        _json_depth(data, max_depth)
+    except json.JSONDecodeError as exc:
+        raise ParamsError(f"{path}:{exc.lineno}:{exc.colno}: not valid JSON: {exc.msg}") from None
+    except RecursionError:
+        raise ParamsError(f"{path}: nested deeper than {max_depth} levels") from None
+    except ValueError as exc:
+        raise ParamsError(f"{path}: {exc}") from None
+    return data
+
+
+# --------------------------------------------------------------------------------------------
+# Field checks
+
+
+class Validator:
+    """Checks one field at a time; every failure names the source, the field and the rule."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, field: str, rule: str):
+        prefix = f"{self.source}: {field}: " if field else f"{self.source}: "
+        raise ParamsError(prefix + rule)
+
+    def mapping(self, data: Any, at: str, keys: Mapping[str, bool]) -> Mapping:
+        """``data`` is a mapping with only the ``keys`` (``True``: required)."""
+        if not isinstance(data, Mapping):
+            self.fail(at, f"must be a mapping of fields, got {show(data)}")
+        for key in data:
+            if key not in keys:
+                close = difflib.get_close_matches(str(key), list(keys), n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else \
+                    f" (allowed: {', '.join(keys)})"
+                self.fail(f"{at}.{key}" if at else str(key), f"unknown field{hint}")
+        for key, required in keys.items():
+            if required and key not in data:
+                self.fail(f"{at}.{key}" if at else key, "required field is missing")
+        return data
+
+    def string(self, value: Any, at: str, allow_empty: bool = False) -> str:
+        if not isinstance(value, str) or not (value.strip() or allow_empty):
+            self.fail(at, f"must be a non-empty string, got {show(value)}")
+        return value
+
+    def choice(self, value: Any, at: str, choices: Sequence[str]) -> str:
+        if not isinstance(value, str) or value not in choices:
+            self.fail(at, f"must be one of {', '.join(choices)}, got {show(value)}")
+        return value
+
+    def boolean(self, value: Any, at: str) -> bool:
+        if not isinstance(value, bool):
+            self.fail(at, f"must be true or false, got {show(value)}")
+        return value
+
+    def number(self, value: Any, at: str, *, lo: float | None = None, hi: float | None = None,
+               lo_open: bool = False) -> float:
+        """A finite number (``lo <= value <= hi``, or ``lo < value`` with ``lo_open``)."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(at, f"must be a number, got {show(value)}")
+        try:
+            x = float(value)
+        except OverflowError:
+            x = math.inf
+        if not math.isfinite(x):
+            self.fail(at, f"must be finite, got {show(value)}")
+        if lo is not None and (x <= lo if lo_open else x < lo):
+            self.fail(at, f"must be {'>' if lo_open else '>='} {lo:g}, got {x!r}")
+        if hi is not None and x > hi:
+            self.fail(at, f"must be <= {hi:g}, got {x!r}")
+        return x
+
+    def integer(self, value: Any, at: str, *, lo: int | None = None, hi: int | None = None) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(at, f"must be a whole number, got {show(value)}")
+        if lo is not None and value < lo:
+            self.fail(at, f"must be >= {lo}, got {value}")
+        if hi is not None and value > hi:
+            self.fail(at, f"must be <= {hi}, got {show(value)}")
+        return value
+
+    def vector(self, value: Any, at: str, length: int) -> list[float]:
+        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != length:
+            self.fail(at, f"must be a list of {length} numbers, got {show(value)}")
+        return [self.number(x, f"{at}[{k}]") for k, x in enumerate(value)]
+
+    def sequence(self, value: Any, at: str, *, min_len: int = 0, max_len: int | None = None
+                 ) -> Sequence:
+        if not isinstance(value, Sequence) or isinstance(value, str):
+            self.fail(at, f"must be a list, got {show(value)}")
+        if len(value) < min_len or (max_len is not None and len(value) > max_len):
+            bound = f"{min_len}" if max_len == min_len else \
+                f"at least {min_len}" if max_len is None else f"{min_len} to {max_len}"
+            self.fail(at, f"must be a list of {bound} items, got {len(value)}")
+        return value
+
+    def array(self, value: Any, at: str, shape: Sequence[int | None], *, integer: bool = False
+              ) -> np.ndarray:
+        """A nested list of finite numbers (whole numbers if ``integer``) of ``shape``
+        (``None``: any length) as an array."""
+        kind = "whole numbers" if integer else "numbers"
+        try:
+            a = np.asarray(value)
+        except (ValueError, TypeError):
+            a = None
+        if a is None or a.dtype.kind not in ("iu" if integer else "iuf") or a.ndim != len(shape) \
+                or any(want is not None and got != want for got, want in zip(a.shape, shape)):
+            dims = " × ".join("N" if k is None else str(k) for k in shape)
+            self.fail(at, f"must be a {dims} array of {kind}, got {show(value)}")
+        if not integer:
+            a = a.astype(float)
+            if not np.isfinite(a).all():
+                self.fail(at, "must hold finite numbers, got NaN or inf")
+        return a
