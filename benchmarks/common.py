@@ -9,12 +9,8 @@ from collections.abc import Callable
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-# The same allocator settings as the Makefile (see README, "Performance"): without them large
-# numpy temporaries are returned to the system after every use and the timings measure page
-# faults. Run directly, a benchmark restarts itself with them.
-MALLOC = {"MALLOC_MMAP_THRESHOLD_": "268435456", "MALLOC_TRIM_THRESHOLD_": "536870912"}
-if any(os.environ.get(k) != v for k, v in MALLOC.items()):
-    os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **MALLOC})
+# No environment of its own: nfarm tunes glibc's allocator when imported (nfarm._allocator),
+# so a benchmark measures what a user's plain script gets.
 
 
 def seconds_per_call(fn: Callable[[], object], *, min_time: float = 0.2, repeat: int = 5) -> float:

@@ -28,12 +28,15 @@ def test_committed_without_outputs_and_with_literal_parameters(notebook):
             assert not cell["outputs"] and cell["execution_count"] is None, "strip the outputs"
     tagged = [c for c in cells if "parameters" in c["metadata"].get("tags", [])]
     assert len(tagged) == 1, "exactly one cell tagged 'parameters'"
-    names = set()
+    values = {}
     for node in ast.parse("".join(tagged[0]["source"])).body:
         assert isinstance(node, ast.Assign), "the parameters cell holds assignments only"
-        ast.literal_eval(node.value)  # literals only: papermill replaces them
-        names |= {target.id for target in node.targets}
-    assert REQUIRED_PARAMETERS <= names
+        value = ast.literal_eval(node.value)  # literals only: papermill replaces them
+        values.update({target.id: value for target in node.targets})
+    assert REQUIRED_PARAMETERS <= set(values)
+    # Explore freely, publish deliberately: a run by hand writes under build/, never figures/.
+    assert values["out_dir"] == f"build/explore/{notebook.stem}"
+    assert all(not str(v).startswith("figures") for k, v in values.items() if k.endswith("_dir"))
 
 
 @pytest.mark.notebook

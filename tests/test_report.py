@@ -1,33 +1,48 @@
-"""The report pipeline: publishing, failure reporting, index, manifest, reproducibility."""
+"""The report pipeline: what is published where, atomic publishing under kills, failure
+reports naming the cell, the index, the manifest, reproducibility, offline HTML."""
 
 from __future__ import annotations
 
 import hashlib
+import json
+import os
+import random
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
 
 import nbformat
 import numpy as np
 import pytest
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
-from nfarm.paths import atomic_path
-from nfarm.report import Table, build_report
+from nfarm import report
+from nfarm.paths import ROOT, atomic_path
+from nfarm.report import Table, build_report, verify_manifest, write_manifest
 
 
-def make_notebook(path, *code):
+def make_notebook(path, *code, tags=None):
     cells = [new_markdown_cell(f"# Chapter {path.stem}"),
-             new_code_cell('smoke = False\nseed = 0\nout_dir = "figures"',
+             new_code_cell('smoke = False\nseed = 0\nout_dir = "build/explore/x"',
                            metadata={"tags": ["parameters"]})]
-    cells += [new_code_cell(c) for c in code]
+    cells += [new_code_cell(c, metadata={"tags": tags} if tags else {}) for c in code]
     nbformat.write(new_notebook(cells=cells), path)
 
 
 WRITE = """import matplotlib.pyplot as plt
+from nfarm.paths import project_path
 from nfarm.plotting import save_figure
 from nfarm.report import Table
+out = project_path(out_dir)
 fig, ax = plt.subplots()
 ax.plot([0, 1], [0, 1])
-save_figure(fig, out_dir, "{p}_line")
-Table(["smoke"], [[smoke]]).save(out_dir, "{p}_params")"""
+save_figure(fig, out, "{p}_line", caption="A line of chapter {p}")
+Table(["smoke"], [[smoke]], caption="Was it a smoke run?").save(out, "{p}_params")"""
+
+PROSE = 'from IPython.display import Markdown, display\ndisplay(Markdown(f"The answer is {6 * 7}."))'
 
 
 @pytest.fixture
@@ -36,6 +51,11 @@ def project(tmp_path):
     notebooks.mkdir()
     make_notebook(notebooks / "01_first.ipynb", WRITE.format(p="01"))
     make_notebook(notebooks / "02_second.ipynb", WRITE.format(p="02"))
+    make_notebook(notebooks / "03_third.ipynb", WRITE.format(p="03"))
+    nb = nbformat.read(notebooks / "03_third.ipynb", 4)
+    nb.cells.append(new_markdown_cell("$$x^2$$"))
+    nb.cells.append(new_code_cell(PROSE, metadata={"tags": ["remove-input"]}))
+    nbformat.write(nb, notebooks / "03_third.ipynb")
     dirs = dict(notebooks_dir=notebooks, figures_dir=tmp_path / "figures",
                 build_dir=tmp_path / "build")
     return tmp_path, dirs
@@ -46,41 +66,181 @@ def digest(path):
 
 
 @pytest.mark.notebook
-def test_report_builds_index_and_manifest_and_is_reproducible(project):
+def test_default_run_publishes_atomically_with_index_manifest_and_offline_html(project):
     root, dirs = project
-    stale = dirs["figures_dir"] / "01_removed_since.png"
+    figures, build = dirs["figures_dir"], dirs["build_dir"]
+    stale = figures / "01_removed_since.png"
     stale.parent.mkdir(parents=True)
     stale.write_bytes(b"old")
-    assert build_report(smoke=True, **dirs) == 0
-    figures = dirs["figures_dir"]
+    assert build_report(**dirs) == 0
     assert not stale.exists(), "a chapter's old outputs are replaced by its new ones"
-    assert (figures / "tables" / "01_params.csv").read_text() == "smoke\nTrue\n"
+    assert (figures / "tables" / "01_params.csv").read_text() == "smoke\nFalse\n"
     manifest = (figures / "MANIFEST.sha256").read_text().splitlines()
     assert [line.split("  ")[1] for line in manifest] == [
-        "01_line.png", "02_line.png", "tables/01_params.csv", "tables/01_params.md",
-        "tables/02_params.csv", "tables/02_params.md"]
-    for line in manifest:
-        sha, name = line.split("  ")
-        assert digest(figures / name) == sha
-    index = (dirs["build_dir"] / "report" / "index.html").read_text()
+        f"{p}_line.png" for p in ("01", "02", "03")] + [
+        f"tables/{p}_params.{s}" for p in ("01", "02", "03") for s in ("csv", "md")]
+    assert verify_manifest(figures) == []
+    assert not list(root.glob(".figures.*")), "no publishing leftovers"
+
+    index = (build / "report" / "index.html").read_text()
     assert index.index("Chapter 01_first") < index.index("Chapter 02_second")
-    assert "figures/01_line.png" in index and (dirs["build_dir"] / "report" / "01_first.html").exists()
+    assert index.count("figures/01_line.png") == 1, "each figure once"
+    assert "A line of chapter 02" in index and "Was it a smoke run?" in index, "captions shown"
+    assert re.search(r"<dt>commit</dt><dd>[0-9a-f]{7,}", index) or "unknown" in index
+    page = (build / "report" / "02_second.html").read_text()
+    assert "01_first.html" in page and "03_third.html" in page, "navigation between chapters"
+    for html in [index] + [p.read_text() for p in (build / "report").glob("*.html")]:
+        assert not re.search(r"<(script|link)[^>]+(src|href)=['\"]?https?://", html), \
+            "nothing loaded from the internet"
+    third = (build / "report" / "03_third.html").read_text()
+    assert "mathjax/MathJax.js" in third and (build / "report" / "mathjax" / "MathJax.js").is_file()
+    assert "The answer is 42." in third and "display(Markdown" not in third, "remove-input"
+
+    executed = (build / "notebooks" / "01_first.ipynb").read_text()
+    assert str(ROOT) not in executed, "no absolute paths of the checkout"
+
     first = (figures / "MANIFEST.sha256").read_bytes()
-    assert build_report(smoke=True, **dirs) == 0
+    assert build_report(**dirs) == 0
     assert (figures / "MANIFEST.sha256").read_bytes() == first, "figures are byte-reproducible"
 
 
 @pytest.mark.notebook
-def test_a_failing_notebook_stops_the_run_and_names_the_cell(project, capsys):
+def test_smoke_and_custom_runs_never_touch_the_published_figures(project):
+    root, dirs = project
+    figures, build = dirs["figures_dir"], dirs["build_dir"]
+    assert build_report(only=["01"], **dirs) == 0
+    before = {p: digest(p) for p in figures.rglob("*") if p.is_file()}
+    assert build_report(smoke=True, only=["01"], **dirs) == 0
+    assert build_report(only=["01"], extra_parameters={"seed": 3}, **dirs) == 0
+    assert {p: digest(p) for p in figures.rglob("*") if p.is_file()} == before
+    assert (build / "smoke" / "figures" / "tables" / "01_params.csv").read_text() == "smoke\nTrue\n"
+    assert verify_manifest(build / "smoke" / "figures") == []
+    assert "smoke run" in (build / "smoke" / "report" / "index.html").read_text()
+    assert (build / "custom" / "figures" / "01_line.png").is_file()
+
+
+@pytest.mark.notebook
+def test_a_failing_notebook_stops_the_run_and_names_the_source_cell(project, capsys):
     root, dirs = project
     make_notebook(dirs["notebooks_dir"] / "02_second.ipynb", "x = 1", "raise ValueError('bad joint')")
-    assert build_report(smoke=True, **dirs) == 1
+    assert build_report(**dirs) == 1
     err = capsys.readouterr().err
-    assert "02_second.ipynb failed in cell 4" in err and "ValueError: bad joint" in err
+    # Source cells: 0 title, 1 parameters, 2 "x = 1", 3 the raise (papermill's injected cell
+    # is not counted).
+    assert "02_second.ipynb failed in cell 3 (\"raise ValueError('bad joint')\"): ValueError: bad joint" in err
     kept = dirs["build_dir"] / "notebooks" / "02_second.ipynb"
     assert f"kept at {kept}" in err and kept.exists()
     assert (dirs["figures_dir"] / "01_line.png").exists(), "earlier chapters are published"
-    assert not (dirs["figures_dir"] / "MANIFEST.sha256").exists()
+    assert verify_manifest(dirs["figures_dir"]) == [], "figures and manifest agree after a failure"
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("code, message", [
+    ("import os\nos._exit(3)", r"02_second.ipynb lost its kernel \(it died.*\) in cell 2 \('import os'\)"),
+    ("import time\ntime.sleep(60)", r"02_second.ipynb timed out after 3 s in cell 2 \('import time'\)"),
+])
+def test_dead_and_hanging_kernels_are_one_line(project, capsys, code, message):
+    root, dirs = project
+    make_notebook(dirs["notebooks_dir"] / "02_second.ipynb", code)
+    assert build_report(only=["02"], cell_timeout=3, **dirs) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert re.search(message, err[-1]), err
+    assert "Traceback" not in "\n".join(err)
+
+
+def test_bad_notebooks_and_chapter_choices_are_one_line(project, capsys):
+    root, dirs = project
+    (dirs["notebooks_dir"] / "02_second.ipynb").write_text("{not json")
+    assert build_report(only=["02"], **dirs) == 1
+    assert "02_second.ipynb: not a valid notebook" in capsys.readouterr().err
+    assert build_report(only=["99"], **dirs) == 2
+    assert "report: no chapter 99 (chapters: 01, 02, 03)" in capsys.readouterr().err
+    assert build_report(only=[], **dirs) == 2
+    assert "--only needs chapter numbers" in capsys.readouterr().err
+
+
+def test_publishing_is_atomic_at_every_step(tmp_path, monkeypatch):
+    """A crash after any file operation of a publish leaves figures/ as it was before or as
+    it is after, its manifest matching; the next publish cleans up."""
+    figures = tmp_path / "figures"
+
+    def stage(version):
+        s = tmp_path / f"stage{version}"
+        (s / "tables").mkdir(parents=True, exist_ok=True)
+        for k in range(3):
+            (s / f"01_f{k}.png").write_bytes(f"v{version} {k}".encode())
+        (s / "tables" / "01_t.csv").write_text(f"v{version}\n")
+        (s / "tables" / "01_t.md").write_text(f"v{version}\n")
+        return s
+
+    report._publish(stage(1), figures, "01")
+    states = {tuple(sorted((p.name, digest(p)) for p in figures.rglob("*") if p.is_file()))}
+    real_ops = {name: getattr(shutil, name) for name in ("copyfile", "copytree", "rmtree")}
+    step, crash_at = [0], [0]
+
+    def counting(fn):
+        def wrapper(*args, **kwargs):
+            step[0] += 1
+            if step[0] == crash_at[0]:
+                raise KeyboardInterrupt("killed")
+            return fn(*args, **kwargs)
+        return wrapper
+
+    for crash in range(1, 40):
+        step[0], crash_at[0] = 0, crash
+        for name, fn in real_ops.items():
+            monkeypatch.setattr(shutil, name, counting(fn))
+        monkeypatch.setattr(report, "_exchange", counting(report._exchange))
+        try:
+            report._publish(stage(2 + crash % 2), figures, "01")
+            finished = True
+        except KeyboardInterrupt:
+            finished = False
+        monkeypatch.undo()
+        assert verify_manifest(figures) == [], f"crash at step {crash}"
+        if finished:
+            break
+    else:
+        pytest.fail("the publish never finished")
+    assert crash > 3, "the crash points covered the publish"
+    report._recover(figures)
+    assert not list(tmp_path.glob(".figures.*"))
+
+
+@pytest.mark.notebook
+def test_killing_a_real_run_at_random_moments_keeps_figures_consistent(project):
+    """``python -m nfarm report`` killed with SIGKILL at seeded random moments: figures/ and
+    its manifest agree after every kill."""
+    root, dirs = project
+    script = (f"import sys; from pathlib import Path; from nfarm.report import build_report; "
+              f"sys.exit(build_report(notebooks_dir=Path({str(dirs['notebooks_dir'])!r}), "
+              f"figures_dir=Path({str(dirs['figures_dir'])!r}), "
+              f"build_dir=Path({str(dirs['build_dir'])!r})))")
+    rng = random.Random(7)
+    for _ in range(3):
+        process = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.DEVNULL,
+                                   start_new_session=True)
+        time.sleep(rng.uniform(2.0, 12.0))
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+        if dirs["figures_dir"].exists():
+            assert verify_manifest(dirs["figures_dir"]) == []
+    assert build_report(**dirs) == 0
+    assert verify_manifest(dirs["figures_dir"]) == []
+
+
+def test_verify_reports_every_kind_of_difference(tmp_path):
+    (tmp_path / "tables").mkdir()
+    (tmp_path / "a.png").write_bytes(b"a")
+    (tmp_path / "tables" / "b.csv").write_text("b\n")
+    write_manifest(tmp_path)
+    assert verify_manifest(tmp_path) == []
+    (tmp_path / "a.png").write_bytes(b"changed")
+    (tmp_path / "tables" / "b.csv").unlink()
+    (tmp_path / "c.png").write_bytes(b"c")
+    assert verify_manifest(tmp_path) == ["a.png: differs from the manifest",
+                                         "tables/b.csv: listed but missing",
+                                         "c.png: not in the manifest"]
 
 
 def test_table_formats_and_files(tmp_path):
@@ -104,3 +264,17 @@ def test_atomic_path_leaves_no_half_written_file(tmp_path):
             raise RuntimeError("disk full")
     assert target.read_text() == "old"
     assert list(tmp_path.iterdir()) == [target]
+
+
+def test_executed_notebook_json_is_plain(tmp_path):
+    """The helper that cleans executed notebooks drops widget state and absolute paths."""
+    nb = new_notebook(cells=[new_code_cell("1")])
+    nb.metadata["widgets"] = {"application/vnd.jupyter.widget-state+json": {"state": {}}}
+    nb.metadata["papermill"] = {"input_path": str(ROOT / "notebooks" / "x.ipynb"),
+                                "output_path": str(ROOT / "build" / "x.ipynb")}
+    path = tmp_path / "x.ipynb"
+    nbformat.write(nb, path)
+    report._clean_executed(path)
+    data = json.loads(path.read_text())
+    assert "widgets" not in data["metadata"]
+    assert data["metadata"]["papermill"]["input_path"] == "notebooks/x.ipynb"

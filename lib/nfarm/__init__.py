@@ -10,3 +10,7 @@ Modules: :mod:`~nfarm.robot` (parameters and validation), :mod:`~nfarm.kinematic
 """
 
 __version__ = "0.1.0"
+
+from . import _allocator
+
+_allocator.tune()   # batched kernels' speed must not depend on the caller's environment

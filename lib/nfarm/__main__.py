@@ -1,4 +1,4 @@
-"""Command line: ``python -m nfarm check-params FILE...`` and ``python -m nfarm report``."""
+"""Command line: ``python -m nfarm check-params FILE...``, ``report`` and ``verify``."""
 
 from __future__ import annotations
 
@@ -6,7 +6,23 @@ import argparse
 import sys
 import warnings
 
-from .robot import ParamsError, ParamsWarning, load_robot
+from .robot import ParamsError, ParamsWarning, robot_from_dict
+
+
+def _check_one(path: str) -> str:
+    """Validate one robot or study file (told apart by their required fields); the summary."""
+    from .reading import load_yaml
+
+    data = load_yaml(path)
+    if isinstance(data, dict) and "robot_file" in data and "joints" not in data:
+        from .datasets import study_from_dict
+
+        study = study_from_dict(data, source=path)
+        return (f"study {study.name!r} of {study.robot.name}, IK sizes "
+                f"{'/'.join(str(study.ik_sizes[k]) for k in ('train', 'val', 'test'))}, ID "
+                f"trajectories {'/'.join(str(study.id.trajectories[k]) for k in ('train', 'val', 'test'))}")
+    robot = robot_from_dict(data, source=path)
+    return f"{robot.name}, {robot.n} joints, {robot.convention} DH"
 
 
 def check_params(files: list[str]) -> int:
@@ -16,7 +32,7 @@ def check_params(files: list[str]) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ParamsWarning)
             try:
-                robot = load_robot(path)
+                summary = _check_one(path)
             except ParamsError as exc:
                 print(exc, file=sys.stderr)
                 status = 2
@@ -28,24 +44,78 @@ def check_params(files: list[str]) -> int:
                 continue
         for warning in caught:
             print(f"warning: {warning.message}", file=sys.stderr)
-        print(f"{path}: ok ({robot.name}, {robot.n} joints, {robot.convention} DH)")
+        print(f"{path}: ok ({summary})")
     return status
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nfarm", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
-    check = sub.add_parser("check-params", help="validate robot parameter files")
+    check = sub.add_parser("check-params", help="validate robot and study parameter files")
     check.add_argument("files", nargs="+", metavar="FILE")
     report = sub.add_parser("report", help="run every chapter notebook and build the report")
     report.add_argument("--smoke", action="store_true", help="small parameter set (for tests)")
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
+    report.add_argument("--cell-timeout", type=float, default=1800, metavar="SECONDS",
+                        help="fail a cell that runs longer (default 1800)")
+    datasets = sub.add_parser("datasets", help="build a study's training and test data sets")
+    datasets.add_argument("study", metavar="STUDY", help="params/studies/<robot>.yaml")
+    datasets.add_argument("--out", default=None, metavar="DIR",
+                          help="output directory (default build/datasets/<robot>/)")
+    datasets.add_argument("--force", action="store_true", help="rebuild files that are up to date")
+    verify = sub.add_parser("verify", help="check figures/ against figures/MANIFEST.sha256")
+    verify.add_argument("--figures", default=None, metavar="DIR")
     args = parser.parse_args(argv)
     if args.command == "check-params":
         return check_params(args.files)
+    if args.command == "verify":
+        return verify_figures(args.figures)
+    if args.command == "datasets":
+        return make_datasets(args.study, args.out, args.force)
     from .report import build_report
-    return build_report(smoke=args.smoke, only=args.only)
+    return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout)
+
+
+def make_datasets(study_file: str, out: str | None, force: bool) -> int:
+    """Build (or reuse) every data set of a study; one line per file."""
+    from .datasets import build_datasets, load_study
+
+    try:
+        study = load_study(study_file)
+    except ParamsError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    command = " ".join(["python -m nfarm datasets", study_file] + (["--out", out] if out else []))
+    for path, status in build_datasets(study, out, force=force, progress=sys.stderr.isatty(),
+                                       command=command):
+        print(f"{path}: {status}")
+    return 0
+
+
+def verify_figures(figures: str | None) -> int:
+    """Print what differs from the manifest; 0 when nothing does, else 1."""
+    from pathlib import Path
+
+    from .paths import FIGURES
+    from .report import verify_manifest
+
+    directory = Path(figures) if figures else FIGURES
+    problems = verify_manifest(directory)
+    for line in problems:
+        print(f"{directory}: {line}", file=sys.stderr)
+    if not problems:
+        count = len((directory / "MANIFEST.sha256").read_text().splitlines())
+        print(f"{directory}: {count} files match MANIFEST.sha256")
+    return 1 if problems else 0
+
+
+def _main() -> int:
+    try:
+        return main()
+    except KeyboardInterrupt:
+        print("nfarm: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(_main())

@@ -27,11 +27,15 @@ __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_
 DPI = 110
 
 
-def save_figure(fig: Figure, out_dir: str | os.PathLike, name: str) -> str:
-    """Write ``fig`` to ``out_dir/name.png`` atomically and reproducibly; return the path."""
+def save_figure(fig: Figure, out_dir: str | os.PathLike, name: str, caption: str = "") -> str:
+    """Write ``fig`` to ``out_dir/name.png`` atomically and reproducibly; return the path.
+
+    ``caption`` is stored in the PNG (its ``Description`` text chunk); the report's index
+    shows it under the figure."""
     path = os.path.join(out_dir, f"{name}.png")
+    metadata = {"Software": None, **({"Description": caption} if caption else {})}
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=DPI, metadata={"Software": None})
+        fig.savefig(tmp, format="png", dpi=DPI, metadata=metadata)
     return path
 
 

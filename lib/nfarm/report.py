@@ -1,34 +1,53 @@
 """The report pipeline: tables, notebook execution with papermill, HTML export, the manifest.
 
 ``python -m nfarm report`` (``make report``) runs every ``notebooks/NN_*.ipynb`` in order in
-the project's Jupyter kernel, each into a staging directory; when a chapter succeeds its
-figures and tables replace that chapter's files in ``figures/`` (so ``figures/`` always holds
-complete runs), the executed notebook is exported to HTML, and at the end
-``build/report/index.html`` and ``figures/MANIFEST.sha256`` are rewritten. A failing notebook
-stops the run, names the notebook and the cell, and keeps the executed copy for inspection.
+the project's Jupyter kernel, each into a staging directory under ``build/stage/``.
+
+**Explore freely, publish deliberately.** Only a run with the default parameters publishes
+into ``figures/``; a smoke run (``--smoke``) publishes into ``build/smoke/figures/`` and its
+pages into ``build/smoke/report/``, never into ``figures/``. A chapter run by hand (JupyterLab,
+papermill) writes where its ``out_dir`` parameter says, by default ``build/explore/<chapter>/``.
+
+**Publishing is atomic.** A chapter that succeeds is published as one step: a copy of
+``figures/`` with that chapter's files replaced and ``MANIFEST.sha256`` rewritten is built
+beside it (``.figures.new/``) and exchanged with ``figures/`` by one ``renameat2(...,
+RENAME_EXCHANGE)`` system call. At every instant ``figures/`` is a complete published state
+whose manifest matches it (``python -m nfarm verify``), whenever the run is killed.
+
+A failing, hanging (``cell_timeout``) or crashing notebook stops the run with one line naming
+the notebook and the cell (counted as in the source notebook, without papermill's injected
+cell); the executed copy is kept for inspection. Executed notebooks hold no absolute paths of
+the checkout and no widget state; their HTML pages load MathJax from ``build/report/mathjax/``
+(from the ``jupyter-server-mathjax`` package), so the report reads offline.
 """
 
 from __future__ import annotations
 
 import csv
+import ctypes
+import ctypes.util
+import datetime
 import hashlib
 import html
 import io
 import json
+import logging
 import os
 import re
 import shutil
+import subprocess
 import sys
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .paths import BUILD, FIGURES, NOTEBOOKS, atomic_path
+from .paths import BUILD, FIGURES, NOTEBOOKS, ROOT, atomic_path
 
 __all__ = ["Table", "ReportError", "run_notebook", "build_report", "write_manifest",
-           "KERNEL_NAME"]
+           "verify_manifest", "chapters", "KERNEL_NAME"]
 
 KERNEL_NAME = "nfarm"
 CHAPTER = re.compile(r"^(\d\d)_\w+\.ipynb$")
@@ -110,6 +129,15 @@ class ReportError(RuntimeError):
     """A chapter could not be built; the message says which and where."""
 
 
+class _DropMessage(logging.Filter):
+    def __init__(self, start: str):
+        super().__init__()
+        self.start = start
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith(self.start)
+
+
 def _use_project_kernel() -> None:
     """Make Jupyter find this environment's kernel spec first and check that it runs this
     interpreter: the notebooks must never run in a kernel the machine happens to have."""
@@ -129,35 +157,138 @@ def _use_project_kernel() -> None:
                           f"environment's {sys.executable}: run `make setup`")
 
 
+def _ipc_kernel_manager(directory: str):
+    """A kernel manager whose kernel talks over Unix sockets in ``directory``: no open TCP
+    ports, and no "running over TCP without encryption" warning from every kernel."""
+    from jupyter_client.manager import AsyncKernelManager
+
+    class IPCKernelManager(AsyncKernelManager):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.transport = "ipc"
+            self.ip = os.path.join(directory, "kernel")
+
+    return IPCKernelManager
+
+
+def _relative(path: Path) -> str:
+    """``path`` relative to the checkout when inside it (no absolute paths in notebooks)."""
+    try:
+        return Path(path).resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def _source_cell(executed: Path, index: int) -> int:
+    """The index in the source notebook of the executed notebook's cell ``index`` (papermill's
+    injected parameters cell is not in the source)."""
+    import nbformat
+
+    try:
+        cells = nbformat.read(executed, 4).cells
+    except Exception:  # noqa: BLE001 — unreadable output: keep papermill's count
+        return index
+    injected = sum("injected-parameters" in c.metadata.get("tags", []) for c in cells[:index])
+    return index - injected
+
+
+def _running_cell(executed: Path) -> tuple[int, str] | None:
+    """The cell that was running when the kernel died or the time ran out — the last one
+    papermill started — as (source index, first line)."""
+    import nbformat
+
+    try:
+        cells = nbformat.read(executed, 4).cells
+    except Exception:  # noqa: BLE001
+        return None
+    started = [k for k, c in enumerate(cells)
+               if c.metadata.get("papermill", {}).get("status", "pending") != "pending"]
+    if not started:
+        return None
+    k = started[-1]
+    injected = sum("injected-parameters" in c.metadata.get("tags", []) for c in cells[:k])
+    lines = cells[k].source.strip().splitlines()
+    return k - injected, lines[0] if lines else ""
+
+
+def _clean_executed(executed: Path) -> None:
+    """Remove what must not be published from an executed notebook: widget state (a progress
+    bar frozen at 0 %) and the checkout's absolute paths in papermill's metadata."""
+    import nbformat
+
+    nb = nbformat.read(executed, 4)
+    nb.metadata.pop("widgets", None)
+    meta = nb.metadata.get("papermill", {})
+    for key in ("input_path", "output_path"):
+        if key in meta:
+            meta[key] = _relative(Path(meta[key]))
+    for cell in nb.cells:
+        for output in cell.get("outputs", []):
+            output.get("data", {}).pop("application/vnd.jupyter.widget-view+json", None)
+    with atomic_path(executed) as tmp:
+        nbformat.write(nb, tmp)
+
+
 def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, parameters: dict,
-                 *, progress: bool = False) -> None:
+                 *, progress: bool = False, cell_timeout: float | None = 1800) -> None:
     """Execute ``notebook`` with papermill in the project kernel, writing ``output``.
 
+    ``cell_timeout``: seconds a cell may run before the run fails (``None``: no limit).
+
     Raises:
-        ReportError: a cell failed; names the notebook, the cell and the error. ``output``
+        ReportError: the notebook is not valid, a cell failed, timed out or killed the
+            kernel; one line naming the notebook and the cell (source numbering). ``output``
             holds the executed notebook up to the failure.
     """
+    import nbformat
     import papermill
+    from nbclient.exceptions import CellTimeoutError, DeadKernelError
     from papermill.exceptions import PapermillExecutionError
 
     _use_project_kernel()
     notebook, output = Path(notebook), Path(output)
-    output.parent.mkdir(parents=True, exist_ok=True)
     try:
-        papermill.execute_notebook(str(notebook), str(output), parameters=parameters,
-                                   kernel_name=KERNEL_NAME, language="python", cwd=str(notebook.parent),
-                                   progress_bar=progress, log_output=False)
-    except PapermillExecutionError as exc:
-        source = exc.source.strip().splitlines()
-        first = source[0] if source else ""
-        raise ReportError(
-            f"{notebook.name} failed in cell {exc.cell_index} (execution count "
-            f"{exc.exec_count}: {first!r}): {exc.ename}: {exc.evalue}\n"
-            f"the executed notebook is kept at {output}") from None
+        nbformat.validate(nbformat.read(notebook, 4))
+    except FileNotFoundError:
+        raise ReportError(f"{notebook}: notebook not found") from None
+    except Exception as exc:  # noqa: BLE001 — NotJSONError, ValidationError, …
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ReportError(f"{notebook.name}: not a valid notebook: {first[:200]}") from None
+    output.parent.mkdir(parents=True, exist_ok=True)
+    quiet = _DropMessage("Kernel died")      # reported below, in one line
+    logging.getLogger("papermill").addFilter(quiet)
+    with tempfile.TemporaryDirectory(prefix="nfarm-kernel-") as sockets:
+        try:
+            papermill.execute_notebook(
+                str(notebook), str(output), parameters=parameters, kernel_name=KERNEL_NAME,
+                language="python", cwd=str(notebook.parent), progress_bar=progress,
+                log_output=False, execution_timeout=cell_timeout,
+                kernel_manager_class=_ipc_kernel_manager(sockets))
+        except PapermillExecutionError as exc:
+            source = exc.source.strip().splitlines()
+            first = source[0] if source else ""
+            cell = _source_cell(output, exc.cell_index)
+            raise ReportError(
+                f"{notebook.name} failed in cell {cell} ({first!r}): {exc.ename}: "
+                f"{exc.evalue.strip().splitlines()[0] if exc.evalue.strip() else ''}; "
+                f"the executed notebook is kept at {output}") from None
+        except (DeadKernelError, CellTimeoutError, RuntimeError) as exc:
+            where = _running_cell(output)
+            at = f" in cell {where[0]} ({where[1]!r})" if where else ""
+            what = f"timed out after {cell_timeout:g} s" if isinstance(exc, CellTimeoutError) \
+                or "timed out" in str(exc).lower() else \
+                "lost its kernel (it died: a crash, os._exit or out of memory)" \
+                if isinstance(exc, DeadKernelError) or "dead" in str(exc).lower() else \
+                f"failed: {type(exc).__name__}: {str(exc).strip().splitlines()[0][:200]}"
+            raise ReportError(f"{notebook.name} {what}{at}; the executed notebook is kept at "
+                              f"{output}") from None
+        finally:
+            logging.getLogger("papermill").removeFilter(quiet)
+    _clean_executed(output)
 
 
 # --------------------------------------------------------------------------------------------
-# The whole report
+# Publishing
 
 
 def chapters(notebooks_dir: Path = NOTEBOOKS) -> list[Path]:
@@ -170,35 +301,118 @@ def _outputs(directory: Path, prefix: str) -> list[Path]:
                    *(directory / "tables").glob(f"{prefix}_*.md")])
 
 
-def _publish(stage: Path, figures_dir: Path, prefix: str) -> list[Path]:
-    """Replace chapter ``prefix``'s files in ``figures_dir`` with those in ``stage``."""
-    made = _outputs(stage, prefix)
-    strays = sorted(set(p for p in stage.rglob("*") if p.is_file()) - set(made))
-    if strays:
-        raise ReportError(f"chapter {prefix} wrote files not named {prefix}_*.png or "
-                          f"tables/{prefix}_*.{{csv,md}}: {', '.join(map(str, strays))}")
-    for old in _outputs(figures_dir, prefix):
-        old.unlink()
-    published = []
-    for path in made:
-        target = figures_dir / path.relative_to(stage)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(path, target)
-        published.append(target)
-    return published
+def _published_files(figures_dir: Path) -> list[Path]:
+    return sorted(p for p in figures_dir.rglob("*")
+                  if p.is_file() and p.suffix in (".png", ".csv", ".md"))
 
 
 def write_manifest(figures_dir: Path = FIGURES) -> Path:
     """Write ``MANIFEST.sha256`` (``sha256sum -c`` format, paths relative to ``figures_dir``)."""
     lines = []
-    for path in sorted(p for p in figures_dir.rglob("*")
-                       if p.is_file() and p.suffix in (".png", ".csv", ".md")):
+    for path in _published_files(figures_dir):
         digest = hashlib.sha256(path.read_bytes()).hexdigest()
         lines.append(f"{digest}  {path.relative_to(figures_dir).as_posix()}\n")
     manifest = figures_dir / "MANIFEST.sha256"
     with atomic_path(manifest) as tmp:
         tmp.write_text("".join(lines), encoding="utf-8")
     return manifest
+
+
+def verify_manifest(figures_dir: Path = FIGURES) -> list[str]:
+    """What differs between ``figures_dir`` and its manifest (empty when they agree): files
+    whose hash differs, listed files that are missing, files the manifest does not list."""
+    manifest = figures_dir / "MANIFEST.sha256"
+    if not manifest.is_file():
+        return [f"{manifest}: missing"]
+    problems, listed = [], set()
+    for number, line in enumerate(manifest.read_text(encoding="utf-8").splitlines(), 1):
+        digest, sep, name = line.partition("  ")
+        if not sep or not re.fullmatch(r"[0-9a-f]{64}", digest):
+            problems.append(f"{manifest}:{number}: not a 'sha256  path' line")
+            continue
+        listed.add(name)
+        path = figures_dir / name
+        if not path.is_file():
+            problems.append(f"{name}: listed but missing")
+        elif hashlib.sha256(path.read_bytes()).hexdigest() != digest:
+            problems.append(f"{name}: differs from the manifest")
+    for path in _published_files(figures_dir):
+        if path.relative_to(figures_dir).as_posix() not in listed:
+            problems.append(f"{path.relative_to(figures_dir).as_posix()}: not in the manifest")
+    return problems
+
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two directories atomically (Linux ``renameat2(RENAME_EXCHANGE)``); False where
+    the system does not offer it."""
+    libc = ctypes.CDLL(ctypes.util.find_library("c") or None, use_errno=True)
+    renameat2 = getattr(libc, "renameat2", None)
+    if renameat2 is None:
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    errno = ctypes.get_errno()
+    if errno in (22, 38, 95):   # EINVAL, ENOSYS, EOPNOTSUPP: this file system cannot
+        return False
+    raise OSError(errno, f"cannot exchange {a} and {b}: {os.strerror(errno)}")
+
+
+def _recover(figures_dir: Path) -> None:
+    """Undo what a run killed in the middle of publishing left beside ``figures_dir``."""
+    new, old = _sibling(figures_dir, "new"), _sibling(figures_dir, "old")
+    if not figures_dir.exists() and old.exists():     # killed between the two fallback renames
+        os.rename(old, figures_dir)
+    shutil.rmtree(new, ignore_errors=True)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _sibling(figures_dir: Path, kind: str) -> Path:
+    return figures_dir.with_name(f".{figures_dir.name}.{kind}")
+
+
+def _publish(stage: Path, figures_dir: Path, prefix: str) -> list[Path]:
+    """Replace chapter ``prefix``'s files in ``figures_dir`` with those in ``stage`` and
+    rewrite the manifest, as one atomic step (module docstring)."""
+    made = _outputs(stage, prefix)
+    strays = sorted(set(p for p in stage.rglob("*") if p.is_file()) - set(made))
+    if strays:
+        raise ReportError(f"chapter {prefix} wrote files not named {prefix}_*.png or "
+                          f"tables/{prefix}_*.{{csv,md}}: {', '.join(map(str, strays))}")
+    _recover(figures_dir)
+    new = _sibling(figures_dir, "new")
+    if figures_dir.exists():
+        shutil.copytree(figures_dir, new)
+    else:
+        new.mkdir(parents=True)
+    for old in _outputs(new, prefix):
+        old.unlink()
+    published = []
+    for path in made:
+        target = new / path.relative_to(stage)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(path, target)
+        published.append(figures_dir / path.relative_to(stage))
+    write_manifest(new)
+    if not figures_dir.exists():
+        os.rename(new, figures_dir)
+    elif _exchange(new, figures_dir):
+        shutil.rmtree(new)                      # now the previous state
+    else:                                       # two renames; _recover repairs a kill between
+        old = _sibling(figures_dir, "old")
+        os.rename(figures_dir, old)
+        os.rename(new, figures_dir)
+        shutil.rmtree(old)
+    return published
+
+
+# --------------------------------------------------------------------------------------------
+# HTML
 
 
 def _title(notebook: Path) -> str:
@@ -211,11 +425,58 @@ def _title(notebook: Path) -> str:
     return notebook.stem
 
 
-def _export_html(executed: Path, target: Path) -> None:
+MATHJAX = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
+
+
+def _install_mathjax(report_dir: Path) -> None:
+    """Copy MathJax from the ``jupyter_server_mathjax`` package beside the pages (once)."""
+    import jupyter_server_mathjax
+
+    source = Path(jupyter_server_mathjax.__file__).parent / "static"
+    target = report_dir / "mathjax"
+    if (target / "MathJax.js").is_file():
+        return
+    tmp = report_dir / ".mathjax.tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    shutil.copytree(source, tmp)
+    shutil.rmtree(target, ignore_errors=True)
+    os.rename(tmp, target)
+
+
+def _nav(links: dict[str, tuple[str, str] | None]) -> str:
+    parts = [f"<a href='{html.escape(href)}'>{label}: {html.escape(title)}</a>"
+             for label, link in links.items() if link for href, title in [link]]
+    return ("<nav style='font-family:sans-serif;margin:1em 2em;display:flex;gap:2em'>"
+            + "".join(parts) + "</nav>")
+
+
+def _export_html(executed: Path, target: Path, nav: str = "") -> None:
+    """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
+    output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
+    directory; a navigation bar between chapters."""
     import nbformat
     from nbconvert import HTMLExporter
+    from nbconvert.preprocessors import TagRemovePreprocessor
+    from traitlets.config import Config
 
-    body, _ = HTMLExporter(template_name="lab").from_notebook_node(nbformat.read(executed, 4))
+    config = Config()
+    config.TagRemovePreprocessor.remove_input_tags = {"remove-input"}
+    config.TagRemovePreprocessor.remove_cell_tags = {"remove-cell"}
+    config.TagRemovePreprocessor.enabled = True
+    exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=MATHJAX,
+                            require_js_url="", jquery_url="", widget_renderer_url="")
+    exporter.register_preprocessor(TagRemovePreprocessor(config=config), enabled=True)
+    # The lab template has no alt text for output images; nbconvert fills in a generic one
+    # and warns once per page. The figures' captions are in the chapter's prose.
+    quiet = _DropMessage("Alternative text is missing")
+    exporter.log.addFilter(quiet)
+    try:
+        body, _ = exporter.from_notebook_node(nbformat.read(executed, 4))
+    finally:
+        exporter.log.removeFilter(quiet)
+    if nav:
+        body = re.sub(r"(<body[^>]*>)", lambda m: m.group(1) + nav, body, count=1)
+        body = body.replace("</body>", nav + "</body>", 1)
     with atomic_path(target) as tmp:
         tmp.write_text(body, encoding="utf-8")
 
@@ -228,69 +489,157 @@ def _csv_to_html(path: Path) -> str:
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
+def _caption(path: Path) -> str:
+    """A figure's caption (its PNG ``Description``) or a table's (the first line of its .md)."""
+    if path.suffix == ".png":
+        from PIL import Image
+
+        with Image.open(path) as image:
+            return image.text.get("Description", "")
+    md = path.with_suffix(".md")
+    if md.is_file():
+        first = md.read_text(encoding="utf-8").split("\n", 1)[0]
+        if first.startswith("*") and first.endswith("*"):
+            return first.strip("*")
+    return ""
+
+
 _STYLE = """body{font-family:sans-serif;max-width:70em;margin:2em auto;padding:0 1em;color:#222}
 img{max-width:100%;border:1px solid #ddd;margin:.5em 0}
 table{border-collapse:collapse;margin:.5em 0 1.5em;font-size:.9em}
 td,th{border:1px solid #ccc;padding:.2em .6em;text-align:right}th{background:#f3f3f3}
-h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}"""
+h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
+figure{margin:1em 0 2em}figcaption{color:#444;margin:.2em 0}.file{color:#888;font-size:.8em}
+dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1em}dt{font-weight:bold}"""
 
 
-def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, str, str]]) -> None:
+def _git(*args: str) -> str:
+    try:
+        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                              timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+
+
+def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, str, str]],
+                 *, parameters: dict, smoke: bool) -> None:
     """``entries``: (prefix, title, html file name) per chapter, in order."""
     shown = report_dir / "figures"
     if shown.exists():
         shutil.rmtree(shown)
+    commit = _git("rev-parse", "--short=12", "HEAD") or "unknown"
+    dirty = " (with uncommitted changes)" if _git("status", "--porcelain") else ""
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    kind = "smoke run (small parameters: not the published results)" if smoke else \
+        "published results (default parameters)"
+    facts = {"what": kind, "robot": "params/robots/intelbot5.yaml (chapter parameters may name others)",
+             "parameters": ", ".join(f"{k} = {v!r}" for k, v in parameters.items()) or "defaults",
+             "commit": commit + dirty, "built": when,
+             "figures": _relative(figures_dir) + " (checked by MANIFEST.sha256)"}
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>nfarm — study report"
-             f"</title><style>{_STYLE}</style></head><body><h1>nfarm — study report</h1><ol>"]
-    parts += [f"<li><a href='#ch{p}'>{html.escape(t)}</a></li>" for p, t, _ in entries]
+             f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
+             "numerical methods and ANFIS</h1><dl>"]
+    parts += [f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in facts.items()]
+    parts.append("</dl><h2>Chapters</h2><ol>")
+    parts += [f"<li><a href='{page}'>{html.escape(t)}</a> · <a href='#ch{p}'>its figures and "
+              f"tables</a></li>" for p, t, page in entries]
     parts.append("</ol>")
     for prefix, title, page in entries:
         parts.append(f"<h2 id='ch{prefix}'>{html.escape(title)}</h2>"
-                     f"<p><a href='{page}'>The chapter in full (code and prose)</a></p>")
+                     f"<p><a href='{page}'>The chapter in full (prose, code and results)</a></p>")
         for path in _outputs(figures_dir, prefix):
+            if path.suffix == ".md":
+                continue
             rel = path.relative_to(figures_dir)
+            caption = html.escape(_caption(path))
+            label = f"<span class='file'>{html.escape(rel.as_posix())}</span>"
             if path.suffix == ".png":
                 (shown / rel).parent.mkdir(parents=True, exist_ok=True)
                 shutil.copyfile(path, shown / rel)
-                parts.append(f"<h3>{html.escape(path.stem)}</h3><img src='figures/{rel.as_posix()}'>")
-            elif path.suffix == ".csv":
-                parts.append(f"<h3>{html.escape(path.stem)}</h3>{_csv_to_html(path)}")
+                parts.append(f"<figure><img src='figures/{rel.as_posix()}' alt='{caption}'>"
+                             f"<figcaption>{caption} {label}</figcaption></figure>")
+            else:
+                parts.append(f"<figure><figcaption>{caption} {label}</figcaption>"
+                             f"{_csv_to_html(path)}</figure>")
     parts.append("</body></html>\n")
     with atomic_path(report_dir / "index.html") as tmp:
         tmp.write_text("\n".join(parts), encoding="utf-8")
 
 
+# --------------------------------------------------------------------------------------------
+# The whole report
+
+
 def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  notebooks_dir: Path = NOTEBOOKS, figures_dir: Path = FIGURES,
-                 build_dir: Path = BUILD, extra_parameters: dict | None = None) -> int:
-    """Run the chapters, publish their figures and tables, export HTML, write the index and
-    the manifest. Returns the process exit status (0, or 1 with the failure on stderr)."""
-    notebooks = chapters(notebooks_dir)
-    if only:
-        notebooks = [nb for nb in notebooks if nb.name[:2] in set(only)]
+                 build_dir: Path = BUILD, extra_parameters: dict | None = None,
+                 cell_timeout: float | None = 1800) -> int:
+    """Run the chapters, publish their figures and tables, export HTML and write the index.
+
+    Only a run with the default parameters (not ``smoke``, no ``extra_parameters``)
+    publishes into ``figures_dir``; others publish into ``build_dir/<variant>/figures``.
+    Returns the process exit status (0; 1 with the failure on stderr; 130 when interrupted).
+    """
+    everything = chapters(notebooks_dir)
+    if only is not None:
+        wanted = set(only)
+        if not wanted:
+            print("report: --only needs chapter numbers (e.g. --only 01 03)", file=sys.stderr)
+            return 2
+        unknown = sorted(wanted - {nb.name[:2] for nb in everything})
+        if unknown:
+            print(f"report: no chapter {', '.join(unknown)} (chapters: "
+                  f"{', '.join(nb.name[:2] for nb in everything)})", file=sys.stderr)
+            return 2
+        notebooks = [nb for nb in everything if nb.name[:2] in wanted]
+    else:
+        notebooks = everything
     if not notebooks:
         print(f"report: no chapter notebooks NN_*.ipynb in {notebooks_dir}", file=sys.stderr)
         return 1
-    report_dir = build_dir / "report"
-    for nb in notebooks:
-        prefix = nb.name[:2]
-        stage = build_dir / "stage" / nb.stem
-        shutil.rmtree(stage, ignore_errors=True)
-        stage.mkdir(parents=True)
-        executed = build_dir / "notebooks" / nb.name
-        parameters = {"smoke": smoke, "out_dir": str(stage), **(extra_parameters or {})}
-        print(f"report: {nb.name} …", file=sys.stderr, flush=True)
-        try:
-            run_notebook(nb, executed, parameters, progress=sys.stderr.isatty())
-            published = _publish(stage, figures_dir, prefix)
-        except ReportError as exc:
-            print(f"report: {exc}", file=sys.stderr)
-            return 1
-        _export_html(executed, report_dir / f"{nb.stem}.html")
-        print(f"report: {nb.name}: {len(published)} figures and tables", file=sys.stderr)
-    entries = [(nb.name[:2], _title(nb), f"{nb.stem}.html") for nb in chapters(notebooks_dir)
-               if (report_dir / f"{nb.stem}.html").exists()]
-    _write_index(report_dir, figures_dir, entries)
-    manifest = write_manifest(figures_dir)
-    print(f"report: {report_dir / 'index.html'}; {manifest}", file=sys.stderr)
+    extra = dict(extra_parameters or {})
+    variant = "smoke" if smoke else "custom" if extra else None
+    if variant:
+        figures_dir = build_dir / variant / "figures"
+        report_dir = build_dir / variant / "report"
+    else:
+        report_dir = build_dir / "report"
+    _recover(figures_dir)
+    try:
+        _install_mathjax(report_dir)
+        for nb in notebooks:
+            prefix = nb.name[:2]
+            stage = build_dir / "stage" / nb.stem
+            shutil.rmtree(stage, ignore_errors=True)
+            stage.mkdir(parents=True)
+            executed = build_dir / ("notebooks" if not variant else f"{variant}/notebooks") / nb.name
+            parameters = {"smoke": smoke, "out_dir": _relative(stage), **extra}
+            print(f"report: {nb.name} …", file=sys.stderr, flush=True)
+            try:
+                run_notebook(nb, executed, parameters, progress=sys.stderr.isatty(),
+                             cell_timeout=cell_timeout)
+                published = _publish(stage, figures_dir, prefix)
+            except ReportError as exc:
+                print(f"report: {exc}", file=sys.stderr)
+                return 1
+            shutil.rmtree(stage, ignore_errors=True)
+            print(f"report: {nb.name}: {len(published)} figures and tables published in "
+                  f"{_relative(figures_dir)}", file=sys.stderr)
+        pages = [(nb.name[:2], _title(nb), f"{nb.stem}.html") for nb in everything
+                 if (build_dir / ("notebooks" if not variant else f"{variant}/notebooks")
+                     / nb.name).exists()]
+        for k, (prefix, title, page) in enumerate(pages):
+            nb = notebooks_dir / page.replace(".html", ".ipynb")
+            executed = build_dir / ("notebooks" if not variant else f"{variant}/notebooks") / nb.name
+            links = {"index": ("index.html", "all chapters"),
+                     "previous": (pages[k - 1][2], pages[k - 1][1]) if k > 0 else None,
+                     "next": (pages[k + 1][2], pages[k + 1][1]) if k + 1 < len(pages) else None}
+            _export_html(executed, report_dir / page, _nav(links))
+        _write_index(report_dir, figures_dir, pages, parameters={**extra}, smoke=smoke)
+    except KeyboardInterrupt:
+        print(f"report: interrupted; {_relative(figures_dir)} holds the chapters published "
+              f"before (its manifest matches)", file=sys.stderr)
+        return 130
+    print(f"report: {_relative(report_dir / 'index.html')}; figures in "
+          f"{_relative(figures_dir)}", file=sys.stderr)
     return 0

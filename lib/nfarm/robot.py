@@ -21,6 +21,8 @@ Conventions (SI units, radians):
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
 import warnings
 from collections.abc import Sequence
@@ -39,6 +41,7 @@ __all__ = [
     "robot_from_dict",
     "robot_to_dict",
     "sample_configurations",
+    "robot_hash",
     "joint_array",
     "dh_rows",
 ]
@@ -193,6 +196,14 @@ def robot_to_dict(robot: Robot) -> dict:
     if robot.description:
         out["description"] = robot.description
     return out
+
+
+def robot_hash(robot: Robot) -> str:
+    """SHA-256 of the robot's parameters as loaded (canonical JSON of :func:`robot_to_dict`,
+    floats written exactly): two files that differ only in comments or layout are one robot.
+    Data sets and saved models record it, and refuse to be used with another robot."""
+    blob = json.dumps(robot_to_dict(robot), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(blob.encode("utf-8")).hexdigest()
 
 
 def sample_configurations(robot: Robot, size: int | tuple[int, ...], seed: int | np.random.Generator,

@@ -1,0 +1,667 @@
+"""Training, validation and test data for learned inverse kinematics and inverse dynamics,
+generated from the numerical models (the dissertation's §3.2.3; chapter 05).
+
+**Inverse kinematics.** Over the full joint ranges a 5-DOF arm's inverse kinematics is
+many-valued — the base can turn half a turn and the arm lean back over its head, the elbow can
+bend up or down — and no regressor learns a map that is not a function. The IK data therefore
+live in a declared :class:`IKRegion`: a box of joint sub-ranges that selects one branch, plus
+optional task-space filters on the tool point (distance from the base axis, height) and on the
+tool's approach axis (a cone). :func:`check_single_valued` proves the choice by measurement:
+Levenberg–Marquardt from many starts spread over the *full* joint limits, looking for a second
+solution of each target inside the region. Samples are ``q`` from the region and ``T = fk(q)``.
+
+**Inverse dynamics.** Random smooth joint trajectories (:func:`random_trajectories`): for each
+trajectory, via points drawn within the joint limits (less a margin), joined by quintic
+segments whose via velocities follow the neighbouring slopes (zero at a turning point, as
+PCHIP does) and whose via accelerations are zero; the trajectory is then slowed down uniformly
+until its velocities and accelerations are within the study's bounds (time scaling by ``s``
+divides velocities by ``s`` and accelerations by ``s²``). Torques are ``rnea(q, qd, qdd)``.
+Splits are by whole trajectories.
+
+**Files** (:func:`build_datasets`, ``python -m nfarm datasets STUDY``):
+``build/datasets/<robot>/{ik,ik_full,id}_{train,val,test}.npz`` of plain arrays (``np.load(...,
+allow_pickle=False)``; written with fixed zip timestamps, so the same inputs give the same
+bytes), each with a ``.json`` beside it: the robot's parameter hash, the study parameters, the
+seed, the nfarm and data-code versions, the array shapes, the npz's SHA-256 and the command.
+A file whose inputs' hash is unchanged is reused. :func:`load` refuses a file made for another
+robot or other study parameters, saying what differs and how to regenerate.
+
+Every random draw comes from the study's ``seed``, through one named stream per use
+(``numpy.random.SeedSequence([seed, stream])``), so adding a use never shifts another's draws.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import os
+import sys
+import zipfile
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.stats import qmc
+
+from . import __version__
+from .dynamics import rnea
+from .ik import solve
+from .kinematics import fk
+from .paths import BUILD, atomic_path, project_path
+from .reading import ParamsError, Validator, load_json, load_yaml, show
+from .robot import Robot, joint_array, load_robot, robot_hash
+
+__all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "load_study",
+           "check_single_valued", "random_trajectories", "ik_samples", "build_datasets",
+           "load", "dataset_dir", "DATA_VERSION", "SPLITS"]
+
+#: Version of the generating code: bump when the same inputs would give different data.
+DATA_VERSION = 1
+SPLITS = ("train", "val", "test")
+_STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5}
+_SPLIT_STREAM = {"train": 0, "val": 1, "test": 2}
+
+
+def _rng(seed: int, *stream: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence([seed, *stream]))
+
+
+# --------------------------------------------------------------------------------------------
+# The IK region
+
+
+@dataclass(frozen=True, eq=False)
+class IKRegion:
+    """A region of joint space in which the inverse kinematics is to be single-valued.
+
+    Attributes:
+        robot: the robot.
+        box: ``(n, 2)`` joint sub-ranges ``[lo, hi]`` [rad], within the joint limits.
+        radial: ``(lo, hi)`` distance of the tool point from the base z axis [m] (``None``: no
+            bound).
+        height: ``(lo, hi)`` height ``z`` of the tool point in the base frame [m].
+        approach_axis: unit vector in the base frame, or ``None``; with ``approach_angle``
+            [rad], the tool's approach axis (the z column of ``T_0e``) must lie within that
+            angle of it.
+    """
+
+    robot: Robot
+    box: np.ndarray
+    radial: tuple[float | None, float | None] = (None, None)
+    height: tuple[float | None, float | None] = (None, None)
+    approach_axis: np.ndarray | None = None
+    approach_angle: float = math.pi
+
+    @classmethod
+    def full(cls, robot: Robot) -> "IKRegion":
+        """The whole joint box: the dissertation's (naive) sampling."""
+        return cls(robot, robot.qlim.copy())
+
+    @property
+    def has_filters(self) -> bool:
+        return self.radial != (None, None) or self.height != (None, None) or \
+            self.approach_axis is not None
+
+    def contains_pose(self, T_0e: np.ndarray) -> np.ndarray:
+        """Whether tool poses ``(..., 4, 4)`` pass the task-space filters: ``(...)``."""
+        p = T_0e[..., :3, 3]
+        ok = np.ones(T_0e.shape[:-2], bool)
+        r = np.hypot(p[..., 0], p[..., 1])
+        for value, (lo, hi) in ((r, self.radial), (p[..., 2], self.height)):
+            if lo is not None:
+                ok &= value >= lo
+            if hi is not None:
+                ok &= value <= hi
+        if self.approach_axis is not None:
+            ok &= T_0e[..., :3, 2] @ self.approach_axis >= math.cos(self.approach_angle)
+        return ok
+
+    def contains(self, q) -> np.ndarray:
+        """Whether configurations ``q (..., n)`` [rad] lie in the region: ``(...)``."""
+        q = joint_array(self.robot, q)
+        ok = np.atleast_1d(((q >= self.box[:, 0]) & (q <= self.box[:, 1])).all(axis=-1))
+        if self.has_filters and ok.any():
+            flat = q.reshape(-1, self.robot.n)
+            inside = ok.reshape(-1)
+            inside[inside] = self.contains_pose(fk(self.robot, flat[inside]))
+            ok = inside.reshape(ok.shape)
+        return ok.reshape(q.shape[:-1])
+
+    def sample(self, n: int, seed: int | np.random.Generator, *, method: str = "sobol",
+               max_draws: int = 100_000_000) -> np.ndarray:
+        """``n`` configurations ``(n, dof)`` [rad] in the region.
+
+        ``method="sobol"``: a scrambled Sobol sequence (``scipy.stats.qmc``) over the box, which
+        covers it more evenly than independent draws (lower discrepancy); ``"uniform"``:
+        independent uniform draws. The box is sampled without rejection; the task-space
+        filters reject, in batches, until ``n`` are accepted.
+
+        Raises:
+            ValueError: the filters accept too few draws to reach ``n`` within ``max_draws``.
+        """
+        if method not in ("sobol", "uniform"):
+            raise ValueError(f"method must be 'sobol' or 'uniform', got {method!r}")
+        rng = np.random.default_rng(seed)
+        lo, span = self.box[:, 0], self.box[:, 1] - self.box[:, 0]
+        sobol = qmc.Sobol(self.robot.n, scramble=True, seed=rng) if method == "sobol" else None
+        parts, accepted, drawn = [], 0, 0
+        while accepted < n:
+            want = max(n - accepted, 1024)
+            if sobol is not None:            # powers of two keep Sobol's balance properties
+                u = sobol.random(1 << int(math.ceil(math.log2(want))))
+            else:
+                u = rng.random((want, self.robot.n))
+            q = lo + span * u
+            drawn += len(q)
+            if self.has_filters:
+                q = q[self.contains_pose(fk(self.robot, q))]
+            parts.append(q)
+            accepted += len(q)
+            if accepted < n and drawn >= max_draws:
+                raise ValueError(f"the region's task-space filters accepted {accepted} of "
+                                 f"{drawn} draws, fewer than the {n} asked for: widen them")
+        return np.concatenate(parts)[:n]
+
+    def describe(self) -> list[tuple[str, str]]:
+        """The region for people: (what, bound) rows, angles in degrees."""
+        rows = [(f"q{i + 1} ({self.robot.joint_names[i]})",
+                 f"{math.degrees(lo):.1f} … {math.degrees(hi):.1f} deg")
+                for i, (lo, hi) in enumerate(self.box)]
+        for name, (lo, hi), unit in (("distance from the base axis", self.radial, "m"),
+                                     ("height z", self.height, "m")):
+            if (lo, hi) != (None, None):
+                rows.append((name, f"{'−∞' if lo is None else f'{lo:g}'} … "
+                                   f"{'∞' if hi is None else f'{hi:g}'} {unit}"))
+        if self.approach_axis is not None:
+            rows.append(("tool approach axis", f"within {math.degrees(self.approach_angle):g}° of "
+                                               f"{np.round(self.approach_axis, 3).tolist()}"))
+        return rows
+
+
+@dataclass(frozen=True)
+class SingleValuedness:
+    """Result of :func:`check_single_valued` for ``M`` targets and ``S`` starts each.
+
+    Attributes:
+        q: ``(M, n)`` the targets' configurations (in the region).
+        second: ``(M,)`` whether a second solution inside the region was found.
+        q_second: ``(M, n)`` that solution (NaN where none).
+        solutions: ``(M,)`` distinct solutions within the joint limits found from the starts
+            (anywhere, not only in the region): how many-valued the full problem is.
+        solved: ``(M,)`` starts that converged.
+        starts: S.
+    """
+
+    q: np.ndarray
+    second: np.ndarray
+    q_second: np.ndarray
+    solutions: np.ndarray
+    solved: np.ndarray
+    starts: int
+
+    @property
+    def fraction(self) -> float:
+        """Fraction of targets with a second solution in the region."""
+        return float(np.mean(self.second))
+
+    @property
+    def offenders(self) -> np.ndarray:
+        return np.flatnonzero(self.second)
+
+
+def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int = 24, *,
+                        seed: int = 0, tol: float = 1e-6, distinct: float = 1e-4,
+                        **ik_options) -> SingleValuedness:
+    """Look for a second IK solution inside ``region`` for ``n_targets`` targets drawn in it.
+
+    Each target ``T = fk(q)`` is solved by Levenberg–Marquardt (:func:`nfarm.ik.solve`, no
+    restarts) from ``n_starts`` starts spread over the **full** joint limits (a scrambled Sobol
+    sequence); a converged solution inside the region that differs from ``q`` by more than
+    ``tol`` [rad] in some joint is a second solution. Solutions are counted as distinct when
+    they differ by more than ``distinct`` [rad].
+    """
+    robot = region.robot
+    q = region.sample(n_targets, _rng(seed, _STREAMS["check"]), method="uniform")
+    T = fk(robot, q)
+    lo, span = robot.qlim[:, 0], robot.qlim[:, 1] - robot.qlim[:, 0]
+    sobol = qmc.Sobol(robot.n, scramble=True, seed=_rng(seed, _STREAMS["check_starts"]))
+    starts = lo + span * sobol.random(1 << int(math.ceil(math.log2(n_starts))))[:n_starts]
+    T_all = np.broadcast_to(T[:, None], (n_targets, n_starts, 4, 4))
+    q0 = np.broadcast_to(starts, (n_targets, n_starts, robot.n))
+    result = solve(robot, T_all, q0=q0, **{"restarts": 0, **ik_options})
+    ok = result.success                                                # (M, S)
+    other = ok & region.contains(result.q) & \
+        (np.abs(result.q - q[:, None]).max(axis=-1) > tol)
+    second = other.any(axis=1)
+    first = np.argmax(other, axis=1)
+    q_second = np.where(second[:, None], result.q[np.arange(n_targets), first], np.nan)
+    # Distinct solutions per target: round to the `distinct` grid and count unique rows.
+    target, start = np.nonzero(ok)
+    keys = np.column_stack([target, np.round(result.q[target, start] / distinct)]).astype(np.int64)
+    unique = np.unique(keys, axis=0)
+    solutions = np.bincount(unique[:, 0], minlength=n_targets)
+    return SingleValuedness(q=q, second=second, q_second=q_second, solutions=solutions,
+                            solved=ok.sum(axis=1), starts=n_starts)
+
+
+def ik_samples(region: IKRegion, n: int, seed, *, method: str = "sobol") -> dict[str, np.ndarray]:
+    """``q (n, dof)`` in the region and ``T = fk(q) (n, 4, 4)``."""
+    q = region.sample(n, seed, method=method)
+    return {"q": q, "T": fk(region.robot, q)}
+
+
+# --------------------------------------------------------------------------------------------
+# ID trajectories
+
+
+@dataclass(frozen=True)
+class IDSettings:
+    """The random trajectory generator (study file, section ``id``; SI units, radians).
+
+    Attributes:
+        trajectories: trajectories per split.
+        via_points: via points per trajectory (the first is the start).
+        segment_time: ``(lo, hi)`` nominal duration of each segment [s], drawn uniformly.
+        dt: sampling step [s].
+        margin: via points stay this far inside the joint limits [rad].
+        max_velocity, max_acceleration: ``(n,)`` bounds [rad/s, rad/s²].
+    """
+
+    trajectories: dict[str, int]
+    via_points: int
+    segment_time: tuple[float, float]
+    dt: float
+    margin: float
+    max_velocity: np.ndarray
+    max_acceleration: np.ndarray
+
+
+def _quintic(p0, v0, p1, v1, T, s):
+    """Quintic Hermite segment with zero end accelerations, at normalised times ``s``:
+    position, velocity, acceleration (arrays broadcast over leading axes)."""
+    d = p1 - p0
+    c3 = 10 * d - (6 * v0 + 4 * v1) * T
+    c4 = -15 * d + (8 * v0 + 7 * v1) * T
+    c5 = 6 * d - 3 * (v0 + v1) * T
+    c1 = v0 * T
+    q = p0 + s * (c1 + s * s * (c3 + s * (c4 + s * c5)))
+    qd = (c1 + s * s * (3 * c3 + s * (4 * c4 + s * 5 * c5))) / T
+    qdd = s * (6 * c3 + s * (12 * c4 + s * 20 * c5)) / (T * T)
+    return q, qd, qdd
+
+
+def _via_velocities(points: np.ndarray, durations: np.ndarray) -> np.ndarray:
+    """Velocities at via points ``(J, K, n)`` from the neighbouring slopes: the harmonic mean
+    where both slopes have one sign, 0 at turning points and at both ends (as PCHIP)."""
+    slopes = np.diff(points, axis=1) / durations[..., None]            # (J, K-1, n)
+    a, b = slopes[:, :-1], slopes[:, 1:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inner = np.where(a * b > 0, 2 * a * b / (a + b), 0.0)
+    v = np.zeros_like(points)
+    v[:, 1:-1] = inner
+    return v
+
+
+def random_trajectories(robot: Robot, settings: IDSettings, count: int, seed) -> dict[str, np.ndarray]:
+    """``count`` random trajectories sampled at ``settings.dt`` (module docstring).
+
+    Returns ``t (N,)`` [s] (from 0 in each trajectory), ``q, qd, qdd (N, n)``, ``trajectory
+    (N,)`` (index of each sample's trajectory) and ``scale (count,)`` (the time scaling used).
+    Every sample lies within the joint limits and the velocity and acceleration bounds.
+    """
+    rng = np.random.default_rng(seed)
+    n, K = robot.n, settings.via_points
+    lo = robot.qlim[:, 0] + settings.margin
+    hi = robot.qlim[:, 1] - settings.margin
+    points = lo + (hi - lo) * rng.random((count, K, n))
+    durations = rng.uniform(*settings.segment_time, size=(count, K - 1))
+    v = _via_velocities(points, durations)
+    # A segment that overshoots the joint limits gets zero velocity at both ends (a rest-to-rest
+    # quintic is monotone, so it stays between its via points); repeat until none does.
+    s = np.linspace(0.0, 1.0, 129)[:, None, None, None]
+    for _ in range(K):
+        q, qd, qdd = _quintic(points[:, :-1], v[:, :-1], points[:, 1:], v[:, 1:],
+                              durations[..., None], s)                   # (129, J, K-1, n)
+        over = ((q < robot.qlim[:, 0]) | (q > robot.qlim[:, 1])).any(axis=(0, 3))  # (J, K-1)
+        if not over.any():
+            break
+        v[:, :-1][over] = 0.0
+        v[:, 1:][over] = 0.0
+    # Slow each trajectory down uniformly until it keeps the velocity and acceleration bounds
+    # (a 0.5 % margin covers the maxima between the 129 points per segment checked).
+    ratio_v = (np.abs(qd) / settings.max_velocity).max(axis=(0, 2, 3))
+    ratio_a = (np.abs(qdd) / settings.max_acceleration).max(axis=(0, 2, 3))
+    scale = np.maximum(1.0, np.maximum(ratio_v, np.sqrt(ratio_a)) * 1.005)
+    durations = durations * scale[:, None]
+    v = v / scale[:, None, None]
+    # Sample every trajectory at dt from 0 to its end; find each sample's segment with one
+    # search over all trajectories' segment ends, shifted apart so that they stay sorted.
+    ends = np.cumsum(durations, axis=1)                                  # (J, K-1)
+    counts = np.floor(ends[:, -1] / settings.dt + 1e-9).astype(int) + 1
+    trajectory = np.repeat(np.arange(count), counts)
+    t = (np.arange(trajectory.size) - np.repeat(np.cumsum(counts) - counts, counts)) * settings.dt
+    offset = np.arange(count) * (ends[:, -1].max() + 1.0)
+    found = np.searchsorted((ends + offset[:, None]).ravel(), t + offset[trajectory], side="right")
+    segment = np.minimum(found - trajectory * (K - 1), K - 2)
+    starts = np.concatenate([np.zeros((count, 1)), ends[:, :-1]], axis=1)
+    T = durations[trajectory, segment]
+    sn = np.clip((t - starts[trajectory, segment]) / T, 0.0, 1.0)[:, None]
+    q, qd, qdd = _quintic(points[trajectory, segment], v[trajectory, segment],
+                          points[trajectory, segment + 1], v[trajectory, segment + 1],
+                          T[:, None], sn)
+    return {"t": t, "q": q, "qd": qd, "qdd": qdd, "trajectory": trajectory, "scale": scale}
+
+
+# --------------------------------------------------------------------------------------------
+# Study files
+
+
+@dataclass(frozen=True, eq=False)
+class Study:
+    """A validated study file (schema in ``params/README.md``)."""
+
+    source: str
+    name: str
+    robot_file: str
+    robot: Robot
+    seed: int
+    ik_region: IKRegion
+    ik_sampler: str
+    ik_sizes: dict[str, int]
+    ik_full_range: bool
+    check_targets: int
+    check_starts: int
+    id: IDSettings
+    params: dict = field(repr=False)
+
+    @property
+    def inputs_hash(self) -> str:
+        """SHA-256 of what the data depend on: the robot's parameters, the study's
+        parameters and the data code's version."""
+        blob = json.dumps({"robot": robot_hash(self.robot), "study": self.params,
+                           "data_version": DATA_VERSION}, sort_keys=True)
+        return hashlib.sha256(blob.encode()).hexdigest()
+
+
+_TOP = {"name": True, "description": False, "robot_file": True, "seed": True, "ik": True,
+        "id": True}
+_IK = {"region": True, "sampler": False, "sizes": True, "check": True, "full_range": False}
+_REGION = {"joints_deg": True, "radial_m": False, "height_m": False, "approach": False}
+_APPROACH = {"axis": True, "max_angle_deg": True}
+_SIZES = dict.fromkeys(SPLITS, True)
+_CHECK = {"targets": True, "starts": True}
+_ID = {"trajectories": True, "via_points": True, "segment_time_s": True, "dt_s": True,
+       "margin_deg": False, "max_velocity_deg_s": True, "max_acceleration_deg_s2": True}
+
+
+def load_study(path: str | os.PathLike) -> Study:
+    """Load and validate a study file; every broken rule is one :class:`ParamsError` line
+    naming the file and the field."""
+    path = Path(path)
+    data = load_yaml(project_path(path), what="study file")
+    return study_from_dict(data, source=str(path))
+
+
+def _bounds(v: Validator, value: Any, at: str, *, positive: bool = False) -> tuple:
+    pair = v.sequence(value, at, min_len=2, max_len=2)
+    out = tuple(None if x is None else v.number(x, f"{at}[{k}]", lo=0.0 if positive else None)
+                for k, x in enumerate(pair))
+    if None not in out and not out[0] < out[1]:
+        v.fail(at, f"must satisfy lo < hi, got {list(out)}")
+    return out
+
+
+def _per_joint(v: Validator, value: Any, at: str, n: int) -> np.ndarray:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        values = [v.number(value, at, lo=0.0, lo_open=True)] * n
+    else:
+        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=True)
+                  for k, x in enumerate(v.sequence(value, at, min_len=n, max_len=n))]
+    return np.array(values)
+
+
+def study_from_dict(data: Any, source: str = "<dict>") -> Study:
+    """Validate a study mapping (as read from YAML) and build a :class:`Study`."""
+    v = Validator(source)
+    v.mapping(data, "", _TOP)
+    name = v.string(data["name"], "name")
+    if "description" in data:
+        v.string(data["description"], "description", allow_empty=True)
+    robot_file = v.string(data["robot_file"], "robot_file")
+    try:
+        robot = load_robot(project_path(robot_file))
+    except ParamsError as exc:
+        v.fail("robot_file", f"cannot load the robot: {exc}")
+    seed = v.integer(data["seed"], "seed", lo=0, hi=2**63 - 1)
+    n = robot.n
+
+    ik = v.mapping(data["ik"], "ik", _IK)
+    region = v.mapping(ik["region"], "ik.region", _REGION)
+    joints = v.sequence(region["joints_deg"], "ik.region.joints_deg", min_len=n, max_len=n)
+    box = robot.qlim.copy()
+    for i, pair in enumerate(joints):
+        at = f"ik.region.joints_deg[{i}]"
+        if pair is None:
+            continue
+        lo, hi = (math.radians(x) for x in v.vector(pair, at, 2))
+        if not lo < hi:
+            v.fail(at, f"must satisfy lo < hi, got {show(pair)}")
+        limits = robot.qlim[i]
+        if lo < limits[0] - 1e-12 or hi > limits[1] + 1e-12:
+            v.fail(at, f"must lie within joint {i + 1}'s limits "
+                       f"[{math.degrees(limits[0]):.6g}, {math.degrees(limits[1]):.6g}] deg, "
+                       f"got {show(pair)}")
+        box[i] = (max(lo, limits[0]), min(hi, limits[1]))
+    radial = _bounds(v, region["radial_m"], "ik.region.radial_m", positive=True) \
+        if region.get("radial_m") is not None else (None, None)
+    height = _bounds(v, region["height_m"], "ik.region.height_m") \
+        if region.get("height_m") is not None else (None, None)
+    axis, angle = None, math.pi
+    if region.get("approach") is not None:
+        approach = v.mapping(region["approach"], "ik.region.approach", _APPROACH)
+        axis = np.array(v.vector(approach["axis"], "ik.region.approach.axis", 3))
+        norm = float(np.linalg.norm(axis))
+        if norm == 0:
+            v.fail("ik.region.approach.axis", "must not be the zero vector")
+        axis = axis / norm
+        angle = math.radians(v.number(approach["max_angle_deg"], "ik.region.approach.max_angle_deg",
+                                      lo=0.0, hi=180.0, lo_open=True))
+    sampler = v.choice(ik.get("sampler", "sobol"), "ik.sampler", ("sobol", "uniform"))
+    sizes = v.mapping(ik["sizes"], "ik.sizes", _SIZES)
+    ik_sizes = {k: v.integer(sizes[k], f"ik.sizes.{k}", lo=1, hi=50_000_000) for k in SPLITS}
+    check = v.mapping(ik["check"], "ik.check", _CHECK)
+    check_targets = v.integer(check["targets"], "ik.check.targets", lo=1, hi=1_000_000)
+    check_starts = v.integer(check["starts"], "ik.check.starts", lo=1, hi=1024)
+    full_range = v.boolean(ik.get("full_range", False), "ik.full_range")
+
+    idd = v.mapping(data["id"], "id", _ID)
+    counts = v.mapping(idd["trajectories"], "id.trajectories", _SIZES)
+    trajectories = {k: v.integer(counts[k], f"id.trajectories.{k}", lo=1, hi=1_000_000)
+                    for k in SPLITS}
+    via = v.integer(idd["via_points"], "id.via_points", lo=2, hi=10_000)
+    segment = _bounds(v, idd["segment_time_s"], "id.segment_time_s", positive=True)
+    if None in segment or segment[0] <= 0:
+        v.fail("id.segment_time_s", f"must be two durations 0 < lo < hi [s], got "
+                                    f"{show(idd['segment_time_s'])}")
+    dt = v.number(idd["dt_s"], "id.dt_s", lo=0.0, lo_open=True, hi=segment[0])
+    margin = math.radians(v.number(idd.get("margin_deg", 0.0), "id.margin_deg", lo=0.0))
+    narrowest = float(np.min(robot.qlim[:, 1] - robot.qlim[:, 0]))
+    if 2 * margin >= narrowest:
+        v.fail("id.margin_deg", f"must leave room inside the narrowest joint range "
+                                f"({math.degrees(narrowest):.6g} deg), got {math.degrees(margin):.6g}")
+    vmax = np.radians(_per_joint(v, idd["max_velocity_deg_s"], "id.max_velocity_deg_s", n))
+    amax = np.radians(_per_joint(v, idd["max_acceleration_deg_s2"], "id.max_acceleration_deg_s2", n))
+
+    return Study(
+        source=source, name=name, robot_file=robot_file, robot=robot, seed=seed,
+        ik_region=IKRegion(robot, box, radial, height, axis, angle), ik_sampler=sampler,
+        ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
+        check_starts=check_starts,
+        id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax),
+        params=json.loads(json.dumps(data)))
+
+
+# --------------------------------------------------------------------------------------------
+# Files
+
+
+def dataset_dir(study: Study, out: str | os.PathLike | None = None) -> Path:
+    """Where a study's data sets go: ``out`` or ``build/datasets/<robot name>/``."""
+    return project_path(out) if out is not None else BUILD / "datasets" / study.robot.name
+
+
+def _npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
+    """An ``.npz`` (uncompressed zip of ``.npy``) with fixed timestamps: same arrays, same bytes."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+        for name, array in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.external_attr = 0o644 << 16
+            npy = io.BytesIO()
+            np.lib.format.write_array(npy, np.ascontiguousarray(array), allow_pickle=False)
+            archive.writestr(info, npy.getvalue())
+    return buffer.getvalue()
+
+
+def _write(path: Path, arrays: Mapping[str, np.ndarray], meta: dict) -> None:
+    """The npz, then its JSON (atomically each): a JSON is only there for a complete npz."""
+    data = _npz_bytes(arrays)
+    meta = {**meta, "npz_sha256": hashlib.sha256(data).hexdigest(),
+            "arrays": {k: {"shape": list(a.shape), "dtype": a.dtype.str} for k, a in arrays.items()}}
+    json_path = path.with_suffix(".json")
+    json_path.unlink(missing_ok=True)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    with atomic_path(json_path) as tmp:
+        tmp.write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+
+
+@dataclass(frozen=True)
+class Dataset(Mapping):
+    """A loaded data set: its arrays by name (``data["q"]``) and its description ``meta``."""
+
+    path: Path
+    arrays: dict[str, np.ndarray]
+    meta: dict
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return self.arrays[key]
+
+    def __iter__(self):
+        return iter(self.arrays)
+
+    def __len__(self) -> int:
+        return len(self.arrays)
+
+
+def _differences(made: Any, now: Any, at: str = "") -> list[str]:
+    if isinstance(made, dict) and isinstance(now, dict):
+        out = []
+        for key in sorted(set(made) | set(now)):
+            out += _differences(made.get(key), now.get(key), f"{at}.{key}" if at else str(key))
+        return out
+    return [] if made == now else [f"{at} ({show(made)} → {show(now)})"]
+
+
+def load(path: str | os.PathLike, robot: Robot, study: Study | None = None) -> Dataset:
+    """Read a data set written by :func:`build_datasets`, refusing one made for another robot
+    (or, with ``study``, from other study parameters or data code).
+
+    Raises:
+        ParamsError: a missing, damaged or mismatched file; the message says what differs and
+            how to regenerate.
+    """
+    path = Path(path)
+    meta = load_json(path.with_suffix(".json"), what="data set description")
+    v = Validator(str(path.with_suffix(".json")))
+    v.mapping(meta, "", dict.fromkeys(_META_KEYS, True))
+    again = f"regenerate with `python -m nfarm datasets {meta.get('study_file', 'STUDY')}`"
+    if meta["robot_params_sha256"] != robot_hash(robot):
+        v.fail("robot_params_sha256", f"made for robot {show(meta.get('robot'))} with other "
+                                      f"parameters than {robot.name!r} ({robot.source}): {again}")
+    if study is not None and meta["inputs_hash"] != study.inputs_hash:
+        diff = _differences(meta["study"], study.params)
+        if meta["data_version"] != DATA_VERSION:
+            diff.append(f"data code version ({meta['data_version']} → {DATA_VERSION})")
+        v.fail("study", f"made from other study parameters: {'; '.join(diff[:4]) or 'unknown'}; "
+                        f"{again}")
+    raw = _read_limited(path)
+    if hashlib.sha256(raw).hexdigest() != meta["npz_sha256"]:
+        v.fail("npz_sha256", f"{path.name} is not the file this description was written for "
+                             f"(changed or damaged): {again}")
+    with np.load(io.BytesIO(raw), allow_pickle=False) as npz:
+        arrays = {k: npz[k] for k in npz.files}
+    declared = meta["arrays"]
+    if set(arrays) != set(declared) or any(list(arrays[k].shape) != declared[k]["shape"]
+                                           for k in arrays):
+        v.fail("arrays", f"the arrays of {path.name} do not match their description: {again}")
+    return Dataset(path, arrays, meta)
+
+
+_META_KEYS = ("kind", "split", "robot", "robot_file", "robot_params_sha256", "study_file",
+              "study", "seed", "inputs_hash", "nfarm_version", "data_version", "command",
+              "npz_sha256", "arrays")
+
+
+def _read_limited(path: Path) -> bytes:
+    from .reading import read_bytes
+    return read_bytes(path, max_bytes=8 << 30, what="data set")
+
+
+def _up_to_date(path: Path, inputs_hash: str) -> bool:
+    json_path = path.with_suffix(".json")
+    if not (path.is_file() and json_path.is_file()):
+        return False
+    try:
+        meta = load_json(json_path)
+        return isinstance(meta, dict) and meta.get("inputs_hash") == inputs_hash and \
+            hashlib.sha256(path.read_bytes()).hexdigest() == meta.get("npz_sha256")
+    except (ParamsError, OSError):
+        return False
+
+
+def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force: bool = False,
+                   progress: bool = False, command: str | None = None) -> list[tuple[Path, str]]:
+    """Write every data set of ``study`` (module docstring); returns ``(path, "made" |
+    "reused")`` per file. Files whose inputs' hash is unchanged are reused unless ``force``."""
+    directory = dataset_dir(study, out)
+    directory.mkdir(parents=True, exist_ok=True)
+    inputs_hash = study.inputs_hash
+    base = {"robot": study.robot.name, "robot_file": study.robot_file,
+            "robot_params_sha256": robot_hash(study.robot), "study_file": study.source,
+            "study": study.params, "seed": study.seed, "inputs_hash": inputs_hash,
+            "nfarm_version": __version__, "data_version": DATA_VERSION,
+            "command": command or f"python -m nfarm datasets {study.source}"}
+    jobs = [("ik", s) for s in SPLITS] + [("id", s) for s in SPLITS]
+    if study.ik_full_range:
+        jobs += [("ik_full", s) for s in SPLITS]
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(jobs), desc="data sets", unit="file", file=sys.stderr)
+    done = []
+    for kind, split in jobs:
+        path = directory / f"{kind}_{split}.npz"
+        if not force and _up_to_date(path, inputs_hash):
+            done.append((path, "reused"))
+        else:
+            seed = [study.seed, _STREAMS[kind], _SPLIT_STREAM[split]]
+            if kind == "id":
+                data = random_trajectories(study.robot, study.id, study.id.trajectories[split],
+                                           np.random.SeedSequence(seed))
+                data["tau"] = rnea(study.robot, data["q"], data["qd"], data["qdd"])
+            else:
+                region = study.ik_region if kind == "ik" else IKRegion.full(study.robot)
+                data = ik_samples(region, study.ik_sizes[split], np.random.SeedSequence(seed),
+                                  method=study.ik_sampler)
+            _write(path, data, {**base, "kind": kind, "split": split})
+            done.append((path, "made"))
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    return done

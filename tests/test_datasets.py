@@ -1,0 +1,245 @@
+"""Data sets for learned IK and ID (nfarm.datasets): they obey the models, lie where declared,
+keep their splits apart, are reproducible byte for byte, refuse the wrong robot or study, and
+every study-file rule has a bad file."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from nfarm import datasets
+from nfarm.datasets import (IKRegion, build_datasets, check_single_valued, load, load_study,
+                            random_trajectories, study_from_dict)
+from nfarm.dynamics import rnea
+from nfarm.kinematics import fk
+from nfarm.paths import PARAMS
+from nfarm.reading import ParamsError
+from nfarm.robot import load_robot, robot_from_dict, robot_to_dict
+
+STUDY = PARAMS / "studies" / "intelbot5.yaml"
+BASE = yaml.safe_load(STUDY.read_text())
+
+
+def small_study():
+    data = copy.deepcopy(BASE)
+    data["ik"]["sizes"] = {"train": 300, "val": 100, "test": 200}
+    data["ik"]["check"] = {"targets": 50, "starts": 8}
+    data["id"]["trajectories"] = {"train": 6, "val": 2, "test": 3}
+    return data
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("data")
+    study = study_from_dict(small_study(), source="small.yaml")
+    return study, out, build_datasets(study, out)
+
+
+def test_the_shipped_study_loads():
+    study = load_study(STUDY)
+    assert study.robot.name == "intelbot5" and study.ik_sizes["train"] >= 10_000
+    assert study.ik_region.box.shape == (5, 2)
+
+
+def test_stored_data_obey_the_models(built):
+    study, out, made = built
+    assert [p.name for p, status in made] == [f"{k}_{s}.npz" for k in ("ik", "id", "ik_full")
+                                              for s in ("train", "val", "test")]
+    for split in ("train", "val", "test"):
+        ik = load(out / f"ik_{split}.npz", study.robot, study)
+        assert ik["q"].shape == (study.ik_sizes[split], 5)
+        np.testing.assert_allclose(ik["T"], fk(study.robot, ik["q"]), rtol=0, atol=1e-12)
+        assert study.ik_region.contains(ik["q"]).all(), "q inside the region"
+        idd = load(out / f"id_{split}.npz", study.robot, study)
+        np.testing.assert_allclose(idd["tau"], rnea(study.robot, idd["q"], idd["qd"], idd["qdd"]),
+                                   rtol=0, atol=1e-12)
+        assert set(np.unique(idd["trajectory"])) == set(range(study.id.trajectories[split]))
+        assert ((idd["q"] >= study.robot.qlim[:, 0]) & (idd["q"] <= study.robot.qlim[:, 1])).all()
+        assert (np.abs(idd["qd"]) <= study.id.max_velocity).all()
+        assert (np.abs(idd["qdd"]) <= study.id.max_acceleration).all()
+        full = load(out / f"ik_full_{split}.npz", study.robot, study)
+        assert not study.ik_region.contains(full["q"]).all(), "the full range is wider"
+
+
+def test_splits_are_disjoint(built):
+    study, out, _ = built
+    q = {s: load(out / f"ik_{s}.npz", study.robot)["q"] for s in ("train", "val", "test")}
+    rows = np.concatenate(list(q.values()))
+    assert len(np.unique(rows, axis=0)) == len(rows)
+    t = {s: load(out / f"id_{s}.npz", study.robot) for s in ("train", "val", "test")}
+    starts = [tuple(d["q"][d["trajectory"] == j][0]) for d in t.values()
+              for j in np.unique(d["trajectory"])]
+    assert len(set(starts)) == len(starts), "no trajectory in two splits"
+
+
+def test_id_trajectories_are_smooth_and_consistent():
+    """Velocities and accelerations are the derivatives of the positions (central differences)."""
+    study = study_from_dict(small_study())
+    d = random_trajectories(study.robot, study.id, 3, 0)
+    dt = study.id.dt
+    for j in range(3):
+        k = np.flatnonzero(d["trajectory"] == j)
+        q, qd, qdd = d["q"][k], d["qd"][k], d["qdd"][k]
+        np.testing.assert_allclose((q[2:] - q[:-2]) / (2 * dt), qd[1:-1], atol=2e-3)
+        # Accelerations are continuous but the jerk jumps at via points: there the central
+        # difference is off by O(dt · jump); elsewhere it is O(dt²).
+        error = np.abs((qd[2:] - qd[:-2]) / (2 * dt) - qdd[1:-1])
+        assert np.percentile(error, 99) < 2e-3 and error.max() < 0.1
+        assert np.allclose(qd[0], 0) and np.allclose(d["t"][k][0], 0)
+
+
+def test_same_seed_same_bytes_and_reuse(built, tmp_path):
+    study, out, _ = built
+    again = build_datasets(study, tmp_path)
+    for (a, _), (b, _) in zip(build_datasets(study, out), again):
+        assert a.read_bytes() == b.read_bytes()
+        assert json.loads(a.with_suffix(".json").read_text())["npz_sha256"] == \
+            json.loads(b.with_suffix(".json").read_text())["npz_sha256"]
+    assert {status for _, status in build_datasets(study, tmp_path)} == {"reused"}
+    other = small_study()
+    other["seed"] = 1
+    changed = build_datasets(study_from_dict(other), tmp_path)
+    assert {status for _, status in changed} == {"made"}
+
+
+def test_a_mismatched_robot_or_study_is_refused(built):
+    study, out, _ = built
+    params = robot_to_dict(study.robot)
+    params["joints"][1]["mass"] = 0.36
+    heavier = robot_from_dict(params, source="heavier.yaml")
+    with pytest.raises(ParamsError, match=r"ik_train.json: robot_params_sha256: made for robot "
+                                          r"'intelbot5' with other parameters than 'intelbot5' "
+                                          r"\(heavier.yaml\): regenerate with `python -m nfarm "
+                                          r"datasets small.yaml`"):
+        load(out / "ik_train.npz", heavier)
+    other = small_study()
+    other["ik"]["sizes"]["train"] = 301
+    with pytest.raises(ParamsError, match=r"study: made from other study parameters: "
+                                          r"ik.sizes.train \(300 → 301\)"):
+        load(out / "ik_train.npz", study.robot, study_from_dict(other))
+    with pytest.raises(ParamsError, match=r"file not found"):
+        load(out / "nothing.npz", study.robot)
+
+
+def test_a_changed_npz_is_refused(built, tmp_path):
+    study, out, _ = built
+    for name in ("ik_val.npz", "ik_val.json"):
+        (tmp_path / name).write_bytes((out / name).read_bytes())
+    data = bytearray((tmp_path / "ik_val.npz").read_bytes())
+    data[-100] ^= 1
+    (tmp_path / "ik_val.npz").write_bytes(bytes(data))
+    with pytest.raises(ParamsError, match=r"npz_sha256: ik_val.npz is not the file this "
+                                          r"description was written for"):
+        load(tmp_path / "ik_val.npz", study.robot)
+
+
+def test_an_interrupted_write_leaves_no_file(built, tmp_path, monkeypatch):
+    study, _, _ = built
+
+    def fail(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(datasets, "rnea", fail)
+    with pytest.raises(KeyboardInterrupt):
+        build_datasets(study, tmp_path)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == ["ik_test.json", "ik_test.npz", "ik_train.json", "ik_train.npz",
+                    "ik_val.json", "ik_val.npz"], "only complete files, each with its description"
+
+
+def test_region_contains_and_samples(intelbot5):
+    region = load_study(STUDY).ik_region
+    for method in ("sobol", "uniform"):
+        q = region.sample(1000, 3, method=method)
+        assert q.shape == (1000, 5) and region.contains(q).all()
+        np.testing.assert_array_equal(q, region.sample(1000, 3, method=method))
+    q = region.sample(7, 0)
+    assert region.contains(q[None]).shape == (1, 7) and region.contains(q[0]).shape == ()
+    assert not region.contains(intelbot5.qlim[:, 1] * 0.999)
+
+
+def test_the_shipped_region_is_single_valued_and_the_full_range_is_not():
+    study = load_study(STUDY)
+    inside = check_single_valued(study.ik_region, 300, 16, seed=1)
+    assert inside.fraction == 0.0 and inside.solved.mean() > 4
+    full = check_single_valued(IKRegion.full(study.robot), 300, 16, seed=1)
+    assert full.fraction > 0.3
+    k = full.offenders[0]
+    np.testing.assert_allclose(fk(study.robot, full.q_second[k]), fk(study.robot, full.q[k]),
+                               atol=1e-8)
+    assert np.abs(full.q_second[k] - full.q[k]).max() > 1e-3
+
+
+def bad(path, value):
+    data = small_study()
+    *head, last = path
+    target = data
+    for key in head:
+        target = target[key]
+    if value is KeyError:
+        del target[last]
+    else:
+        target[last] = value
+    return data
+
+
+@pytest.mark.parametrize("path, value, message", [
+    (("name",), "", r"name: must be a non-empty string"),
+    (("robot_file",), "params/robots/none.yaml", r"robot_file: cannot load the robot: .*none.yaml: file not found"),
+    (("seed",), -1, r"seed: must be >= 0, got -1"),
+    (("seed",), 1.5, r"seed: must be a whole number, got 1.5"),
+    (("sead",), 1, r"sead: unknown field \(did you mean 'seed'\?\)"),
+    (("ik",), KeyError, r"ik: required field is missing"),
+    (("ik", "region", "joints_deg"), [[-80, 80]] * 4, r"ik.region.joints_deg: must be a list of 5 items, got 4"),
+    (("ik", "region", "joints_deg", 0), [80, -80], r"ik.region.joints_deg\[0\]: must satisfy lo < hi"),
+    (("ik", "region", "joints_deg", 1), [-100, 60], r"ik.region.joints_deg\[1\]: must lie within joint 2's limits \[-90, 90\] deg"),
+    (("ik", "region", "joints_deg", 2), ["a", 1], r"ik.region.joints_deg\[2\]\[0\]: must be a number"),
+    (("ik", "region", "radial_m"), [-0.1, None], r"ik.region.radial_m\[0\]: must be >= 0"),
+    (("ik", "region", "height_m"), [0.3, 0.1], r"ik.region.height_m: must satisfy lo < hi"),
+    (("ik", "region", "approach"), {"axis": [0, 0, 0], "max_angle_deg": 30}, r"approach.axis: must not be the zero vector"),
+    (("ik", "region", "approach"), {"axis": [0, 0, -1], "max_angle_deg": 0}, r"approach.max_angle_deg: must be > 0"),
+    (("ik", "region", "approach"), {"axis": [0, 0, -1]}, r"approach.max_angle_deg: required field is missing"),
+    (("ik", "sampler"), "halton", r"ik.sampler: must be one of sobol, uniform, got 'halton'"),
+    (("ik", "sizes", "train"), 0, r"ik.sizes.train: must be >= 1, got 0"),
+    (("ik", "sizes"), {"train": 1, "val": 1}, r"ik.sizes.test: required field is missing"),
+    (("ik", "check", "starts"), 0, r"ik.check.starts: must be >= 1"),
+    (("ik", "full_range"), "yes", r"ik.full_range: must be true or false, got 'yes'"),
+    (("id", "via_points"), 1, r"id.via_points: must be >= 2, got 1"),
+    (("id", "segment_time_s"), [0, 1], r"id.segment_time_s: must be two durations 0 < lo < hi"),
+    (("id", "segment_time_s"), [1.0], r"id.segment_time_s: must be a list of 2 items, got 1"),
+    (("id", "dt_s"), 5.0, r"id.dt_s: must be <= 0.6, got 5.0"),
+    (("id", "dt_s"), 0, r"id.dt_s: must be > 0, got 0.0"),
+    (("id", "margin_deg"), 100, r"id.margin_deg: must leave room inside the narrowest joint range"),
+    (("id", "max_velocity_deg_s"), [1, 2, 3], r"id.max_velocity_deg_s: must be a list of 5 items, got 3"),
+    (("id", "max_acceleration_deg_s2"), -5, r"id.max_acceleration_deg_s2: must be > 0, got -5.0"),
+    (("id", "trajectories", "val"), 2.5, r"id.trajectories.val: must be a whole number"),
+])
+def test_every_study_rule_has_a_bad_file(tmp_path, path, value, message):
+    file = tmp_path / "bad.yaml"
+    file.write_text(yaml.safe_dump(bad(path, value)))
+    with pytest.raises(ParamsError, match=message) as caught:
+        load_study(file)
+    assert str(caught.value).startswith(f"{file}: ") and "\n" not in str(caught.value)
+
+
+def test_check_params_accepts_study_files():
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, "-m", "nfarm", "check-params", str(STUDY)],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and "ok (study 'intelbot5 study' of intelbot5" in run.stdout
+
+
+def test_robot_hash_ignores_layout_but_not_values(tmp_path):
+    source = PARAMS / "robots" / "intelbot5.yaml"
+    robot = load_robot(source)
+    (tmp_path / "same.yaml").write_text("# a comment\n" + source.read_text())
+    from nfarm.robot import robot_hash
+    assert robot_hash(load_robot(tmp_path / "same.yaml")) == robot_hash(robot)
+    params = robot_to_dict(robot)
+    params["joints"][0]["d"] += 1e-12
+    assert robot_hash(robot_from_dict(params)) != robot_hash(robot)
