@@ -45,8 +45,10 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path):
     out = tmp_path / "out"
     executed = tmp_path / notebook.name
     parameters = {"smoke": True, "out_dir": str(out)}
-    if "recordings_dir" in papermill.inspect_notebook(str(notebook)):
-        parameters["recordings_dir"] = str(tmp_path / "recordings")
+    declared = papermill.inspect_notebook(str(notebook))
+    for name in ("recordings_dir", "data_dir", "models_dir"):   # nothing written into the checkout
+        if name in declared:
+            parameters[name] = str(tmp_path / name)
     run_notebook(notebook, executed, parameters)
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
     assert any("image/png" in o.get("data", {}) for o in outputs), "figures show in the chapter"

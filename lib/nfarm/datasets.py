@@ -13,10 +13,11 @@ solution of each target inside the region. Samples are ``q`` from the region and
 **Inverse dynamics.** Random smooth joint trajectories (:func:`random_trajectories`): for each
 trajectory, via points drawn within the joint limits (less a margin), joined by quintic
 segments whose via velocities follow the neighbouring slopes (zero at a turning point, as
-PCHIP does) and whose via accelerations are zero; the trajectory is then slowed down uniformly
-until its velocities and accelerations are within the study's bounds (time scaling by ``s``
-divides velocities by ``s`` and accelerations by ``s²``). Torques are ``rnea(q, qd, qdd)``.
-Splits are by whole trajectories.
+PCHIP does) and whose via accelerations are zero. Each segment gets a random duration, at least
+the time its largest move needs from rest to rest within the bounds; the trajectory is then
+slowed down uniformly until its velocities and accelerations are within the study's bounds
+(time scaling by ``s`` divides velocities by ``s`` and accelerations by ``s²``). Torques are
+``rnea(q, qd, qdd)``. Splits are by whole trajectories.
 
 **Files** (:func:`build_datasets`, ``python -m nfarm datasets STUDY``):
 ``build/datasets/<robot>/{ik,ik_full,id}_{train,val,test}.npz`` of plain arrays (``np.load(...,
@@ -56,11 +57,12 @@ from .reading import ParamsError, Validator, load_json, load_yaml, show
 from .robot import Robot, joint_array, load_robot, robot_hash
 
 __all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "load_study",
-           "check_single_valued", "random_trajectories", "ik_samples", "build_datasets",
-           "load", "dataset_dir", "DATA_VERSION", "SPLITS"]
+           "study_from_dict", "smoke_study", "check_single_valued", "workspace_fraction",
+           "random_trajectories", "ik_samples", "build_datasets", "load", "dataset_dir",
+           "DATA_VERSION", "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
-DATA_VERSION = 1
+DATA_VERSION = 2
 SPLITS = ("train", "val", "test")
 _STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5}
 _SPLIT_STREAM = {"train": 0, "val": 1, "test": 2}
@@ -248,6 +250,33 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
                             solved=ok.sum(axis=1), starts=n_starts)
 
 
+def workspace_fraction(region: IKRegion, n: int = 200_000, seed: int = 0, *,
+                       voxel: float = 0.02) -> float:
+    """The share of the full workspace the region's tool positions cover: the fraction of the
+    ``voxel``-sized cells [m] reached from the full joint ranges that are also reached from the
+    region (``n`` samples each, so small cells reached rarely may be missed by both)."""
+    full = IKRegion.full(region.robot)
+    cells = []
+    for k, r in enumerate((full, region)):
+        p = fk(region.robot, r.sample(n, _rng(seed, 100 + k), method="uniform"))[:, :3, 3]
+        cells.append(np.unique(np.floor(p / voxel).astype(np.int64), axis=0))
+    both = np.concatenate(cells)
+    shared = len(both) - len(np.unique(both, axis=0))
+    return shared / len(cells[0])
+
+
+def smoke_study(study: Study, factor: int = 50) -> Study:
+    """The same study with every size divided by ``factor`` (at least a few samples each),
+    for quick runs; its data sets go to a directory of their own (``<robot>-smoke``)."""
+    params = json.loads(json.dumps(study.params))
+    params["ik"]["sizes"] = {k: max(v // factor, 64) for k, v in params["ik"]["sizes"].items()}
+    params["ik"]["check"]["targets"] = max(params["ik"]["check"]["targets"] // factor, 50)
+    params["id"]["trajectories"] = {k: max(v // factor, 2)
+                                    for k, v in params["id"]["trajectories"].items()}
+    params["name"] = f"{params['name']} (smoke)"
+    return study_from_dict(params, source=study.source)
+
+
 def ik_samples(region: IKRegion, n: int, seed, *, method: str = "sobol") -> dict[str, np.ndarray]:
     """``q (n, dof)`` in the region and ``T = fk(q) (n, 4, 4)``."""
     q = region.sample(n, seed, method=method)
@@ -318,7 +347,14 @@ def random_trajectories(robot: Robot, settings: IDSettings, count: int, seed) ->
     lo = robot.qlim[:, 0] + settings.margin
     hi = robot.qlim[:, 1] - settings.margin
     points = lo + (hi - lo) * rng.random((count, K, n))
-    durations = rng.uniform(*settings.segment_time, size=(count, K - 1))
+    # Each segment lasts a random nominal time, or longer if its largest joint move could not
+    # be made in it from rest to rest within the bounds (peak speed 1.875 Δ/T, peak acceleration
+    # 5.7735 Δ/T² for a rest-to-rest quintic): segments then move at similar speeds, instead of
+    # one fast segment slowing the whole trajectory down.
+    move = np.abs(np.diff(points, axis=1))                               # (J, K-1, n)
+    needed = np.maximum(1.875 * move / settings.max_velocity,
+                        np.sqrt(5.7735 * move / settings.max_acceleration)).max(axis=-1)
+    durations = np.maximum(rng.uniform(*settings.segment_time, size=(count, K - 1)), needed)
     v = _via_velocities(points, durations)
     # A segment that overshoots the joint limits gets zero velocity at both ends (a rest-to-rest
     # quintic is monotone, so it stays between its via points); repeat until none does.
@@ -510,8 +546,12 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
 
 
 def dataset_dir(study: Study, out: str | os.PathLike | None = None) -> Path:
-    """Where a study's data sets go: ``out`` or ``build/datasets/<robot name>/``."""
-    return project_path(out) if out is not None else BUILD / "datasets" / study.robot.name
+    """Where a study's data sets go: ``out`` or ``build/datasets/<robot name>/`` (a smoke
+    study's: ``build/datasets/<robot name>-smoke/``)."""
+    if out is not None:
+        return project_path(out)
+    smoke = "-smoke" if study.name.endswith("(smoke)") else ""
+    return BUILD / "datasets" / f"{study.robot.name}{smoke}"
 
 
 def _npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:

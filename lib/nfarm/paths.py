@@ -13,7 +13,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["ROOT", "FIGURES", "BUILD", "NOTEBOOKS", "PARAMS", "project_path", "atomic_path"]
+__all__ = ["ROOT", "FIGURES", "BUILD", "NOTEBOOKS", "PARAMS", "project_path", "shown_path",
+           "atomic_path"]
 
 ROOT = Path(__file__).resolve().parents[2]
 FIGURES = ROOT / "figures"
@@ -26,6 +27,15 @@ def project_path(path: str | os.PathLike) -> Path:
     """``path`` itself if absolute, else resolved against the repository root."""
     path = Path(path)
     return path if path.is_absolute() else ROOT / path
+
+
+def shown_path(path: str | os.PathLike) -> str:
+    """``path`` for people and for notebooks: relative to the repository root when inside it
+    (so that no executed notebook holds the checkout's absolute path), else as given."""
+    try:
+        return Path(path).resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        return str(path)
 
 
 @contextlib.contextmanager

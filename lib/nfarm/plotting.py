@@ -20,6 +20,7 @@ from .paths import atomic_path
 from .robot import Robot
 
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
+           "plot_region", "plot_histograms", "plot_id_trajectories", "plot_torque_distributions",
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
            "plot_motion", "plot_learning_curves", "DPI"]
 
@@ -212,4 +213,91 @@ def plot_learning_curves(models: Mapping[str, object]) -> Figure:
         bottom.set(xlabel="epoch", ylabel="step size k")
         for ax in (top, bottom):
             ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_region(full: np.ndarray, region: np.ndarray, *, title: str = "") -> Figure:
+    """Side (radial distance–height) and top (x–y) views of the tool positions ``(N, 3)`` [m]
+    of the full joint ranges (grey) and of a region (colour)."""
+    fig, (side, top) = plt.subplots(1, 2, figsize=(10, 4.4), layout="constrained")
+    grey = dict(s=0.4, alpha=0.15, c="0.55", linewidths=0, rasterized=True)
+    colour = dict(s=0.4, alpha=0.35, c="C1", linewidths=0, rasterized=True)
+    for points, style, label in ((full, grey, "full joint ranges"), (region, colour, "IK region")):
+        side.scatter(np.hypot(points[:, 0], points[:, 1]), points[:, 2], label=label, **style)
+        top.scatter(points[:, 0], points[:, 1], **style)
+    side.set(xlabel="distance from the base axis √(x² + y²) [m]", ylabel="z [m]",
+             title="side view (every base angle folded in)", aspect="equal")
+    top.set(xlabel="x [m]", ylabel="y [m]", title="top view (x–y)", aspect="equal")
+    for ax in (side, top):
+        ax.plot(0, 0, "k+", ms=10)
+        ax.grid(alpha=0.3)
+    legend = side.legend(fontsize=8, markerscale=12, loc="upper left")
+    for handle in legend.legend_handles:
+        handle.set_alpha(1)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def plot_histograms(columns: Mapping[str, np.ndarray], *, bins: int = 40, ncols: int = 5,
+                    reference: Mapping[str, np.ndarray] | None = None,
+                    labels: tuple[str, str] = ("data", "reference")) -> Figure:
+    """One histogram per named column (the name carries the unit), optionally over a grey
+    ``reference`` histogram of the same column; densities, so that sizes may differ."""
+    names = list(columns)
+    nrows = -(-len(names) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(2.7 * ncols, 2.3 * nrows),
+                             layout="constrained", squeeze=False)
+    for ax, name in zip(axes.flat, names):
+        values = columns[name]
+        lo, hi = float(np.min(values)), float(np.max(values))
+        if reference is not None:
+            lo, hi = min(lo, float(np.min(reference[name]))), max(hi, float(np.max(reference[name])))
+            ax.hist(reference[name], bins=bins, range=(lo, hi), density=True, color="0.75",
+                    label=labels[1])
+        ax.hist(values, bins=bins, range=(lo, hi), density=True, histtype="step", color="C1",
+                lw=1.4, label=labels[0])
+        ax.set_xlabel(name, fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.set_yticks([])
+    for ax in list(axes.flat)[len(names):]:
+        ax.set_visible(False)
+    axes[0, 0].set_ylabel("density", fontsize=8)
+    if reference is not None:
+        axes[0, 0].legend(fontsize=7)
+    return fig
+
+
+def plot_id_trajectories(trajectories: list[Mapping[str, np.ndarray]], joint_names) -> Figure:
+    """Position, velocity, acceleration [deg, deg/s, deg/s²] and torque [N·m] over time, one
+    row per trajectory (a mapping with ``t, q, qd, qdd, tau``), one line per joint."""
+    rows = len(trajectories)
+    fig, axes = plt.subplots(rows, 4, figsize=(15, 2.6 * rows), layout="constrained",
+                             squeeze=False)
+    what = (("q", "q [deg]", True), ("qd", "q̇ [deg/s]", True), ("qdd", "q̈ [deg/s²]", True),
+            ("tau", "τ [N·m]", False))
+    for r, data in enumerate(trajectories):
+        for ax, (key, label, degrees) in zip(axes[r], what):
+            values = np.degrees(data[key]) if degrees else data[key]
+            for j, name in enumerate(joint_names):
+                ax.plot(data["t"], values[:, j], lw=1.1, label=name)
+            ax.set(ylabel=label)
+            ax.grid(alpha=0.3)
+            if r == rows - 1:
+                ax.set_xlabel("t [s]")
+        axes[r, 0].set_title(f"trajectory {data.get('index', r)}", loc="left", fontsize=9)
+    axes[0, 3].legend(fontsize=7, loc="upper right", ncols=2)
+    return fig
+
+
+def plot_torque_distributions(tau: np.ndarray, joint_names) -> Figure:
+    """The distribution of each joint's torque ``tau (N, n)`` [N·m] (violins with quartiles)."""
+    n = len(joint_names)
+    fig, ax = plt.subplots(figsize=(1.6 * n + 2, 3.6), layout="constrained")
+    parts = ax.violinplot([tau[:, j] for j in range(n)], showextrema=True, showmedians=True)
+    for body in parts["bodies"]:
+        body.set_alpha(0.5)
+    ax.set_xticks(range(1, n + 1), joint_names, fontsize=8)
+    ax.set(ylabel="τ [N·m]", title="joint torques over all training samples")
+    ax.grid(alpha=0.3, axis="y")
     return fig

@@ -44,9 +44,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .paths import BUILD, FIGURES, NOTEBOOKS, ROOT, atomic_path
+from .paths import BUILD, FIGURES, NOTEBOOKS, ROOT, atomic_path, shown_path
 
-__all__ = ["Table", "ReportError", "run_notebook", "build_report", "write_manifest",
+__all__ = ["Table", "shown", "ReportError", "run_notebook", "build_report", "write_manifest",
            "verify_manifest", "chapters", "KERNEL_NAME"]
 
 KERNEL_NAME = "nfarm"
@@ -67,6 +67,17 @@ def _cell(value, floatfmt: str) -> str:
     if isinstance(value, (np.integer, np.bool_)):
         return str(value.item())
     return str(value)
+
+
+def shown(value: float, fmt: str = ".3g", *, floor: float = 1e-15) -> str:
+    """A number for people: ``format(value, fmt)``, or ``"< 1e-15"`` when it is at the level of
+    floating-point noise (|value| below ``floor``), which is not data."""
+    value = float(value)
+    if not np.isfinite(value) or value == 0:
+        return str(value) if value else "0"
+    if abs(value) < floor:
+        return f"< {floor:.0e}".replace("e-0", "e-")
+    return _NEGATIVE_ZERO.sub(r"\1", format(value, fmt))
 
 
 @dataclass
@@ -171,14 +182,6 @@ def _ipc_kernel_manager(directory: str):
     return IPCKernelManager
 
 
-def _relative(path: Path) -> str:
-    """``path`` relative to the checkout when inside it (no absolute paths in notebooks)."""
-    try:
-        return Path(path).resolve().relative_to(ROOT).as_posix()
-    except ValueError:
-        return str(path)
-
-
 def _source_cell(executed: Path, index: int) -> int:
     """The index in the source notebook of the executed notebook's cell ``index`` (papermill's
     injected parameters cell is not in the source)."""
@@ -221,7 +224,7 @@ def _clean_executed(executed: Path) -> None:
     meta = nb.metadata.get("papermill", {})
     for key in ("input_path", "output_path"):
         if key in meta:
-            meta[key] = _relative(Path(meta[key]))
+            meta[key] = shown_path(Path(meta[key]))
     for cell in nb.cells:
         for output in cell.get("outputs", []):
             output.get("data", {}).pop("application/vnd.jupyter.widget-view+json", None)
@@ -535,7 +538,7 @@ def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, s
     facts = {"what": kind, "robot": "params/robots/intelbot5.yaml (chapter parameters may name others)",
              "parameters": ", ".join(f"{k} = {v!r}" for k, v in parameters.items()) or "defaults",
              "commit": commit + dirty, "built": when,
-             "figures": _relative(figures_dir) + " (checked by MANIFEST.sha256)"}
+             "figures": shown_path(figures_dir) + " (checked by MANIFEST.sha256)"}
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>nfarm — study report"
              f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
              "numerical methods and ANFIS</h1><dl>"]
@@ -613,7 +616,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
             shutil.rmtree(stage, ignore_errors=True)
             stage.mkdir(parents=True)
             executed = build_dir / ("notebooks" if not variant else f"{variant}/notebooks") / nb.name
-            parameters = {"smoke": smoke, "out_dir": _relative(stage), **extra}
+            parameters = {"smoke": smoke, "out_dir": shown_path(stage), **extra}
             print(f"report: {nb.name} …", file=sys.stderr, flush=True)
             try:
                 run_notebook(nb, executed, parameters, progress=sys.stderr.isatty(),
@@ -624,7 +627,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                 return 1
             shutil.rmtree(stage, ignore_errors=True)
             print(f"report: {nb.name}: {len(published)} figures and tables published in "
-                  f"{_relative(figures_dir)}", file=sys.stderr)
+                  f"{shown_path(figures_dir)}", file=sys.stderr)
         pages = [(nb.name[:2], _title(nb), f"{nb.stem}.html") for nb in everything
                  if (build_dir / ("notebooks" if not variant else f"{variant}/notebooks")
                      / nb.name).exists()]
@@ -637,9 +640,9 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
             _export_html(executed, report_dir / page, _nav(links))
         _write_index(report_dir, figures_dir, pages, parameters={**extra}, smoke=smoke)
     except KeyboardInterrupt:
-        print(f"report: interrupted; {_relative(figures_dir)} holds the chapters published "
+        print(f"report: interrupted; {shown_path(figures_dir)} holds the chapters published "
               f"before (its manifest matches)", file=sys.stderr)
         return 130
-    print(f"report: {_relative(report_dir / 'index.html')}; figures in "
-          f"{_relative(figures_dir)}", file=sys.stderr)
+    print(f"report: {shown_path(report_dir / 'index.html')}; figures in "
+          f"{shown_path(figures_dir)}", file=sys.stderr)
     return 0
