@@ -477,6 +477,7 @@ def _export_html(executed: Path, target: Path, nav: str = "") -> None:
         body, _ = exporter.from_notebook_node(nbformat.read(executed, 4))
     finally:
         exporter.log.removeFilter(quiet)
+    body = body.replace('<script src=""></script>', "")       # the URLs switched off above
     if nav:
         body = re.sub(r"(<body[^>]*>)", lambda m: m.group(1) + nav, body, count=1)
         body = body.replace("</body>", nav + "</body>", 1)

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from .paths import shown_path
 from .reading import ParamsError, ParamsWarning, Validator, load_yaml, show
 
 __all__ = [
@@ -43,6 +44,7 @@ __all__ = [
     "sample_configurations",
     "robot_hash",
     "joint_array",
+    "poses_for",
     "dh_rows",
 ]
 
@@ -102,7 +104,7 @@ class Robot:
         return self.a.shape[0]
 
     def __repr__(self) -> str:
-        return f"Robot({self.name!r}, {self.convention} DH, n={self.n}, source={self.source!r})"
+        return f"Robot({self.name!r}, {self.convention} DH, n={self.n}, source={shown_path(self.source)!r})"
 
 
 # --------------------------------------------------------------------------------------------
@@ -226,6 +228,31 @@ def joint_array(robot: Robot, value, name: str = "q") -> np.ndarray:
     if array.ndim == 0 or array.shape[-1] != robot.n:
         raise ValueError(f"{robot.name}: {name} must have shape (..., {robot.n}), got {array.shape}")
     return array.astype(float, copy=False)
+
+
+def poses_for(robot: Robot, poses_deg: dict[str, Sequence[float]], seed: int = 0,
+              ) -> tuple[dict[str, np.ndarray], str]:
+    """Named configurations [rad] for a chapter, and a note for its reader.
+
+    ``poses_deg`` maps names to angles [deg]. When every pose has one angle per joint they are
+    used as given (an empty note); when they were written for another arm (another number of
+    joints), the home configuration (0 moved into the limits) and seeded random
+    configurations within the limits take their place, as many as were given, and the note
+    says so — a chapter run for another robot shows that robot instead of failing.
+    """
+    if poses_deg and all(len(q) == robot.n for q in poses_deg.values()):
+        return {name: np.radians(np.asarray(q, dtype=float)) for name, q in poses_deg.items()}, ""
+    lengths = sorted({len(q) for q in poses_deg.values()})
+    rng = np.random.default_rng(seed)
+    home = np.clip(0.0, robot.qlim[:, 0], robot.qlim[:, 1])
+    poses = {"home (q = 0)": home}
+    for k in range(1, max(len(poses_deg), 1)):
+        poses[f"random configuration {k}"] = sample_configurations(robot, (), rng)
+    note = (f"The chapter's named poses have {', '.join(map(str, lengths))} angles; "
+            f"{robot.name} has {robot.n} joints, so its home configuration and "
+            f"{len(poses) - 1} random configuration{'s' if len(poses) != 2 else ''} within its limits (seed {seed}) are "
+            f"shown instead.")
+    return poses, note
 
 
 def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
