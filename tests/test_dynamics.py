@@ -55,7 +55,7 @@ def test_random_chains_match_pinocchio(robot, seed):
 
 
 def test_puma560_published_gravity_check_values(puma560):
-    """../shared/data/puma560.md: at q = (0, π/4, −π, 0, π/4, 0), g ≈ (0, 31.64, 6.035, 0, 0.0283, 0)."""
+    """Corke's published Puma 560 check (Robotics Toolbox, puma560 model): at q = (0, π/4, −π, 0, π/4, 0), g ≈ (0, 31.64, 6.035, 0, 0.0283, 0)."""
     for q3 in (-np.pi, np.pi):
         g = gravity_torques(puma560, [0, np.pi / 4, q3, 0, np.pi / 4, 0])
         np.testing.assert_allclose(g, [0, 31.64, 6.035, 0, 0.0283, 0], atol=5e-3)

@@ -8,7 +8,7 @@ import json
 import papermill
 import pytest
 
-from nfarm.paths import NOTEBOOKS
+from nfarm.paths import FIGURES, NOTEBOOKS, ROOT
 from nfarm.report import chapters, run_notebook
 
 NOTEBOOK_FILES = chapters(NOTEBOOKS)
@@ -50,6 +50,7 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path):
         if name in declared:
             parameters[name] = str(tmp_path / name)
     run_notebook(notebook, executed, parameters)
+    assert str(ROOT) not in executed.read_text(), "no absolute path of the checkout"
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
     assert any("image/png" in o.get("data", {}) for o in outputs), "figures show in the chapter"
     prefix = notebook.name[:2]
@@ -60,3 +61,23 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path):
         assert path.name.startswith(f"{prefix}_") and path.stat().st_size > 0
     for table in tables:
         assert table.with_suffix(".md").exists()
+
+
+ROBOT_CHAPTERS = [nb for nb in NOTEBOOK_FILES
+                  if "robot_file" in papermill.inspect_notebook(str(nb))]
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("notebook", ROBOT_CHAPTERS, ids=lambda p: p.stem)
+def test_runs_for_another_shipped_robot_without_touching_figures(notebook, tmp_path):
+    """A chapter takes any shipped robot (here the 6-joint Puma 560), and a run by hand never
+    writes into figures/."""
+    before = {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")}
+    parameters = {"smoke": True, "out_dir": str(tmp_path / "out"),
+                  "robot_file": "params/robots/puma560.yaml"}
+    for name in ("recordings_dir", "data_dir", "models_dir"):
+        if name in papermill.inspect_notebook(str(notebook)):
+            parameters[name] = str(tmp_path / name)
+    run_notebook(notebook, tmp_path / notebook.name, parameters)
+    assert "puma560" in (tmp_path / notebook.name).read_text()
+    assert {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")} == before

@@ -121,7 +121,10 @@ def test_recording_holds_the_robot_and_every_time_step(intelbot5, tmp_path):
     assert rows["/intelbot5"] >= 1 and any(e.startswith("/intelbot5/visual_geometries/link5") for e in rows)
     for joint in intelbot5.joint_names:
         assert rows[f"/transforms/{joint}"] == K
-        for key in ("q", "qd", "tau"):
-            assert rows[f"/joints/{joint}/{key}"] == K
+        for key in ("q_deg", "qd_deg_s", "tau"):
+            assert rows[f"/{key}/{joint}"] == K
     assert rows["/tool_path"] == K
     assert list(tmp_path.iterdir()) == [path], "no temporary files left"
+    printed = subprocess.run([sys.executable, "-m", "rerun", "rrd", "print", str(path)],
+                             capture_output=True, text=True, check=True).stdout
+    assert "blueprint" in printed.lower(), "the recording carries its viewer layout"

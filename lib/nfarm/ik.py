@@ -47,7 +47,7 @@ from .linalg import cholesky_solve_T, gram_T
 from .robot import Robot, sample_configurations
 from .rotations import relative_log_T
 
-__all__ = ["IKResult", "solve", "solve_path", "METHODS", "REASONS"]
+__all__ = ["IKResult", "solve", "solve_path", "check_targets", "METHODS", "REASONS"]
 
 METHODS = ("lm", "dls", "pinv", "jt")
 REASONS = ("converged", "max_iter", "unreachable", "joint_limits")
@@ -114,7 +114,10 @@ def _where(shape: tuple, flat_index: int) -> str:
     return f"T_target[{', '.join(map(str, np.unravel_index(flat_index, shape)))}]"
 
 
-def _check_targets(T_target, ortho_tol: float) -> np.ndarray:
+def check_targets(T_target, ortho_tol: float = 1e-9) -> np.ndarray:
+    """``T_target`` as a float array of rigid transforms ``(..., 4, 4)``, or a ``ValueError``
+    naming the first bad one (shape, NaN, last row, rotation not orthonormal to ``ortho_tol``,
+    reflection)."""
     T = np.asarray(T_target, dtype=float)
     if T.ndim < 2 or T.shape[-2:] != (4, 4):
         raise ValueError(f"T_target must have shape (..., 4, 4), got {T.shape}")
@@ -333,7 +336,7 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
                             ("guess_table", guess_table, 1), ("stall_iters", stall_iters, 1),
                             ("chunk", chunk, 1)):
         _check_integer(name, value, lo)
-    T = _check_targets(T_target, ortho_tol)
+    T = check_targets(T_target, ortho_tol)
     batch = T.shape[:-2]
     q_start = _check_q0(robot, q0, batch, respect_limits)
     w = _check_weights(weights)
@@ -592,7 +595,7 @@ def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
     to another branch). Returns the results stacked along the path, shapes ``(K, ...)``.
     """
     options = {"restarts": 0, **options}
-    T_path = _check_targets(T_path, options.get("ortho_tol", 1e-9))
+    T_path = check_targets(T_path, options.get("ortho_tol", 1e-9))
     if T_path.ndim != 3:
         raise ValueError(f"T_path must have shape (K, 4, 4), got {T_path.shape}")
     results, q = [], np.asarray(q0, dtype=float)

@@ -63,20 +63,26 @@ def _equal_3d(ax, points: np.ndarray) -> None:
 
 
 def plot_arm_poses(robot: Robot, poses: Mapping[str, np.ndarray]) -> Figure:
-    """One 3-D panel per named configuration ``q (n,)`` [rad]."""
-    fig = plt.figure(figsize=(3.2 * len(poses), 3.6), layout="constrained")
+    """One 3-D panel per named configuration ``q (n,)`` [rad]; a legend explains the tool
+    frame's colours."""
+    fig = plt.figure(figsize=(3.9 * len(poses), 4.4), layout="constrained")
     reach = np.vstack([np.vstack([fk_all(robot, q)[:, :3, 3], fk(robot, q)[:3, 3]])
                        for q in poses.values()])
     for k, (name, q) in enumerate(poses.items()):
         ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
         draw_arm(ax, robot, np.asarray(q), color=f"C{k}")
         _equal_3d(ax, np.vstack([reach, [[0, 0, 0]]]))
-        ax.set_title(name, fontsize=9)
-        ax.set_xlabel("x [m]", fontsize=7)
-        ax.set_ylabel("y [m]", fontsize=7)
-        ax.set_zlabel("z [m]", fontsize=7)
-        ax.tick_params(labelsize=6)
+        ax.set_box_aspect((1, 1, 1), zoom=0.82)       # room for every axis label
+        ax.set_title(name, fontsize=10)
+        ax.set_xlabel("x [m]", fontsize=9)
+        ax.set_ylabel("y [m]", fontsize=9)
+        ax.set_zlabel("z [m]", fontsize=9)
+        ax.tick_params(labelsize=8)
         ax.view_init(elev=20, azim=-60)
+    handles = [plt.Line2D([], [], color=c, lw=1.5, label=f"tool {a} axis")
+               for c, a in zip(("r", "g", "b"), "xyz")]
+    handles.append(plt.Line2D([], [], color="k", marker="o", ls="", ms=4, label="joint (DH frame origin)"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
     return fig
 
 
@@ -115,20 +121,28 @@ def plot_convergence(histories: Mapping[str, Mapping[str, np.ndarray]], *, floor
 
     ``histories[case][label]`` is a ``(K, 2)`` history from ``solve(..., record_history=True)``
     (position [m], orientation [rad]); errors are drawn on a log scale, clipped at ``floor``.
+    Each method has its own colour, line style and marker, so that curves lying on top of
+    each other stay visible; one legend for the figure.
     """
-    fig, axes = plt.subplots(len(histories), 2, figsize=(10, 3.2 * len(histories)),
+    fig, axes = plt.subplots(len(histories), 2, figsize=(11, 3.3 * len(histories)),
                              layout="constrained", squeeze=False)
+    styles = [("-", "o"), ("--", "s"), (":", "^"), ("-.", "v"), ((0, (5, 2, 1, 2)), "D"), ("-", "x")]
+    labels = {}
     for row, (case, curves) in zip(axes, histories.items()):
         for k, (label, history) in enumerate(curves.items()):
             steps = np.arange(len(history))
+            line, marker = styles[k % len(styles)]
             for ax, column in zip(row, (0, 1)):
-                ax.semilogy(steps, np.maximum(history[:, column], floor), "-", color=f"C{k}",
-                            label=label, lw=1.4)
+                (handle,) = ax.semilogy(steps, np.maximum(history[:, column], floor), ls=line,
+                                        marker=marker, markevery=max(len(steps) // 12, 1),
+                                        ms=4, color=f"C{k}", lw=1.6 - 0.2 * k, label=label)
+                labels.setdefault(label, handle)
         for ax, what in zip(row, ("position error [m]", "orientation error [rad]")):
             ax.axhline(1e-9, color="k", lw=0.8, ls=":")
             ax.set(xlabel="iteration", ylabel=what, title=case)
             ax.grid(alpha=0.3, which="both")
-    axes[0, 0].legend(fontsize=8)
+    fig.legend(labels.values(), labels.keys(), loc="outside lower center",
+               ncols=min(len(labels), 3), fontsize=9)
     return fig
 
 
@@ -145,7 +159,8 @@ def plot_joint_paths(s: np.ndarray, paths: Mapping[str, np.ndarray], joint_names
         ax.set(title=name, xlabel="path parameter s")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("joint angle [deg]")
-    axes[0].legend(fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize=9)
     return fig
 
 
@@ -154,9 +169,11 @@ def plot_profiles(t: np.ndarray, profiles: Mapping[str, np.ndarray], joint_names
     (angles are shown in degrees: pass values in radians)."""
     fig, axes = plt.subplots(1, len(profiles), figsize=(4.2 * len(profiles), 3.4),
                              layout="constrained", squeeze=False)
+    dashes = ["-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (8, 2))]
     for ax, (label, values) in zip(axes[0], profiles.items()):
-        for j, name in enumerate(joint_names):
-            ax.plot(t, np.degrees(values[:, j]), ".-", ms=3, lw=1.2, label=name)
+        for j, name in enumerate(joint_names):      # own dashes: coinciding joints stay visible
+            ax.plot(t, np.degrees(values[:, j]), ls=dashes[j % len(dashes)], marker=".", ms=3,
+                    lw=1.4, label=name)
         ax.set(xlabel="t [s]", ylabel=label, title=label.split(" [")[0])
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
@@ -180,19 +197,27 @@ def plot_per_joint(t: np.ndarray, series: Mapping[str, np.ndarray], joint_names,
     return fig
 
 
-def plot_motion(robot: Robot, q: np.ndarray, *, frames: int = 5) -> Figure:
-    """The arm at ``frames`` instants of a motion ``q (K, n)`` and the path its tool draws."""
-    fig = plt.figure(figsize=(5.5, 5), layout="constrained")
+def plot_motion(robot: Robot, q: np.ndarray, *, frames: int = 5, t: np.ndarray | None = None,
+                title: str = "") -> Figure:
+    """The arm at ``frames`` instants of a motion ``q (K, n)`` and the path its tool draws;
+    the arms are coloured by time (``t (K,)`` [s], or the sample index), with a colour bar."""
+    fig = plt.figure(figsize=(6.4, 5.4), layout="constrained")
     ax = fig.add_subplot(projection="3d")
     tip = fk(robot, q)[:, :3, 3]
-    for k, index in enumerate(np.linspace(0, len(q) - 1, frames).round().astype(int)):
-        draw_arm(ax, robot, q[index], color=plt.cm.viridis(k / max(frames - 1, 1)))
+    time = np.arange(len(q), dtype=float) if t is None else np.asarray(t, dtype=float)
+    norm = plt.Normalize(time[0], time[-1])
+    for index in np.linspace(0, len(q) - 1, frames).round().astype(int):
+        draw_arm(ax, robot, q[index], color=plt.cm.viridis(norm(time[index])))
     ax.plot(*tip.T, color="C1", lw=2, label="tool path")
     points = np.vstack([tip, fk_all(robot, q[:: max(len(q) // 20, 1)])[..., :3, 3].reshape(-1, 3)])
     _equal_3d(ax, np.vstack([points, [[0, 0, 0]]]))
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
     ax.legend(fontsize=8)
     ax.view_init(elev=25, azim=-55)
+    bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap="viridis"), ax=ax, shrink=0.6, pad=0.1)
+    bar.set_label("t [s]" if t is not None else "sample")
+    if title:
+        ax.set_title(title)
     return fig
 
 
