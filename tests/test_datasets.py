@@ -45,6 +45,38 @@ def test_the_shipped_study_loads():
     assert study.ik_region.box.shape == (5, 2)
 
 
+def test_reach_keeps_the_tool_in_front_of_the_base():
+    """With the reach bound the tool's azimuth is the base angle q1 (the arm never reaches back
+    over its base); with the distance bound alone it is not, for some draws."""
+    study = study_from_dict(small_study())
+    region = study.ik_region
+    q = region.sample(2000, 0)
+    p = fk(study.robot, q)[:, :3, 3]
+    np.testing.assert_allclose(np.arctan2(p[:, 1], p[:, 0]), q[:, 0], atol=1e-9)
+    assert (p[:, 0] * np.cos(q[:, 0]) + p[:, 1] * np.sin(q[:, 0]) >= region.reach[0]).all()
+    distance_only = IKRegion(study.robot, region.box, radial=(region.reach[0], None),
+                             height=region.height)
+    q = distance_only.sample(2000, 0)
+    p = fk(study.robot, q)[:, :3, 3]
+    behind = np.abs(np.angle(np.exp(1j * (np.arctan2(p[:, 1], p[:, 0]) - q[:, 0])))) > 3
+    assert behind.mean() > 0.05
+    assert not region.contains(q[behind]).any()
+    with pytest.raises(ValueError, match="reach filter needs the poses' configurations"):
+        region.contains_pose(fk(study.robot, q))
+
+
+def test_reach_needs_a_base_joint_about_z(tmp_path):
+    data = robot_to_dict(load_robot(PARAMS / "robots" / "intelbot5.yaml"))
+    data["convention"] = "modified"
+    data["joints"][0]["alpha"] = 0.5
+    (tmp_path / "robot.yaml").write_text(yaml.safe_dump(data))
+    study = small_study()
+    study["robot_file"] = str(tmp_path / "robot.yaml")
+    with pytest.raises(ParamsError, match=r"ik.region.reach_m: needs joint 1 to turn about the "
+                                          r"base z axis"):
+        study_from_dict(study)
+
+
 def test_stored_data_obey_the_models(built):
     study, out, made = built
     assert [p.name for p, status in made] == [f"{k}_{s}.npz" for k in ("ik", "id", "ik_full")
@@ -205,6 +237,7 @@ def bad(path, value):
     (("ik", "region", "joints_deg", 2), ["a", 1], r"ik.region.joints_deg\[2\]\[0\]: must be a number"),
     (("ik", "region", "radial_m"), [-0.1, None], r"ik.region.radial_m\[0\]: must be >= 0"),
     (("ik", "region", "height_m"), [0.3, 0.1], r"ik.region.height_m: must satisfy lo < hi"),
+    (("ik", "region", "reach_m"), [0.2, 0.1], r"ik.region.reach_m: must satisfy lo < hi"),
     (("ik", "region", "approach"), {"axis": [0, 0, 0], "max_angle_deg": 30}, r"approach.axis: must not be the zero vector"),
     (("ik", "region", "approach"), {"axis": [0, 0, -1], "max_angle_deg": 0}, r"approach.max_angle_deg: must be > 0"),
     (("ik", "region", "approach"), {"axis": [0, 0, -1]}, r"approach.max_angle_deg: required field is missing"),

@@ -5,8 +5,8 @@ generated from the numerical models (the dissertation's §3.2.3; chapter 05).
 many-valued — the base can turn half a turn and the arm lean back over its head, the elbow can
 bend up or down — and no regressor learns a map that is not a function. The IK data therefore
 live in a declared :class:`IKRegion`: a box of joint sub-ranges that selects one branch, plus
-optional task-space filters on the tool point (distance from the base axis, height) and on the
-tool's approach axis (a cone). :func:`check_single_valued` proves the choice by measurement:
+optional task-space filters on the tool point (distance from the base axis, reach in front of
+it, height) and on the tool's approach axis (a cone). :func:`check_single_valued` proves the choice by measurement:
 Levenberg–Marquardt from many starts spread over the *full* joint limits, looking for a second
 solution of each target inside the region. Samples are ``q`` from the region and ``T = fk(q)``.
 
@@ -62,7 +62,7 @@ __all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "lo
            "DATA_VERSION", "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
-DATA_VERSION = 2
+DATA_VERSION = 3
 SPLITS = ("train", "val", "test")
 _STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5}
 _SPLIT_STREAM = {"train": 0, "val": 1, "test": 2}
@@ -86,6 +86,10 @@ class IKRegion:
         radial: ``(lo, hi)`` distance of the tool point from the base z axis [m] (``None``: no
             bound).
         height: ``(lo, hi)`` height ``z`` of the tool point in the base frame [m].
+        reach: ``(lo, hi)`` signed horizontal distance of the tool point in front of the base
+            axis, along the direction the base joint faces, ``(cos θ1, sin θ1, 0)`` with
+            ``θ1 = q1 + offset1`` [m]: negative when the arm reaches back over the base. Needs
+            joint 1 to turn about the base z axis.
         approach_axis: unit vector in the base frame, or ``None``; with ``approach_angle``
             [rad], the tool's approach axis (the z column of ``T_0e``) must lie within that
             angle of it.
@@ -97,6 +101,7 @@ class IKRegion:
     height: tuple[float | None, float | None] = (None, None)
     approach_axis: np.ndarray | None = None
     approach_angle: float = math.pi
+    reach: tuple[float | None, float | None] = (None, None)
 
     @classmethod
     def full(cls, robot: Robot) -> "IKRegion":
@@ -106,14 +111,21 @@ class IKRegion:
     @property
     def has_filters(self) -> bool:
         return self.radial != (None, None) or self.height != (None, None) or \
-            self.approach_axis is not None
+            self.reach != (None, None) or self.approach_axis is not None
 
-    def contains_pose(self, T_0e: np.ndarray) -> np.ndarray:
-        """Whether tool poses ``(..., 4, 4)`` pass the task-space filters: ``(...)``."""
+    def contains_pose(self, T_0e: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """Whether tool poses ``(..., 4, 4)`` pass the task-space filters: ``(...)``. The
+        reach filter also needs the configurations ``q (..., n)`` [rad] of the poses."""
         p = T_0e[..., :3, 3]
         ok = np.ones(T_0e.shape[:-2], bool)
         r = np.hypot(p[..., 0], p[..., 1])
-        for value, (lo, hi) in ((r, self.radial), (p[..., 2], self.height)):
+        bounds = [(r, self.radial), (p[..., 2], self.height)]
+        if self.reach != (None, None):
+            if q is None:
+                raise ValueError("the region's reach filter needs the poses' configurations q")
+            theta1 = q[..., 0] + self.robot.offset[0]
+            bounds.append((p[..., 0] * np.cos(theta1) + p[..., 1] * np.sin(theta1), self.reach))
+        for value, (lo, hi) in bounds:
             if lo is not None:
                 ok &= value >= lo
             if hi is not None:
@@ -129,7 +141,7 @@ class IKRegion:
         if self.has_filters and ok.any():
             flat = q.reshape(-1, self.robot.n)
             inside = ok.reshape(-1)
-            inside[inside] = self.contains_pose(fk(self.robot, flat[inside]))
+            inside[inside] = self.contains_pose(fk(self.robot, flat[inside]), flat[inside])
             ok = inside.reshape(ok.shape)
         return ok.reshape(q.shape[:-1])
 
@@ -160,7 +172,7 @@ class IKRegion:
             q = lo + span * u
             drawn += len(q)
             if self.has_filters:
-                q = q[self.contains_pose(fk(self.robot, q))]
+                q = q[self.contains_pose(fk(self.robot, q), q)]
             parts.append(q)
             accepted += len(q)
             if accepted < n and drawn >= max_draws:
@@ -174,6 +186,7 @@ class IKRegion:
                  f"{math.degrees(lo):.1f} … {math.degrees(hi):.1f} deg")
                 for i, (lo, hi) in enumerate(self.box)]
         for name, (lo, hi), unit in (("distance from the base axis", self.radial, "m"),
+                                     ("reach in front of the base axis", self.reach, "m"),
                                      ("height z", self.height, "m")):
             if (lo, hi) != (None, None):
                 rows.append((name, f"{'−∞' if lo is None else f'{lo:g}'} … "
@@ -426,7 +439,8 @@ class Study:
 _TOP = {"name": True, "description": False, "robot_file": True, "seed": True, "ik": True,
         "id": True}
 _IK = {"region": True, "sampler": False, "sizes": True, "check": True, "full_range": False}
-_REGION = {"joints_deg": True, "radial_m": False, "height_m": False, "approach": False}
+_REGION = {"joints_deg": True, "radial_m": False, "reach_m": False, "height_m": False,
+           "approach": False}
 _APPROACH = {"axis": True, "max_angle_deg": True}
 _SIZES = dict.fromkeys(SPLITS, True)
 _CHECK = {"targets": True, "starts": True}
@@ -496,6 +510,13 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
         if region.get("radial_m") is not None else (None, None)
     height = _bounds(v, region["height_m"], "ik.region.height_m") \
         if region.get("height_m") is not None else (None, None)
+    reach = _bounds(v, region["reach_m"], "ik.region.reach_m") \
+        if region.get("reach_m") is not None else (None, None)
+    if reach != (None, None) and robot.convention == "modified" and \
+            (abs(robot.a[0]) > 1e-12 or abs(math.remainder(robot.alpha[0], 2 * math.pi)) > 1e-12):
+        v.fail("ik.region.reach_m", f"needs joint 1 to turn about the base z axis; {robot.name}'s "
+                                    f"first joint has a = {robot.a[0]:g} m, alpha = "
+                                    f"{math.degrees(robot.alpha[0]):g} deg")
     axis, angle = None, math.pi
     if region.get("approach") is not None:
         approach = v.mapping(region["approach"], "ik.region.approach", _APPROACH)
@@ -534,7 +555,7 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
 
     return Study(
         source=source, name=name, robot_file=robot_file, robot=robot, seed=seed,
-        ik_region=IKRegion(robot, box, radial, height, axis, angle), ik_sampler=sampler,
+        ik_region=IKRegion(robot, box, radial, height, axis, angle, reach), ik_sampler=sampler,
         ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
         check_starts=check_starts,
         id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax),

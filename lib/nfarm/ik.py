@@ -118,7 +118,11 @@ def check_targets(T_target, ortho_tol: float = 1e-9) -> np.ndarray:
     """``T_target`` as a float array of rigid transforms ``(..., 4, 4)``, or a ``ValueError``
     naming the first bad one (shape, NaN, last row, rotation not orthonormal to ``ortho_tol``,
     reflection)."""
-    T = np.asarray(T_target, dtype=float)
+    try:
+        T = np.asarray(T_target, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"T_target must be an array of numbers of shape (..., 4, 4), got "
+                         f"{type(T_target).__name__} {str(T_target)[:40]!r}") from None
     if T.ndim < 2 or T.shape[-2:] != (4, 4):
         raise ValueError(f"T_target must have shape (..., 4, 4), got {T.shape}")
     batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)

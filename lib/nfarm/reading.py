@@ -369,6 +369,9 @@ class Validator:
             a = None
         if a is None or a.dtype.kind not in ("iu" if integer else "iuf") or a.ndim != len(shape) \
                 or any(want is not None and got != want for got, want in zip(a.shape, shape)):
+            if len(shape) == 1:
+                count = "" if shape[0] is None else f"{shape[0]} "
+                self.fail(at, f"must be a list of {count}{kind}, got {show(value)}")
             dims = " × ".join("N" if k is None else str(k) for k in shape)
             self.fail(at, f"must be a {dims} array of {kind}, got {show(value)}")
         if not integer:

@@ -1,0 +1,388 @@
+"""Learned inverse kinematics: one ANFIS per joint behind one object (chapters 06 and 07).
+
+The dissertation's IK page feeds five trained ANFIS models, one per joint, with the target's
+orientation quaternion and position (7 inputs). :class:`LearnedIK` does that, and offers other
+**encodings** of a target pose ``T_0e`` (:func:`encode`):
+
+* ``"quat_xyz"`` — the dissertation's ``[w, x, y, z]`` quaternion (kept on one hemisphere,
+  ``w ≥ 0``, so that ``q`` and ``−q`` are one input) and the position ``[x, y, z]``: 7 inputs.
+  The hemisphere is a cut: a rotation by about 180° (the gripper pointing down is one) has
+  ``w ≈ 0``, and across it ``x, y, z`` change sign — a jump the model must learn;
+* ``"axes_xyz"`` — the position, the tool's approach axis (the z column of ``R``) and its
+  x axis: 9 inputs, continuous everywhere (two columns of ``R`` determine it);
+* ``"arm_plane"`` — six numbers for an arm whose tool's approach axis stays in the vertical
+  plane through the tool point (a base yaw, then joints pitching in that plane, then a roll:
+  intelbot5, the SO-101): the tool point's azimuth ``atan2(y, x)``, its distance ``r`` from the
+  base axis and its height ``z``; with ``R' = Rz(−azimuth) · R`` (the orientation seen in the
+  arm's plane), the pitch ``φ = atan2(R'₀₂, −R'₂₂)`` of the approach axis from pointing straight
+  down, as ``cos φ, sin φ``, and the roll ``ψ = atan2(R'₁₀, R'₁₁)`` about it. The pose set of such
+  an arm is 5-dimensional and this is a minimal chart of it but for the pitch, which is kept as a
+  point on the circle because the arm's pitch ``q2 + q3 + q4`` spans more than a turn: a single
+  pitch angle would jump by 2π inside the region. For intelbot5 in a region that keeps the tool
+  in front of the base axis, ``q1`` *is* the azimuth and ``q5`` the roll less a constant, so two of
+  the five models are linear maps, which a first-order Sugeno rule represents exactly.
+
+Angular inputs (the azimuth and the roll of ``"arm_plane"``) are unwrapped about the circular
+mean of the training data (stored with the model), so a region that straddles ±180° is not cut.
+Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model), so grid
+partitions and clustering see every input alike. Outputs are the joint angles [rad].
+
+Models are saved as one JSON file (no pickle) holding the robot's parameter hash
+(:func:`nfarm.robot.robot_hash`); loading against another robot is an error, and the file is
+validated like a parameter file (:mod:`nfarm.reading`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import __version__
+from .anfis import ANFIS
+from .ik import check_targets
+from .paths import atomic_path
+from .reading import ParamsError, Validator, load_json, show
+from .robot import Robot, robot_hash
+from .rotations import matrix_to_quat
+
+__all__ = ["LearnedIK", "encode", "ENCODINGS", "FILE_NAME"]
+
+ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
+#: Columns of each encoding that are angles [rad] (unwrapped about a centre).
+ANGULAR = {"quat_xyz": (), "axes_xyz": (), "arm_plane": (0, 5)}
+FILE_NAME = "learned_ik.json"
+_FORMAT = "nfarm-learned-ik-1"
+_CHUNK = 16384
+
+
+def encode(T_0e: np.ndarray, encoding: str) -> np.ndarray:
+    """Input features ``(..., d)`` of tool poses ``T_0e (..., 4, 4)`` (module docstring)."""
+    if encoding not in ENCODINGS:
+        raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {encoding!r}")
+    T = np.asarray(T_0e, dtype=float)
+    p, R = T[..., :3, 3], T[..., :3, :3]
+    if encoding == "quat_xyz":
+        quat = matrix_to_quat(R)                         # [w, x, y, z]
+        quat = np.where(quat[..., :1] < 0, -quat, quat)  # one hemisphere: w >= 0
+        return np.concatenate([quat, p], axis=-1)
+    if encoding == "axes_xyz":
+        return np.concatenate([p, R[..., :, 2], R[..., :, 0]], axis=-1)
+    azimuth = np.arctan2(p[..., 1], p[..., 0])
+    c, s = np.cos(azimuth), np.sin(azimuth)
+    # R' = Rz(−azimuth) R: rows 0 and 1 rotated, row 2 unchanged.
+    r0 = c[..., None] * R[..., 0, :] + s[..., None] * R[..., 1, :]
+    r1 = -s[..., None] * R[..., 0, :] + c[..., None] * R[..., 1, :]
+    pitch = np.arctan2(r0[..., 2], -R[..., 2, 2])
+    roll = np.arctan2(r1[..., 0], r1[..., 1])
+    return np.stack([azimuth, np.hypot(p[..., 0], p[..., 1]), p[..., 2], np.cos(pitch),
+                     np.sin(pitch), roll], axis=-1)
+
+
+def out_of_plane(T_0e: np.ndarray) -> np.ndarray:
+    """Angle [rad] ``(...)`` by which the tool's approach axis leaves the vertical plane through
+    the tool point and the base axis: 0 for every pose of an arm ``"arm_plane"`` describes."""
+    T = np.asarray(T_0e, dtype=float)
+    azimuth = np.arctan2(T[..., 1, 3], T[..., 0, 3])
+    normal = -np.sin(azimuth) * T[..., 0, 2] + np.cos(azimuth) * T[..., 1, 2]
+    return np.arcsin(np.clip(np.abs(normal), 0.0, 1.0))
+
+
+def _unwrap(X: np.ndarray, columns: tuple, centre: np.ndarray) -> np.ndarray:
+    """Angular columns mapped into ``[centre − π, centre + π)``."""
+    if columns:
+        X = X.copy()
+        X[..., columns] = centre + np.mod(X[..., columns] - centre + np.pi, 2 * np.pi) - np.pi
+    return X
+
+
+def _check_q(q, robot: Robot, what: str) -> np.ndarray:
+    q = np.asarray(q)
+    if q.dtype.kind not in "iuf" or q.ndim != 2 or q.shape[1] != robot.n:
+        raise ValueError(f"{what}: q must be a (N, {robot.n}) array of joint angles, got "
+                         f"shape {q.shape} of {q.dtype}")
+    q = q.astype(float)
+    if not np.isfinite(q).all():
+        raise ValueError(f"{what}: q contains NaN or inf (first in row "
+                         f"{int(np.argmax(~np.isfinite(q).all(axis=1)))})")
+    return q
+
+
+def _pairs(data: Mapping, robot: Robot, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """``T (N, 4, 4)`` (rigid transforms) and ``q (N, n)`` of a data set."""
+    if not isinstance(data, Mapping) or "T" not in data or "q" not in data:
+        raise ValueError(f"{what} must be a mapping with arrays 'T' (N, 4, 4) and 'q' (N, "
+                         f"{robot.n}), e.g. a data set of nfarm.datasets.load")
+    try:
+        T = check_targets(data["T"], 1e-9)
+    except ValueError as exc:
+        raise ValueError(f"{what}: {str(exc).replace('T_target', 'T')}") from None
+    q = _check_q(data["q"], robot, what)
+    if T.ndim != 3 or len(T) != len(q):
+        raise ValueError(f"{what}: T must be (N, 4, 4) with one pose per row of q ({len(q)}), "
+                         f"got {T.shape}")
+    return T, q
+
+
+class LearnedIK:
+    """Inverse kinematics learned by one ANFIS per joint (scikit-learn conventions).
+
+    Args:
+        encoding: how a pose becomes inputs (:data:`ENCODINGS`, module docstring).
+        joint_options: ``None`` or one mapping per joint of ANFIS options that override the
+            shared ones for that joint (e.g. a single rule for a joint that is a linear map of
+            the inputs).
+        max_out_of_plane: for ``"arm_plane"``, the largest angle [rad] by which a training pose's
+            approach axis may leave the arm's vertical plane (:func:`out_of_plane`); beyond it
+            the encoding loses information and ``fit`` refuses the robot.
+        **anfis_options: passed to every joint's :class:`nfarm.anfis.ANFIS` (``n_mfs``,
+            ``partition``, ``n_rules``, ``radius``, ``epochs``, …).
+
+    Learned attributes: ``models_`` (one fitted ANFIS per joint), ``robot_hash_``,
+    ``robot_name_``, ``n_joints_``, ``angle_centre_`` (the unwrapping centres of the angular
+    inputs), ``input_lo_``, ``input_span_`` (the scaling), ``fit_seconds_`` (per joint).
+    """
+
+    def __init__(self, encoding: str = "quat_xyz", joint_options: Sequence[Mapping] | None = None,
+                 max_out_of_plane: float = 1e-6, **anfis_options):
+        self.encoding = encoding
+        self.joint_options = joint_options
+        self.max_out_of_plane = max_out_of_plane
+        self.anfis_options = anfis_options
+
+    def get_params(self, deep: bool = True) -> dict:
+        return {"encoding": self.encoding, "joint_options": self.joint_options,
+                "max_out_of_plane": self.max_out_of_plane, **self.anfis_options}
+
+    def set_params(self, **params) -> "LearnedIK":
+        for name in ("encoding", "joint_options", "max_out_of_plane"):
+            if name in params:
+                setattr(self, name, params.pop(name))
+        ANFIS().set_params(**params)          # validates the names
+        self.anfis_options.update(params)
+        return self
+
+    def __repr__(self) -> str:
+        options = "".join(f", {k}={v!r}" for k, v in self.anfis_options.items())
+        joints = f", joint_options={self.joint_options!r}" if self.joint_options else ""
+        return f"LearnedIK(encoding={self.encoding!r}{joints}{options})"
+
+    # -- fitting ------------------------------------------------------------------------------
+
+    def _inputs(self, T: np.ndarray) -> np.ndarray:
+        X = _unwrap(encode(T, self.encoding), ANGULAR[self.encoding], self.angle_centre_)
+        return (X - self.input_lo_) / self.input_span_
+
+    def _options(self, n: int) -> list[dict]:
+        """The ANFIS options of each joint, validated before any training."""
+        if self.encoding not in ENCODINGS:
+            raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
+        joint = self.joint_options
+        if joint is None:
+            joint = [{}] * n
+        if isinstance(joint, (str, bytes, Mapping)) or not isinstance(joint, Sequence) or \
+                len(joint) != n or not all(isinstance(o, Mapping) for o in joint):
+            raise ValueError(f"joint_options must be None or a list of {n} mappings (one per "
+                             f"joint), got {show(joint)}")
+        names = set(ANFIS._param_names()) - {"feature_names"}
+        options = []
+        for j, extra in enumerate([self.anfis_options, *joint]):
+            unknown = sorted(set(extra) - names)
+            if unknown:
+                where = "" if j == 0 else f"joint_options[{j - 1}]: "
+                raise ValueError(f"{where}unknown ANFIS option {unknown[0]!r}; valid: "
+                                 f"{', '.join(sorted(names))}")
+        for j in range(n):
+            merged = {**self.anfis_options, **joint[j]}
+            try:
+                ANFIS(**merged)._check_options(ENCODINGS[self.encoding])
+            except ValueError as exc:
+                raise ValueError(f"joint {j + 1}: {exc}") from None
+            options.append(merged)
+        return options
+
+    def fit(self, robot: Robot, train: Mapping, val: Mapping | None = None) -> "LearnedIK":
+        """Train one ANFIS per joint on ``train`` (arrays ``T (N, 4, 4)`` and ``q (N, n)``),
+        keeping each model's epoch of least error on ``val`` when given (MATLAB's chkFIS).
+
+        Raises:
+            ValueError: bad options or data (not rigid transforms, wrong shapes, NaN), or an
+                encoding that cannot describe the robot's poses, before any training.
+        """
+        import time
+
+        options = self._options(robot.n)
+        T, q = _pairs(train, robot, "train")
+        T_val, q_val = _pairs(val, robot, "val") if val is not None else (None, None)
+        if self.encoding == "arm_plane":
+            worst = float(out_of_plane(T).max())
+            if not worst <= self.max_out_of_plane:
+                raise ValueError(f"encoding 'arm_plane' needs the tool's approach axis in the "
+                                 f"vertical plane through the tool point; {robot.name}'s training "
+                                 f"poses leave it by up to {math.degrees(worst):.3g} deg: use "
+                                 f"'axes_xyz'")
+        X = encode(T, self.encoding)
+        columns = ANGULAR[self.encoding]
+        self.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
+            else np.zeros(0)
+        X = _unwrap(X, columns, self.angle_centre_)
+        self.input_lo_ = X.min(axis=0)
+        self.input_span_ = np.where(np.ptp(X, axis=0) > 0, np.ptp(X, axis=0), 1.0)
+        Xs = (X - self.input_lo_) / self.input_span_
+        Xv = self._inputs(T_val) if T_val is not None else None
+        names = _feature_names(self.encoding)
+        self.models_, self.fit_seconds_ = [], []
+        for j in range(robot.n):
+            start = time.perf_counter()
+            model = ANFIS(**{**options[j], "feature_names": names})
+            model.fit(Xs, q[:, j], Xv, None if q_val is None else q_val[:, j])
+            self.models_.append(model)
+            self.fit_seconds_.append(time.perf_counter() - start)
+        self.robot_hash_, self.robot_name_, self.n_joints_ = robot_hash(robot), robot.name, robot.n
+        return self
+
+    # -- prediction ---------------------------------------------------------------------------
+
+    def _check_fitted(self):
+        if not hasattr(self, "models_"):
+            raise ValueError("this LearnedIK is not fitted yet: call fit or load")
+
+    def predict(self, T_0e) -> np.ndarray:
+        """Joint angles ``(..., n)`` [rad] for tool poses ``T_0e (..., 4, 4)`` (a single pose
+        is the ``()`` batch), in chunks of 16 384 poses.
+
+        Raises:
+            ValueError: not a batch of rigid transforms (shape, NaN, last row, rotation),
+                before any work.
+        """
+        self._check_fitted()
+        T = check_targets(T_0e, 1e-6)
+        batch = T.shape[:-2]
+        flat = T.reshape(-1, 4, 4)
+        out = np.empty((len(flat), self.n_joints_))
+        for start in range(0, len(flat), _CHUNK):
+            X = self._inputs(flat[start:start + _CHUNK])
+            for j, model in enumerate(self.models_):
+                out[start:start + _CHUNK, j] = model._predict_fast(X)[0]
+        return out.reshape(*batch, self.n_joints_)
+
+    def describe(self) -> str:
+        """What the model is: encoding, rule bases, sizes, training errors, per joint."""
+        self._check_fitted()
+        lines = [f"LearnedIK for {self.robot_name_} ({self.n_joints_} joints), encoding "
+                 f"{self.encoding!r} ({ENCODINGS[self.encoding]} inputs: "
+                 f"{', '.join(_feature_names(self.encoding))})"]
+        for j, m in enumerate(self.models_):
+            R, n = m.consequents_.shape[0], m.n_features_in_
+            premise = sum(p.size for p in m.mfs_)
+            val = f", validation RMSE {m.val_loss_curve_[m.best_epoch_]:.4g} rad" \
+                if m.val_loss_curve_ else ""
+            lines.append(f"  joint {j + 1}: {m.partition} partition, {m.mf} functions, {R} rules, "
+                         f"{premise + R * (n + 1)} parameters, kept epoch {m.best_epoch_ + 1} of "
+                         f"{m.n_epochs_}, training RMSE {m.loss_curve_[m.best_epoch_]:.4g} rad{val}")
+        return "\n".join(lines)
+
+    # -- persistence --------------------------------------------------------------------------
+
+    def to_dict(self) -> dict:
+        self._check_fitted()
+        return {"format": _FORMAT, "nfarm_version": __version__, "encoding": self.encoding,
+                "anfis_options": _plain(self.anfis_options),
+                "joint_options": _plain(self.joint_options), "max_out_of_plane":
+                self.max_out_of_plane, "robot": self.robot_name_,
+                "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
+                "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(), "input_span": self.input_span_.tolist(),
+                "fit_seconds": list(self.fit_seconds_),
+                "models": [m.to_dict() for m in self.models_]}
+
+    def save(self, directory: str | os.PathLike) -> Path:
+        """Write ``directory/learned_ik.json`` atomically; :meth:`load` reproduces the
+        predictions bit for bit. Returns the file's path."""
+        path = Path(directory) / FILE_NAME
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps(self.to_dict()), encoding="utf-8")
+        return path
+
+    @classmethod
+    def load(cls, directory: str | os.PathLike, robot: Robot) -> "LearnedIK":
+        """Read a model saved by :meth:`save` for ``robot``.
+
+        Raises:
+            ParamsError: a missing, damaged or edited file (named, with the field), or a model
+                trained for another robot.
+        """
+        path = Path(directory)
+        path = path / FILE_NAME if path.is_dir() else path
+        data = load_json(path, what="learned IK model")
+        return cls.from_dict(data, robot, str(path))
+
+    @classmethod
+    def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedIK":
+        v = Validator(source)
+        v.mapping(data, "", dict.fromkeys(_KEYS, True))
+        if data["format"] != _FORMAT:
+            v.fail("format", f"must be {_FORMAT!r} (an nfarm learned IK model), got {show(data['format'])}")
+        encoding = v.choice(data["encoding"], "encoding", tuple(ENCODINGS))
+        if data["robot_params_sha256"] != robot_hash(robot):
+            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other "
+                                          f"parameters than {robot.name!r} ({robot.source}): "
+                                          f"retrain it for this robot")
+        n = v.integer(data["n_joints"], "n_joints", lo=1, hi=64)
+        if n != robot.n:
+            v.fail("n_joints", f"must be {robot.n} for {robot.name}, got {n}")
+        d = ENCODINGS[encoding]
+        lo = v.array(data["input_lo"], "input_lo", (d,))
+        span = v.array(data["input_span"], "input_span", (d,))
+        if (span <= 0).any():
+            v.fail("input_span", "must hold positive numbers")
+        option_names = dict.fromkeys(ANFIS._param_names(), False)
+        options = v.mapping(data["anfis_options"], "anfis_options", option_names)
+        joint_options = data["joint_options"]
+        if joint_options is not None:
+            joint_options = [v.mapping(o, f"joint_options[{j}]", option_names) for j, o in
+                             enumerate(v.sequence(joint_options, "joint_options", min_len=n,
+                                                  max_len=n))]
+        max_out = v.number(data["max_out_of_plane"], "max_out_of_plane", lo=0.0)
+        centre = v.array(data["angle_centre"], "angle_centre", (len(ANGULAR[encoding]),))
+        models = v.sequence(data["models"], "models", min_len=n, max_len=n)
+        fitted = [ANFIS.from_dict(m, f"{source}: models[{j}]") for j, m in enumerate(models)]
+        for j, m in enumerate(fitted):
+            if m.n_features_in_ != d:
+                v.fail(f"models[{j}]", f"must take the {d} inputs of encoding {encoding!r}, "
+                                       f"takes {m.n_features_in_}")
+        seconds = v.array(data["fit_seconds"], "fit_seconds", (n,))
+        model = cls(encoding=encoding, joint_options=joint_options, max_out_of_plane=max_out,
+                    **options)
+        model.models_, model.fit_seconds_ = fitted, seconds.tolist()
+        model.angle_centre_, model.input_lo_, model.input_span_ = centre, lo, span
+        model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
+            data["robot"], n
+        return model
+
+
+_KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options",
+         "max_out_of_plane", "robot", "robot_params_sha256", "n_joints", "angle_centre",
+         "input_lo", "input_span", "fit_seconds", "models")
+
+
+def _feature_names(encoding: str) -> list[str]:
+    return {"quat_xyz": ["qw", "qx", "qy", "qz", "x", "y", "z"],
+            "axes_xyz": ["x", "y", "z", "ax", "ay", "az", "nx", "ny", "nz"],
+            "arm_plane": ["azimuth", "r", "z", "cos_pitch", "sin_pitch", "roll"]}[encoding]
+
+
+def _plain(value):
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"option value {value!r} cannot be saved")
+    return value

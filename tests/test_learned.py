@@ -1,0 +1,263 @@
+"""Learned inverse kinematics (nfarm.learned): encodings are faithful charts of the poses, a
+small seeded training reaches a stated error, save/load is bit for bit, batching follows the
+library's rule, and every bad input is one clear error before any work."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from nfarm.datasets import ik_samples, load_study
+from nfarm.kinematics import fk
+from nfarm.learned import ENCODINGS, LearnedIK, encode, out_of_plane
+from nfarm.paths import PARAMS
+from nfarm.reading import ParamsError
+from nfarm.robot import load_robot
+from nfarm.rotations import quat_to_matrix
+
+STUDY = load_study(PARAMS / "studies" / "intelbot5.yaml")
+ROBOT = STUDY.robot
+with warnings.catch_warnings():          # the Puma's published inertias are not physical
+    warnings.simplefilter("ignore")
+    PUMA = load_robot(PARAMS / "robots" / "puma560.yaml")
+SMALL = dict(encoding="arm_plane", n_mfs=[1, 2, 2, 2, 2, 1], epochs=8,
+             joint_options=[{"n_mfs": 1}, {}, {}, {}, {"n_mfs": 1}])
+
+
+def wrap(angle):
+    return np.angle(np.exp(1j * angle))
+
+
+@pytest.fixture(scope="module")
+def data():
+    return {split: ik_samples(STUDY.ik_region, n, seed)
+            for split, n, seed in (("train", 1500, 1), ("val", 300, 2), ("test", 500, 3))}
+
+
+@pytest.fixture(scope="module")
+def fitted(data):
+    return LearnedIK(**SMALL).fit(ROBOT, data["train"], data["val"])
+
+
+# -- encodings ---------------------------------------------------------------------------------
+
+
+def test_quaternion_is_kept_on_one_hemisphere(data):
+    T = data["test"]["T"]
+    X = encode(T, "quat_xyz")
+    assert X.shape == (len(T), 7) and (X[:, 0] >= 0).all()
+    np.testing.assert_allclose(np.linalg.norm(X[:, :4], axis=1), 1, atol=1e-12)
+    np.testing.assert_allclose(quat_to_matrix(X[:, :4]), T[:, :3, :3], atol=1e-12)
+    np.testing.assert_array_equal(X[:, 4:], T[:, :3, 3])
+
+
+def test_axes_encoding_determines_the_pose(data):
+    T = data["test"]["T"]
+    X = encode(T, "axes_xyz")
+    p, a, n = X[:, :3], X[:, 3:6], X[:, 6:]
+    R = np.stack([n, np.cross(a, n), a], axis=-1)
+    np.testing.assert_allclose(R, T[:, :3, :3], atol=1e-12)
+    np.testing.assert_array_equal(p, T[:, :3, 3])
+
+
+def test_arm_plane_encoding_is_the_arms_own_coordinates(data):
+    """For intelbot5 in its region: the azimuth is q1, the roll is q5 less a constant, the
+    pitch is q2 + q3 + q4 (mod 2π), and the approach axis stays in the arm's plane."""
+    q, T = data["test"]["q"], data["test"]["T"]
+    X = encode(T, "arm_plane")
+    np.testing.assert_allclose(X[:, 0], q[:, 0], atol=1e-12)
+    np.testing.assert_allclose(X[:, 1], np.hypot(T[:, 0, 3], T[:, 1, 3]))
+    np.testing.assert_allclose(X[:, 3] ** 2 + X[:, 4] ** 2, 1, atol=1e-12)
+    pitch = np.arctan2(X[:, 4], X[:, 3])
+    np.testing.assert_allclose(wrap(pitch - q[:, 1:4].sum(axis=1)), 0, atol=1e-9)
+    offset = wrap(X[:, 5] - q[:, 4])
+    np.testing.assert_allclose(wrap(offset - offset[0]), 0, atol=1e-9)
+    assert out_of_plane(T).max() < 1e-12
+
+
+def test_encodings_are_batched_over_leading_axes(data):
+    T = data["test"]["T"][:6].reshape(2, 3, 4, 4)
+    for name, d in ENCODINGS.items():
+        X = encode(T, name)
+        assert X.shape == (2, 3, d)
+        np.testing.assert_array_equal(encode(T[1, 2], name), X[1, 2])
+
+
+def test_arm_plane_refuses_an_arm_whose_tool_leaves_the_plane():
+    q = np.random.default_rng(0).uniform(PUMA.qlim[:, 0], PUMA.qlim[:, 1], (200, 6))
+    poses = {"T": fk(PUMA, q), "q": q}
+    assert out_of_plane(poses["T"]).max() > 0.1
+    with pytest.raises(ValueError, match=r"encoding 'arm_plane' needs the tool's approach axis "
+                                         r"in the vertical plane .* use 'axes_xyz'"):
+        LearnedIK(encoding="arm_plane").fit(PUMA, poses)
+
+
+def test_angular_inputs_are_unwrapped_about_their_centre(data):
+    """A region straddling ±180° of roll is not cut: the roll input of the fitted model spans
+    the region's roll range (180° here), not the whole circle."""
+    model = LearnedIK(encoding="arm_plane", n_mfs=1, epochs=1).fit(ROBOT, data["train"])
+    roll_span = model.input_span_[5]
+    np.testing.assert_allclose(roll_span, np.ptp(data["train"]["q"][:, 4]), rtol=1e-9)
+
+
+# -- training and prediction -----------------------------------------------------------------
+
+
+def test_small_seeded_training_reaches_a_stated_error(fitted, data):
+    """1 500 poses, 16 rules per pitch joint, 8 epochs: under 3° RMSE on every joint, and the
+    two joints that are linear maps of the arm-plane inputs (q1, q5) to rounding."""
+    q_hat = fitted.predict(data["test"]["T"])
+    rmse = np.degrees(np.sqrt(np.mean((q_hat - data["test"]["q"]) ** 2, axis=0)))
+    assert (rmse < 3.0).all(), rmse
+    assert rmse[0] < 1e-8 and rmse[4] < 1e-8, rmse
+
+
+def test_the_dissertation_encoding_trains_too(data):
+    """The dissertation's set-up (7 inputs, 2 bell functions each: 128 rules, 1 024 consequent
+    parameters per joint) on 1 500 poses: it runs, and overfits (tens of degrees)."""
+    model = LearnedIK(encoding="quat_xyz", n_mfs=2, epochs=2).fit(ROBOT, data["train"])
+    assert model.models_[0].rules_.shape == (128, 7)
+    rmse = np.degrees(np.sqrt(np.mean((model.predict(data["test"]["T"]) -
+                                       data["test"]["q"]) ** 2, axis=0)))
+    assert np.isfinite(rmse).all() and (rmse < 45).all(), rmse
+
+
+def test_prediction_is_batched_over_leading_axes(fitted, data):
+    T = data["test"]["T"][:6]
+    flat = fitted.predict(T)
+    assert flat.shape == (6, 5)
+    np.testing.assert_array_equal(fitted.predict(T.reshape(2, 3, 4, 4)), flat.reshape(2, 3, 5))
+    single = fitted.predict(T[4])
+    assert single.shape == (5,)
+    np.testing.assert_allclose(single, flat[4], rtol=0, atol=1e-15)
+    assert fitted.predict(np.zeros((0, 4, 4))).shape == (0, 5)
+
+
+def test_fast_prediction_equals_the_training_path(fitted, data):
+    X = fitted._inputs(data["test"]["T"])
+    for model in fitted.models_:
+        slow = model._predict_with(X, model.mfs_, model.rules_, model.consequents_)
+        np.testing.assert_allclose(model._predict_fast(X)[0], slow, rtol=0, atol=1e-12)
+
+
+def test_describe_names_encoding_rules_and_errors(fitted):
+    text = fitted.describe()
+    assert "encoding 'arm_plane' (6 inputs: azimuth, r, z, cos_pitch, sin_pitch, roll)" in text
+    assert "joint 2: grid partition, gbell functions, 16 rules" in text
+    assert "joint 1: grid partition, gbell functions, 1 rules" in text
+    assert "validation RMSE" in text
+
+
+# -- persistence -------------------------------------------------------------------------------
+
+
+def test_save_and_load_reproduce_predictions_bit_for_bit(fitted, data, tmp_path):
+    path = fitted.save(tmp_path / "ik")
+    assert path.name == "learned_ik.json" and not list((tmp_path / "ik").glob("*.tmp*"))
+    loaded = LearnedIK.load(tmp_path / "ik", ROBOT)
+    T = data["test"]["T"]
+    np.testing.assert_array_equal(loaded.predict(T), fitted.predict(T))
+    assert loaded.describe() == fitted.describe()
+    assert loaded.get_params() == fitted.get_params()
+    assert json.loads(path.read_text())["robot_params_sha256"] == fitted.robot_hash_
+
+
+def test_loading_for_another_robot_is_refused(fitted, tmp_path):
+    fitted.save(tmp_path)
+    with pytest.raises(ParamsError, match=r"learned_ik.json: robot_params_sha256: trained for "
+                                          r"robot 'intelbot5' with other parameters than "
+                                          r"'puma560'.*retrain"):
+        LearnedIK.load(tmp_path, PUMA)
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("format", "nfarm-anfis-1", r"format: must be 'nfarm-learned-ik-1'"),
+    ("encoding", "euler", r"encoding: must be one of quat_xyz, axes_xyz, arm_plane"),
+    ("n_joints", 4, r"n_joints: must be 5 for intelbot5, got 4"),
+    ("input_span", [1, 1, 0, 1, 1, 1], r"input_span: must hold positive numbers"),
+    ("input_lo", [0, 0, 0], r"input_lo: must be a list of 6 numbers"),
+    ("angle_centre", [0.0], r"angle_centre: must be a list of 2 numbers"),
+    ("joint_options", [{}] * 3, r"joint_options: must be a list of 5 items"),
+    ("anfis_options", {"n_mf": 2}, r"anfis_options.n_mf: unknown field"),
+    ("models", [], r"models: must be a list of 5 items"),
+    ("extra", 1, r"extra: unknown field"),
+])
+def test_an_edited_model_file_is_one_clear_error(fitted, tmp_path, field, value, message):
+    data = fitted.to_dict()
+    data[field] = value
+    (tmp_path / "learned_ik.json").write_text(json.dumps(data))
+    with pytest.raises(ParamsError, match=message):
+        LearnedIK.load(tmp_path, ROBOT)
+
+
+def test_a_damaged_model_file_is_one_clear_error(fitted, tmp_path):
+    fitted.save(tmp_path)
+    text = (tmp_path / "learned_ik.json").read_text()
+    (tmp_path / "learned_ik.json").write_text(text[: len(text) // 2])
+    with pytest.raises(ParamsError, match=r"learned_ik.json"):
+        LearnedIK.load(tmp_path, ROBOT)
+    with pytest.raises(ParamsError, match=r"file not found"):
+        LearnedIK.load(tmp_path / "missing", ROBOT)
+
+
+# -- bad input ---------------------------------------------------------------------------------
+
+
+def bad_T(kind, T):
+    T = T.copy()
+    if kind == "nan":
+        T[3, 0, 3] = np.nan
+    elif kind == "last_row":
+        T[2, 3, 0] = 1.0
+    elif kind == "not_rotation":
+        T[1, :3, :3] *= 2
+    return T
+
+
+@pytest.mark.parametrize("kind, message", [
+    ("nan", r"NaN"), ("last_row", r"last row"), ("not_rotation", r"rotation"),
+])
+def test_predict_refuses_what_is_not_a_rigid_transform(fitted, data, kind, message):
+    with pytest.raises(ValueError, match=message):
+        fitted.predict(bad_T(kind, data["test"]["T"][:5]))
+
+
+@pytest.mark.parametrize("T", [np.zeros((3, 3)), np.zeros((2, 4, 3)), "pose", [[1, 2], [3, 4]]])
+def test_predict_refuses_wrong_shapes(fitted, T):
+    with pytest.raises(ValueError, match=r"shape \(\.\.\., 4, 4\)"):
+        fitted.predict(T)
+
+
+def test_predict_before_fit_is_an_error():
+    with pytest.raises(ValueError, match=r"not fitted yet"):
+        LearnedIK().predict(np.eye(4))
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(encoding="euler"), r"encoding must be one of quat_xyz, axes_xyz, arm_plane"),
+    (dict(n_mf=2), r"unknown ANFIS option 'n_mf'"),
+    (dict(joint_options=[{}] * 4), r"joint_options must be None or a list of 5 mappings"),
+    (dict(joint_options={"n_mfs": 1}), r"joint_options must be None or a list of 5 mappings"),
+    (dict(joint_options=[{"epoch": 1}] + [{}] * 4), r"joint_options\[0\]: unknown ANFIS option 'epoch'"),
+    (dict(joint_options=[{"n_mfs": 0}] + [{}] * 4), r"joint 1: .*n_mfs"),
+    (dict(epochs=-1), r"joint 1: .*epochs"),
+])
+def test_fit_refuses_bad_options_before_any_work(data, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        LearnedIK(**kwargs).fit(ROBOT, data["train"])
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda d: {"T": d["T"]}, r"train must be a mapping with arrays 'T' \(N, 4, 4\) and 'q'"),
+    (lambda d: {"T": d["T"], "q": d["q"][:-1]}, r"train: T must be \(N, 4, 4\) with one pose per row of q"),
+    (lambda d: {"T": d["T"], "q": d["q"][:, :4]}, r"train: q must be a \(N, 5\) array"),
+    (lambda d: {"T": d["T"], "q": np.where(np.arange(5) == 2, np.nan, d["q"])}, r"train: q contains NaN"),
+    (lambda d: {"T": bad_T("not_rotation", d["T"]), "q": d["q"]}, r"train: .*rotation"),
+    (lambda d: [d["T"], d["q"]], r"train must be a mapping"),
+])
+def test_fit_refuses_bad_data_before_any_work(data, change, message):
+    with pytest.raises(ValueError, match=message):
+        LearnedIK(**SMALL).fit(ROBOT, change(data["train"]))
