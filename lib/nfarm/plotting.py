@@ -22,7 +22,8 @@ from .robot import Robot
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
            "plot_region", "plot_histograms", "plot_id_trajectories", "plot_torque_distributions",
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
-           "plot_motion", "plot_learning_curves", "DPI"]
+           "plot_motion", "plot_learning_curves", "plot_joint_curves", "plot_size_curve",
+           "plot_predicted_vs_true", "plot_error_map", "plot_error_against", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -325,4 +326,104 @@ def plot_torque_distributions(tau: np.ndarray, joint_names) -> Figure:
     ax.set_xticks(range(1, n + 1), joint_names, fontsize=8)
     ax.set(ylabel="τ [N·m]", title="joint torques over all training samples")
     ax.grid(alpha=0.3, axis="y")
+    return fig
+
+
+def plot_joint_curves(models: list, joint_names, *, joints=None, scale: float = 180 / np.pi,
+                      unit: str = "deg") -> Figure:
+    """Training (solid) and validation (dashed) RMSE per epoch of one fitted ANFIS per joint,
+    in ``unit`` (the models' errors times ``scale``), the kept epoch marked; ``joints``: the
+    indices of the joints to show (default all)."""
+    fig, ax = plt.subplots(figsize=(7.5, 4), layout="constrained")
+    for j in (range(len(models)) if joints is None else joints):
+        model, name = models[j], joint_names[j]
+        epochs = np.arange(1, len(model.loss_curve_) + 1)
+        ax.plot(epochs, np.asarray(model.loss_curve_) * scale, color=f"C{j}", lw=1.4,
+                label=f"q{j + 1} {name}")
+        if model.val_loss_curve_:
+            ax.plot(epochs, np.asarray(model.val_loss_curve_) * scale, color=f"C{j}", ls="--", lw=1.2)
+            ax.plot(model.best_epoch_ + 1, model.val_loss_curve_[model.best_epoch_] * scale, "o",
+                    color=f"C{j}", ms=5)
+    ax.set_yscale("log")
+    ax.set_xlabel("epoch")
+    ax.set_ylabel(f"RMSE [{unit}]")
+    ax.plot([], [], color="0.3", lw=1.4, label="training")
+    ax.plot([], [], color="0.3", ls="--", lw=1.2, label="validation (○ kept epoch)")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg") -> Figure:
+    """Test RMSE ``errors (len(sizes), n)`` per joint against the training-set size."""
+    fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
+    for j, name in enumerate(joint_names):
+        ax.plot(sizes, errors[:, j], "o-", color=f"C{j}", label=f"q{j + 1} {name}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("training samples")
+    ax.set_ylabel(f"validation RMSE [{unit}]")
+    ax.set_xticks(sizes, [f"{s:,}" for s in sizes])
+    ax.minorticks_off()
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_predicted_vs_true(q_true: np.ndarray, q_pred: np.ndarray, joint_names, *,
+                           max_points: int = 4000) -> Figure:
+    """Predicted against true joint angle [deg], one panel per joint, with the diagonal."""
+    n = q_true.shape[1]
+    k = np.linspace(0, len(q_true) - 1, min(max_points, len(q_true))).astype(int)
+    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 2.9), layout="constrained", squeeze=False)
+    for j, ax in enumerate(axes[0]):
+        t, p = np.degrees(q_true[k, j]), np.degrees(q_pred[k, j])
+        ax.plot(t, p, ".", ms=1.5, alpha=0.5, color=f"C{j}")
+        lo, hi = float(min(t.min(), p.min())), float(max(t.max(), p.max()))
+        ax.plot([lo, hi], [lo, hi], color="0.3", lw=0.8)
+        ax.set_title(f"q{j + 1} {joint_names[j]}", fontsize=9)
+        ax.set_xlabel("true [deg]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0, 0].set_ylabel("predicted [deg]", fontsize=8)
+    return fig
+
+
+def plot_error_map(points: np.ndarray, error: np.ndarray, *, label: str, title: str = "") -> Figure:
+    """Side view (distance from the base axis, height) of tool positions ``(N, 3)`` [m]
+    coloured by ``error`` (log scale), the largest errors drawn on top."""
+    from matplotlib.colors import LogNorm
+    order = np.argsort(error)
+    r = np.hypot(points[order, 0], points[order, 1])
+    fig, ax = plt.subplots(figsize=(6.5, 4.5), layout="constrained")
+    floor = max(float(np.percentile(error, 1)), 1e-12)
+    sc = ax.scatter(r, points[order, 2], c=np.maximum(error[order], floor), s=3, cmap="viridis",
+                    norm=LogNorm(vmin=floor, vmax=max(float(error.max()), floor * 10)))
+    fig.colorbar(sc, ax=ax, label=label)
+    ax.set_xlabel("distance from the base axis r [m]")
+    ax.set_ylabel("height z [m]")
+    ax.set_aspect("equal")
+    if title:
+        ax.set_title(title, fontsize=10)
+    return fig
+
+
+def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label: str,
+                       bins: int = 12) -> Figure:
+    """``error`` against each named quantity (the name carries the unit): the median and the
+    95th percentile of the error in equal-count bins of the quantity."""
+    fig, axes = plt.subplots(1, len(x), figsize=(4.6 * len(x), 3.6), layout="constrained",
+                             squeeze=False, sharey=True)
+    for ax, (name, values) in zip(axes[0], x.items()):
+        edges = np.unique(np.quantile(values, np.linspace(0, 1, bins + 1)))
+        which = np.clip(np.searchsorted(edges, values, side="right") - 1, 0, len(edges) - 2)
+        centre = 0.5 * (edges[1:] + edges[:-1])
+        for q, style in ((50, "o-"), (95, "s--")):
+            stat = [np.percentile(error[which == b], q) if np.any(which == b) else np.nan
+                    for b in range(len(edges) - 1)]
+            ax.plot(centre, stat, style, label=f"{q}th percentile" if q != 50 else "median")
+        ax.set_xlabel(name)
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3, which="both")
+    axes[0, 0].set_ylabel(label)
+    axes[0, 0].legend(fontsize=8)
     return fig
