@@ -7,18 +7,26 @@ models ≤ 5 min on 2 cores. The chosen options are chapter 06's (`chosen` there
 
 from __future__ import annotations
 
+import ast
 import time
 
 import numpy as np
+import papermill
 
 from common import seconds_per_call  # noqa: F401 — sets the benchmark environment
 from nfarm import datasets, ik
 from nfarm.learned import Baseline, LearnedIK
-from nfarm.paths import PARAMS
+from nfarm.paths import NOTEBOOKS, PARAMS
 from nfarm.report import Table
 
-CHOSEN = {"encoding": "arm_plane", "partition": "grid", "n_mfs": [1, 3, 3, 3, 3, 1], "epochs": 30,
-          "joint_options": [{"n_mfs": 1}, {}, {}, {}, {"n_mfs": 1}], "random_state": 0}
+
+
+def chosen_options() -> dict:
+    """Chapter 06's `chosen` and `seed` parameters, read from the notebook (one source)."""
+    declared = papermill.inspect_notebook(str(NOTEBOOKS / "06_anfis_training.ipynb"))
+    return {**ast.literal_eval(declared["chosen"]["default"]),
+            "random_state": ast.literal_eval(declared["seed"]["default"])}
+
 N_PREDICT = 1_000_000
 N_LM = 2000
 
@@ -40,7 +48,7 @@ def main() -> None:
     train, val, test = (datasets.load(directory / f"ik_{s}.npz", robot, study)
                         for s in ("train", "val", "test"))
     start = time.perf_counter()
-    model = LearnedIK(**CHOSEN).fit(robot, train, val)
+    model = LearnedIK(**chosen_options()).fit(robot, train, val)
     train_seconds = time.perf_counter() - start
     T = np.resize(test["T"], (N_PREDICT, 4, 4))
     rows = [["LearnedIK.fit, chosen options", f"{len(train['q']):,} poses", train_seconds, "",

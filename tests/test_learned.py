@@ -147,7 +147,7 @@ def test_describe_names_encoding_rules_and_errors(fitted):
     text = fitted.describe()
     assert "encoding 'arm_plane' (6 inputs: azimuth, r, z, cos_pitch, sin_pitch, roll)" in text
     assert "joint 2: grid partition, gbell functions, 16 rules" in text
-    assert "joint 1: grid partition, gbell functions, 1 rules" in text
+    assert "joint 1: grid partition, gbell functions, 1 rule," in text
     assert "validation RMSE" in text
 
 

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import warnings
 
+import numpy as np
 import pytest
 
 from nfarm.paths import PARAMS
@@ -148,3 +149,12 @@ def test_json_reader_limits(tmp_path):
         load_json(path)
     with pytest.raises(ParamsError, match=r"x.json: file is 80 bytes, over the limit of 10 for a JSON file"):
         load_json(path, max_bytes=10)
+
+
+def test_json_ready_converts_numpy_and_refuses_non_finite():
+    from nfarm.reading import json_ready
+    value = {"a": (1, np.float64(2.5)), "b": np.arange(3), "c": [np.int64(4), None, "x"]}
+    assert json_ready(value) == {"a": [1, 2.5], "b": [0, 1, 2], "c": [4, None, "x"]}
+    for bad in (float("nan"), [1.0, float("inf")], {"k": np.float32("nan")}):
+        with pytest.raises(ValueError, match="cannot be saved as JSON"):
+            json_ready(bad)

@@ -43,7 +43,7 @@ import scipy.linalg
 from .fuzzy import (MF_TYPES, cluster_params, grid_params, mf_gradients, mf_values,
                     subtractive_clustering)
 from .paths import atomic_path
-from .reading import Validator, load_json, show
+from .reading import Validator, json_ready, load_json, show
 
 __all__ = ["ANFIS", "ANFISMulti", "ANFISWarning", "MF_TYPES", "PARTITIONS", "SOLVERS", "load"]
 
@@ -487,7 +487,7 @@ class ANFIS:
 
     def to_dict(self) -> dict:
         self._check_fitted()
-        return {"format": _FORMAT, "class": type(self).__name__, "params": _plain(self.get_params()),
+        return {"format": _FORMAT, "class": type(self).__name__, "params": json_ready(self.get_params()),
                 "state": {"mfs": [p.tolist() for p in self.mfs_], "rules": self.rules_.tolist(),
                           "consequents": self.consequents_.tolist(),
                           "feature_names": list(self.feature_names_in_),
@@ -583,7 +583,7 @@ class ANFISMulti:
         return np.column_stack([m.predict(X) for m in self.models_])
 
     def to_dict(self) -> dict:
-        return {"format": _FORMAT, "class": "ANFISMulti", "params": _plain(self.params),
+        return {"format": _FORMAT, "class": "ANFISMulti", "params": json_ready(self.params),
                 "models": [m.to_dict() for m in self.models_]}
 
     @classmethod
@@ -598,17 +598,6 @@ class ANFISMulti:
     def save(self, path: str | os.PathLike) -> None:
         with atomic_path(path) as tmp:
             tmp.write_text(json.dumps(self.to_dict()), encoding="utf-8")
-
-
-def _plain(value):
-    """Parameters as JSON types (tuples and numpy numbers become lists and Python numbers)."""
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 _STATE_KEYS = ("mfs", "rules", "consequents", "feature_names", "loss_curve", "val_loss_curve",

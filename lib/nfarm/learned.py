@@ -57,7 +57,7 @@ from .anfis import ANFIS
 from .ik import check_targets
 from .kinematics import fk
 from .paths import atomic_path
-from .reading import ParamsError, Validator, load_json, show
+from .reading import ParamsError, Validator, json_ready, load_json, show
 from .robot import Robot, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
@@ -185,6 +185,18 @@ class LearnedIK:
 
     # -- fitting ------------------------------------------------------------------------------
 
+    def _fit_inputs(self, T: np.ndarray) -> np.ndarray:
+        """Learn the inputs' unwrapping centres and scaling from training poses ``T (N, 4, 4)``
+        and return their scaled inputs ``(N, d)``."""
+        X = encode(T, self.encoding)
+        columns = ANGULAR[self.encoding]
+        self.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
+            else np.zeros(0)
+        X = _unwrap(X, columns, self.angle_centre_)
+        self.input_lo_ = X.min(axis=0)
+        self.input_span_ = np.where(np.ptp(X, axis=0) > 0, np.ptp(X, axis=0), 1.0)
+        return (X - self.input_lo_) / self.input_span_
+
     def _inputs(self, T: np.ndarray) -> np.ndarray:
         X = _unwrap(encode(T, self.encoding), ANGULAR[self.encoding], self.angle_centre_)
         return (X - self.input_lo_) / self.input_span_
@@ -235,14 +247,7 @@ class LearnedIK:
                                  f"vertical plane through the tool point; {robot.name}'s training "
                                  f"poses leave it by up to {math.degrees(worst):.3g} deg: use "
                                  f"'axes_xyz'")
-        X = encode(T, self.encoding)
-        columns = ANGULAR[self.encoding]
-        self.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
-            else np.zeros(0)
-        X = _unwrap(X, columns, self.angle_centre_)
-        self.input_lo_ = X.min(axis=0)
-        self.input_span_ = np.where(np.ptp(X, axis=0) > 0, np.ptp(X, axis=0), 1.0)
-        Xs = (X - self.input_lo_) / self.input_span_
+        Xs = self._fit_inputs(T)
         Xv = self._inputs(T_val) if T_val is not None else None
         names = _feature_names(self.encoding)
         self.models_, self.fit_seconds_ = [], []
@@ -291,7 +296,8 @@ class LearnedIK:
             premise = sum(p.size for p in m.mfs_)
             val = f", validation RMSE {m.val_loss_curve_[m.best_epoch_]:.4g} rad" \
                 if m.val_loss_curve_ else ""
-            lines.append(f"  joint {j + 1}: {m.partition} partition, {m.mf} functions, {R} rules, "
+            lines.append(f"  joint {j + 1}: {m.partition} partition, {m.mf} functions, {R} "
+                         f"rule{'s' if R != 1 else ''}, "
                          f"{premise + R * (n + 1)} parameters, kept epoch {m.best_epoch_ + 1} of "
                          f"{m.n_epochs_}, training RMSE {m.loss_curve_[m.best_epoch_]:.4g} rad{val}")
         return "\n".join(lines)
@@ -301,8 +307,8 @@ class LearnedIK:
     def to_dict(self) -> dict:
         self._check_fitted()
         return {"format": _FORMAT, "nfarm_version": __version__, "encoding": self.encoding,
-                "anfis_options": _plain(self.anfis_options),
-                "joint_options": _plain(self.joint_options), "max_out_of_plane":
+                "anfis_options": json_ready(self.anfis_options),
+                "joint_options": json_ready(self.joint_options), "max_out_of_plane":
                 self.max_out_of_plane, "robot": self.robot_name_,
                 "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
                 "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(), "input_span": self.input_span_.tolist(),
@@ -385,17 +391,6 @@ def _feature_names(encoding: str) -> list[str]:
             "arm_plane": ["azimuth", "r", "z", "cos_pitch", "sin_pitch", "roll"]}[encoding]
 
 
-def _plain(value):
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ValueError(f"option value {value!r} cannot be saved")
-    return value
-
 
 # --------------------------------------------------------------------------------------------
 # Errors, baselines and a cache of fitted models
@@ -444,16 +439,8 @@ class Baseline:
         if self.encoding not in ENCODINGS:
             raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
         T, q = _pairs(train, robot, "train")
-        scaler = LearnedIK(self.encoding)
-        X = encode(T, self.encoding)
-        columns = ANGULAR[self.encoding]
-        scaler.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
-            else np.zeros(0)
-        X = _unwrap(X, columns, scaler.angle_centre_)
-        scaler.input_lo_ = X.min(axis=0)
-        scaler.input_span_ = np.where(np.ptp(X, axis=0) > 0, np.ptp(X, axis=0), 1.0)
-        self.scaler_ = scaler
-        X = scaler._inputs(T)
+        self.scaler_ = LearnedIK(self.encoding)      # the same inputs as the learned IK's
+        X = self.scaler_._fit_inputs(T)
         start = time.perf_counter()
         if self.kind == "nearest":
             self.tree_, self.q_ = cKDTree(X), q
@@ -505,7 +492,7 @@ def fit_cached(model: LearnedIK, robot: Robot, train: Mapping, val: Mapping | No
     """
     directory = Path(directory)
     T, q = _pairs(train, robot, "train")
-    parts = [json.dumps(_plain(model.get_params()), sort_keys=True), fingerprint(T, q),
+    parts = [json.dumps(json_ready(model.get_params()), sort_keys=True), fingerprint(T, q),
              robot_hash(robot), _FORMAT, __version__]
     if val is not None:
         parts.append(fingerprint(*_pairs(val, robot, "val")))

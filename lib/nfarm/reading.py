@@ -36,7 +36,7 @@ import numpy as np
 import yaml
 
 __all__ = ["ParamsError", "ParamsWarning", "read_bytes", "load_yaml", "load_json", "Validator",
-           "show", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES"]
+           "show", "json_ready", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES"]
 
 MAX_BYTES = 1 << 20        # 1 MiB: a robot file is ~2 KB, a saved 128-rule model ~100 KB
 MAX_DEPTH = 32             # nesting levels (a robot file uses 4)
@@ -379,3 +379,18 @@ class Validator:
             if not np.isfinite(a).all():
                 self.fail(at, "must hold finite numbers, got NaN or inf")
         return a
+
+
+def json_ready(value: Any) -> Any:
+    """``value`` as JSON types for saving: tuples and arrays become lists, numpy numbers Python
+    numbers; a NaN or infinite float is a ``ValueError`` (JSON has none, and
+    :func:`load_json` refuses them)."""
+    if isinstance(value, Mapping):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"value {value!r} cannot be saved as JSON")
+    return value
