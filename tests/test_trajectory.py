@@ -12,9 +12,11 @@ import numpy as np
 import pytest
 
 from nfarm.dynamics import rnea
-from nfarm.recording import record_trajectory
-from nfarm.trajectory import (TrajectoryLimitWarning, cubic, line_path, quintic, time_grid,
-                              via_points)
+from nfarm.kinematics import fk
+from nfarm.ik import solve
+from nfarm.recording import record_ik_paths, record_trajectory
+from nfarm.trajectory import (TrajectoryLimitWarning, arm_plane_poses, cubic, line_path, quintic,
+                              time_grid, via_points)
 
 Q0, QF = np.radians([0, 10, -20, 30, 0]), np.radians([90, 45, -60, 30, 120])
 V0, VF = np.radians([0, 5, 0, -5, 0]), np.radians([10, 0, 0, 0, -10])
@@ -128,3 +130,44 @@ def test_recording_holds_the_robot_and_every_time_step(intelbot5, tmp_path):
     printed = subprocess.run([sys.executable, "-m", "rerun", "rrd", "print", str(path)],
                              capture_output=True, text=True, check=True).stdout
     assert "blueprint" in printed.lower(), "the recording carries its viewer layout"
+
+
+def test_ik_path_recording_holds_both_arms_and_their_errors(intelbot5, tmp_path):
+    """Two copies of the arm (frames named apart), the target path, and each arm's joint
+    motion, tool path and errors at every time step; bad shapes are refused, no file left."""
+    t = np.linspace(0.0, 2.0, 21)
+    q = np.linspace(np.zeros(5), np.radians([30, 20, -20, 10, 40]), len(t))
+    off = q + np.array([0.0, 0.01, 0.0, 0.0, 0.0])
+    path = record_ik_paths(intelbot5, t, fk(intelbot5, q), {"exact": q, "off": off},
+                           tmp_path / "paths.rrd", seed=1)
+    subprocess.run([sys.executable, "-m", "rerun", "rrd", "verify", str(path)], check=True,
+                   capture_output=True)
+    rows = chunk_rows(path)
+    K = len(t)
+    for label in ("exact", "off"):
+        assert rows[f"/{label}_intelbot5"] >= 1
+        for joint in intelbot5.joint_names:
+            assert rows[f"/{label}_transforms/{joint}"] == K
+        assert rows[f"/{label}_tool_path"] == K
+        assert rows[f"/position_error_mm/{label}"] == K and rows[f"/orientation_error_deg/{label}"] == K
+    assert rows["/target_path"] == 1
+    assert list(tmp_path.iterdir()) == [path]
+    with pytest.raises(ValueError, match=r"solutions\['off'\] must have shape \(21, 5\)"):
+        record_ik_paths(intelbot5, t, fk(intelbot5, q), {"off": off[:3]}, tmp_path / "x.rrd")
+    assert not (tmp_path / "x.rrd").exists()
+
+
+def test_arm_plane_poses_are_reachable_by_a_five_joint_arm(intelbot5):
+    """Poses keeping the reference's pitch and roll in the arm's plane: same positions as asked,
+    orthonormal, and reached exactly by LM (a fixed orientation moved sideways is not)."""
+    q_ref = np.radians([10, 20, 30, -20, 15])
+    T_ref = fk(intelbot5, q_ref)
+    angle = np.linspace(0, 2 * np.pi, 24)
+    circle = T_ref[:3, 3] + 0.04 * np.column_stack([np.cos(angle), np.sin(angle), 0 * angle])
+    T = arm_plane_poses(T_ref, circle)
+    np.testing.assert_array_equal(T[:, :3, 3], circle)
+    np.testing.assert_allclose(T[:, :3, :3] @ np.swapaxes(T[:, :3, :3], 1, 2), np.broadcast_to(np.eye(3), (24, 3, 3)), atol=1e-15)
+    assert solve(intelbot5, T).success.all()
+    fixed = T.copy()
+    fixed[:, :3, :3] = T_ref[:3, :3]
+    assert not solve(intelbot5, fixed[[6, 12]], restarts=4).success.any()

@@ -23,7 +23,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, Slerp
 
 __all__ = ["Trajectory", "LimitViolation", "TrajectoryLimitWarning", "cubic", "quintic",
-           "via_points", "time_grid", "line_path"]
+           "via_points", "time_grid", "line_path", "arm_plane_poses"]
 
 
 class TrajectoryLimitWarning(UserWarning):
@@ -205,3 +205,27 @@ def line_path(T_start, T_end, steps: int) -> np.ndarray:
     T[:, :3, :3] = slerp(s).as_matrix()
     T[:, :3, 3] = (1 - s)[:, None] * T_start[:3, 3] + s[:, None] * T_end[:3, 3]
     return T
+
+
+def arm_plane_poses(T_ref, positions) -> np.ndarray:
+    """Tool poses ``(K, 4, 4)`` at ``positions (K, 3)`` [m] that keep ``T_ref``'s orientation
+    *as seen in the arm's vertical plane*: ``R_k = Rz(φ_k − φ_ref) · R_ref`` with ``φ`` the
+    azimuth ``atan2(y, x)`` of the position.
+
+    An arm whose approach axis stays in the vertical plane through the tool point (a base yaw,
+    pitch joints, a wrist roll: intelbot5, the SO-101) cannot keep a fixed orientation while its
+    tool moves sideways, but it can keep its pitch and roll in that plane: these are the
+    Cartesian paths such an arm can follow.
+    """
+    T_ref = np.asarray(T_ref, dtype=float)
+    positions = np.asarray(positions, dtype=float)
+    if T_ref.shape != (4, 4) or positions.ndim != 2 or positions.shape[1] != 3:
+        raise ValueError(f"T_ref must be (4, 4) and positions (K, 3), got {T_ref.shape} and {positions.shape}")
+    turn = np.arctan2(positions[:, 1], positions[:, 0]) - np.arctan2(T_ref[1, 3], T_ref[0, 3])
+    c, s = np.cos(turn), np.sin(turn)
+    Rz = np.zeros((len(positions), 3, 3))
+    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = c, -s, s, c, 1.0
+    out = np.tile(np.eye(4), (len(positions), 1, 1))
+    out[:, :3, :3] = Rz @ T_ref[:3, :3]
+    out[:, :3, 3] = positions
+    return out

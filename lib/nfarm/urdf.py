@@ -17,6 +17,8 @@ the links' common normals and offsets.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .robot import Robot
@@ -98,15 +100,19 @@ def _link_visuals(points: list[np.ndarray], radius: float) -> list[str]:
     return out
 
 
-def to_urdf(robot: Robot) -> str:
-    """A URDF (XML string) of the chain: revolute joints with limits, inertials, visuals."""
+def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float] = (0.85, 0.55, 0.15)
+            ) -> str:
+    """A URDF (XML string) of the chain: revolute joints with limits, inertials, visuals.
+
+    ``prefix`` goes before the robot's, every link's and every joint's name, so that two copies
+    of one arm can share a scene (frames are matched by name); ``color`` is the links' RGB."""
     J, B = joint_placements(robot)
     n = robot.n
     size = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d)))
     radius = 0.04 * max(size, 0.25)  # visuals in proportion, and visible on a tiny chain
     tool = B[-1] @ robot.tool
     lines = ['<?xml version="1.0"?>', f'<robot name="{robot.name}">',
-             '  <material name="link"><color rgba="0.85 0.55 0.15 1"/></material>',
+             f'  <material name="link"><color rgba="{" ".join(_f(c) for c in color)} 1"/></material>',
              '  <link name="base_link">',
              _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>']
     for i in range(n):
@@ -151,4 +157,7 @@ def to_urdf(robot: Robot) -> str:
         '  <link name="tool"/>',
         '</robot>',
     ]
-    return "\n".join(lines) + "\n"
+    text = "\n".join(lines) + "\n"
+    if prefix:
+        text = re.sub(r'(<robot name="|<link name="|<joint name="|link=")', lambda m: m[1] + prefix, text)
+    return text
