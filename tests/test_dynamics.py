@@ -9,10 +9,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import random_chains
-from nfarm.dynamics import coriolis, gravity_torques, mass_matrix, rnea
+import dataclasses
+import math
+
+from nfarm.dynamics import coriolis, gravity_torques, joint_drive_torques, mass_matrix, rnea
 from nfarm.kinematics import jacobian
 from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.robot import sample_configurations
+from nfarm.reading import ParamsError
+from nfarm.robot import robot_from_dict, robot_hash, robot_to_dict, sample_configurations
 from nfarm.trajectory import quintic
 
 RTOL = 1e-10
@@ -125,3 +129,74 @@ def test_bad_input(intelbot5, kwargs, message):
     args = dict(q=np.zeros(5), qd=np.zeros(5), qdd=np.zeros(5)) | kwargs
     with pytest.raises(ValueError, match=message):
         rnea(intelbot5, args.pop("q"), args.pop("qd"), args.pop("qdd"), **args)
+
+
+# -- joint drives: armature and friction -----------------------------------------------------
+
+
+def with_drives(robot, seed=0, friction=True):
+    rng = np.random.default_rng(seed)
+    n = robot.n
+    return dataclasses.replace(
+        robot, armature=rng.uniform(0.01, 0.2, n),
+        viscous=rng.uniform(0.05, 0.5, n) if friction else np.zeros(n),
+        coulomb=rng.uniform(0.05, 0.8, n) if friction else np.zeros(n),
+        coulomb_velocity=rng.uniform(0.005, 0.05, n))
+
+
+def test_armature_matches_pinocchio(intelbot5, puma560):
+    """Pinocchio's rnea adds model.armature · q̈: the same robot with armature only."""
+    for robot in (intelbot5, puma560):
+        driven = with_drives(robot, friction=False)
+        P = pinocchio_model(driven)
+        assert np.array_equal(P.model.armature, driven.armature)
+        q, qd, qdd = states(robot, 20, 1)
+        expected = np.array([pin.rnea(P.model, P.data, *x) for x in zip(q, qd, qdd)])
+        assert_close(rnea(driven, q, qd, qdd, drive=True), expected)
+        assert_close(rnea(driven, q, qd, qdd), rnea(robot, q, qd, qdd))      # off by default
+
+
+def test_drive_torques_follow_the_formula_joint_by_joint(intelbot5):
+    driven = with_drives(intelbot5, seed=2)
+    q, qd, qdd = states(intelbot5, 30, 3)
+    expected = np.array([[driven.armature[i] * b[i] + driven.viscous[i] * a[i] +
+                          driven.coulomb[i] * math.tanh(a[i] / driven.coulomb_velocity[i])
+                          for i in range(intelbot5.n)] for a, b in zip(qd, qdd)])
+    np.testing.assert_allclose(joint_drive_torques(driven, qd, qdd), expected, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(rnea(driven, q, qd, qdd, drive=True) - rnea(driven, q, qd, qdd),
+                               expected, rtol=0, atol=1e-12)
+
+
+def test_friction_dissipates_and_is_smooth_at_rest(intelbot5):
+    driven = with_drives(intelbot5, seed=4)
+    zero = np.zeros(intelbot5.n)
+    qd = np.random.default_rng(5).normal(size=(200, intelbot5.n)) * 2
+    friction = joint_drive_torques(driven, qd, zero)
+    assert (qd * friction >= 0).all(), "friction never does positive work"
+    # Far above the smoothing speed Coulomb friction is τ_c sign(q̇); at rest its slope is
+    # b + τ_c/ε (central differences).
+    fast = np.full(intelbot5.n, 50.0) * np.sign(qd[0])
+    np.testing.assert_allclose(joint_drive_torques(driven, fast, zero),
+                               driven.viscous * fast + driven.coulomb * np.sign(fast), rtol=1e-12)
+    h = 1e-6
+    slope = (joint_drive_torques(driven, zero + h, zero) - joint_drive_torques(driven, zero - h, zero)) / (2 * h)
+    np.testing.assert_allclose(slope, driven.viscous + driven.coulomb / driven.coulomb_velocity, rtol=1e-6)
+
+
+def test_drive_fields_load_validate_and_keep_old_hashes(intelbot5):
+    data = robot_to_dict(intelbot5)
+    assert not any(k in j for j in data["joints"] for k in ("viscous", "coulomb", "armature")), \
+        "a robot without drive terms writes none (its hash, data sets and models stay valid)"
+    assert robot_hash(robot_from_dict(data)) == robot_hash(intelbot5)
+    data["joints"][1].update(viscous=0.3, coulomb=0.5, coulomb_velocity=0.02, armature=0.04)
+    loaded = robot_from_dict(data)
+    assert (loaded.viscous[1], loaded.coulomb[1], loaded.armature[1]) == (0.3, 0.5, 0.04)
+    assert loaded.viscous[0] == 0 and loaded.coulomb_velocity[0] == 0.01
+    assert robot_to_dict(loaded)["joints"][1]["armature"] == 0.04
+    assert robot_hash(loaded) != robot_hash(intelbot5)
+    for key, value, rule in (("viscous", -0.1, ">= 0"), ("coulomb", "x", "must be a number"),
+                             ("coulomb_velocity", 0, "> 0"), ("armature", float("nan"), "finite")):
+        bad = robot_to_dict(intelbot5)
+        bad["joints"][2][key] = value
+        with pytest.raises(ParamsError, match=rf"joints\[2\]\.{key}: .*{rule}"):
+            robot_from_dict(bad, source="x.yaml")

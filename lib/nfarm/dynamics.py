@@ -37,7 +37,7 @@ from .kinematics import cos_sin, snap_right_angles
 from .robot import Robot, joint_array
 from .urdf import joint_placements
 
-__all__ = ["rnea", "gravity_torques", "mass_matrix", "coriolis", "CHUNK"]
+__all__ = ["rnea", "joint_drive_torques", "gravity_torques", "mass_matrix", "coriolis", "CHUNK"]
 
 #: Samples per chunk (keeps the working set in cache).
 CHUNK = 32768
@@ -155,8 +155,25 @@ def _check(robot: Robot, **arrays) -> tuple[tuple, dict]:
     return batch, out
 
 
-def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None) -> np.ndarray:
-    """Joint torques ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q) + Jᵀ(q) f_tip`` by recursive Newton–Euler.
+def joint_drive_torques(robot: Robot, qd, qdd) -> np.ndarray:
+    """Torques ``(..., n)`` [N·m] of the joint drives beyond the rigid links, per joint:
+
+    ``τ_drive = I_a q̈ + b q̇ + τ_c tanh(q̇ / ε)``
+
+    with the armature ``I_a`` (the rotor's inertia reflected through the gearing, seen by the
+    joint alone), viscous friction ``b`` and Coulomb friction ``τ_c``, smoothed over speeds
+    of about ``ε`` (``coulomb_velocity``) so that it is differentiable at rest (robot-file
+    fields, default 0). Friction only dissipates: ``q̇ · τ_friction ≥ 0``.
+    """
+    _, a = _check(robot, qd=qd, qdd=qdd)
+    qd, qdd = a["qd"], a["qdd"]
+    return robot.armature * qdd + robot.viscous * qd + \
+        robot.coulomb * np.tanh(qd / robot.coulomb_velocity)
+
+
+def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None, drive: bool = False) -> np.ndarray:
+    """Joint torques ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q) + Jᵀ(q) f_tip`` by recursive Newton–Euler,
+    plus, with ``drive=True``, the joints' armature and friction (:func:`joint_drive_torques`).
 
     Args:
         q, qd, qdd: ``(..., n)`` joint positions [rad], velocities [rad/s], accelerations
@@ -165,6 +182,8 @@ def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None) -> np.ndarray:
         f_tip: ``(..., 6)`` wrench ``[force; moment]`` that the **tool exerts on its
             environment**, in base coordinates, the moment taken about the tool frame origin
             [N, N·m]; it adds ``Jᵀ f_tip`` (J: :func:`nfarm.kinematics.jacobian`). Default none.
+        drive: add the joint drives' armature and friction torques (default: the rigid
+            links alone, as chapter 03 and the dissertation).
     Returns:
         ``(..., n)`` joint torques [N·m].
     """
@@ -187,7 +206,10 @@ def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None) -> np.ndarray:
         sl = slice(start, min(start + CHUNK, N))
         tau[:, sl] = _rnea_T(links, *(x[:, sl] for x in flat), g,
                              None if wrench is None else wrench[:, sl])
-    return tau.T.reshape(*batch, robot.n)
+    tau = tau.T.reshape(*batch, robot.n)
+    if drive:
+        tau = tau + joint_drive_torques(robot, a["qd"], a["qdd"])
+    return tau
 
 
 def _rnea_T(L: _Links, q, qd, qdd, g, wrench):

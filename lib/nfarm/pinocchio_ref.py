@@ -73,6 +73,7 @@ def pinocchio_model(robot: Robot) -> PinocchioRobot:
             pin.Frame(f"dh_frame{i + 1}", parent, body, pin.FrameType.OP_FRAME)))
     tool_id = model.addFrame(
         pin.Frame("tool", parent, _se3(B[-1] @ robot.tool), pin.FrameType.OP_FRAME))
+    model.armature = np.asarray(robot.armature, dtype=float).copy()   # pin.rnea adds I_a q̈
     return PinocchioRobot(model, model.createData(), frame_ids, tool_id)
 
 

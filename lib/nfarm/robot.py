@@ -46,13 +46,19 @@ __all__ = [
     "joint_array",
     "poses_for",
     "dh_rows",
+    "DRIVE_DEFAULTS",
 ]
 
 CONVENTIONS = ("standard", "modified")
 TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
             "tool": False, "description": False}
 JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
-              "com": True, "inertia": True, "name": False}
+              "com": True, "inertia": True, "name": False, "viscous": False, "coulomb": False,
+              "coulomb_velocity": False, "armature": False}
+#: Joint-drive terms (optional per joint; see :func:`nfarm.dynamics.joint_drive_torques`) and
+#: their defaults: viscous [N·m·s/rad], Coulomb [N·m], Coulomb smoothing speed [rad/s],
+#: armature (reflected rotor inertia) [kg·m²].
+DRIVE_DEFAULTS = {"viscous": 0.0, "coulomb": 0.0, "coulomb_velocity": 0.01, "armature": 0.0}
 ORTHONORMAL_TOL = 1e-9
 INERTIA_RTOL = 1e-12
 MAX_PLAUSIBLE_LENGTH = 10.0   # [m]
@@ -73,6 +79,10 @@ class Robot:
         gravity: ``(3,)`` gravity acceleration in the base frame [m/s²].
         tool: ``(4, 4)`` pose of the tool frame in the last link frame.
         joint_names: ``n`` names (``"q1"``… when the file gives none).
+        viscous, coulomb, coulomb_velocity, armature: ``(n,)`` joint-drive terms (viscous
+            [N·m·s/rad] and Coulomb [N·m] friction, the Coulomb smoothing speed [rad/s], the
+            reflected rotor inertia [kg·m²]); zero friction and armature unless the file gives
+            them. Used only where asked (``rnea(..., drive=True)``).
         source: the file the robot was loaded from, or a description.
     """
 
@@ -91,8 +101,15 @@ class Robot:
     joint_names: tuple[str, ...]
     source: str = "<dict>"
     description: str = ""
+    viscous: np.ndarray | None = None
+    coulomb: np.ndarray | None = None
+    coulomb_velocity: np.ndarray | None = None
+    armature: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        for key, default in DRIVE_DEFAULTS.items():
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, np.full(self.a.shape[0], default))
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             if isinstance(value, np.ndarray):
@@ -169,6 +186,12 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         fields["inertia"].append(v.inertia(joint["inertia"], f"{at}.inertia"))
         jname = joint.get("name", f"q{i + 1}")
         fields["name"].append(v.string(jname, f"{at}.name"))
+        for key, default in DRIVE_DEFAULTS.items():
+            value = v.number(joint.get(key, default), f"{at}.{key}")
+            if value < 0 or (key == "coulomb_velocity" and value == 0):
+                v.fail(f"{at}.{key}", f"must be {'> 0' if key == 'coulomb_velocity' else '>= 0'}, "
+                                      f"got {value!r}")
+            fields.setdefault(key, []).append(value)
 
     return Robot(
         name=name, convention=convention,
@@ -177,6 +200,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         mass=np.array(fields["mass"]), com=np.array(fields["com"]),
         inertia=np.array(fields["inertia"]), gravity=gravity, tool=tool,
         joint_names=tuple(fields["name"]), source=source, description=description,
+        **{key: np.array(fields[key]) for key in DRIVE_DEFAULTS},
     )
 
 
@@ -193,6 +217,10 @@ def robot_to_dict(robot: Robot) -> dict:
             "inertia": [float(inertia[0, 0]), float(inertia[1, 1]), float(inertia[2, 2]),
                         float(inertia[0, 1]), float(inertia[1, 2]), float(inertia[0, 2])],
         })
+        # Drive terms only where they differ from the defaults: a file without them keeps its
+        # hash (and its data sets and models stay valid).
+        joints[-1].update({key: float(getattr(robot, key)[i]) for key, default in
+                           DRIVE_DEFAULTS.items() if getattr(robot, key)[i] != default})
     out = {"name": robot.name, "convention": robot.convention,
            "gravity": robot.gravity.tolist(), "tool": robot.tool.tolist(), "joints": joints}
     if robot.description:
