@@ -271,3 +271,110 @@ def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
     for bad in (0, 1.5, True, "2"):
         with pytest.raises(ValueError, match=r"threads must be a whole number >= 1"):
             fitted.predict(T[:2], threads=bad)
+
+
+# -- learned inverse dynamics ------------------------------------------------------------------
+
+from nfarm.datasets import random_trajectories  # noqa: E402
+from nfarm.dynamics import rnea  # noqa: E402
+from nfarm.learned import INPUT_SETS, LearnedID, id_features  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def id_data():
+    def split(count, seed):
+        d = random_trajectories(ROBOT, STUDY.id, count, seed)
+        d["tau"] = rnea(ROBOT, d["q"], d["qd"], d["qdd"])
+        return d
+    return {"train": split(6, 1), "val": split(2, 2), "test": split(2, 3)}
+
+
+def nrmse(tau_hat, tau):
+    return np.sqrt(((tau_hat - tau) ** 2).mean(axis=0)) / tau.std(axis=0)
+
+
+@pytest.mark.parametrize("inputs, width", [("own", 3), ("all", 15), ("physics", 25)])
+def test_id_input_sets(id_data, inputs, width):
+    d = id_data["test"]
+    X = id_features(d["q"], d["qd"], d["qdd"], inputs, 2)
+    assert X.shape == (len(d["q"]), width)
+    if inputs == "own":
+        np.testing.assert_array_equal(X, np.column_stack([d["q"][:, 2], d["qd"][:, 2], d["qdd"][:, 2]]))
+
+
+def test_small_seeded_id_training_reaches_a_stated_error(id_data):
+    """Six training trajectories, physics-shaped inputs, 8 c-means rules, 5 epochs: the
+    shoulder's (gravity-dominated) torque fits to NRMSE < 0.2 on the training data, and every
+    joint fits better than with one rule (a single linear map of the same inputs). Measured,
+    and the reason the study's ID chapter compares input sets: the other joints' torques stay
+    above 0.5 here — M(q) q̈ is a product of angle and acceleration terms that few rules on these
+    inputs do not capture."""
+    d = id_data["train"]
+    fits = {}
+    for name, options in (("linear", dict(n_mfs=1)),
+                          ("rules", dict(partition="fcm", n_rules=8, mf="gauss"))):
+        model = LearnedID(inputs="physics", epochs=5, random_state=0, **options).fit(ROBOT, d, id_data["val"])
+        fits[name] = nrmse(model.predict(d["q"], d["qd"], d["qdd"]), d["tau"])
+    assert fits["rules"][1] < 0.2, fits
+    assert (fits["rules"] < fits["linear"]).all(), fits
+
+
+def test_residual_model_learns_what_rnea_misses(id_data):
+    """On torques of an arm with friction and armature, RNEA + a residual ANFIS is closer than
+    RNEA alone; a residual model of frictionless data predicts RNEA to the ANFIS's rounding."""
+    import dataclasses
+    n = ROBOT.n
+    rough = dataclasses.replace(ROBOT, viscous=np.full(n, 0.05), coulomb=np.full(n, 0.08),
+                                coulomb_velocity=np.full(n, 0.05), armature=np.full(n, 0.01))
+    measured = {k: {**v, "tau": rnea(rough, v["q"], v["qd"], v["qdd"], drive=True)}
+                for k, v in id_data.items()}
+    model = LearnedID(inputs="own", residual=True, n_mfs=2, epochs=5).fit(
+        ROBOT, measured["train"], measured["val"])
+    d = measured["test"]
+    rigid = np.sqrt(((rnea(ROBOT, d["q"], d["qd"], d["qdd"]) - d["tau"]) ** 2).mean(axis=0))
+    learned = np.sqrt(((model.predict(d["q"], d["qd"], d["qdd"]) - d["tau"]) ** 2).mean(axis=0))
+    assert (learned < 0.5 * rigid).all(), (learned, rigid)
+
+
+def test_id_save_load_batching_and_bad_input(id_data, tmp_path):
+    model = LearnedID(inputs="physics", partition="fcm", n_rules=4, mf="gauss", epochs=2,
+                      random_state=0).fit(ROBOT, id_data["train"])
+    d = id_data["test"]
+    flat = model.predict(d["q"][:6], d["qd"][:6], d["qdd"][:6])
+    assert flat.shape == (6, 5)
+    np.testing.assert_array_equal(model.predict(d["q"][:6].reshape(2, 3, 5), d["qd"][:6].reshape(2, 3, 5),
+                                                d["qdd"][:6].reshape(2, 3, 5)), flat.reshape(2, 3, 5))
+    np.testing.assert_allclose(model.predict(d["q"][4], d["qd"][4], d["qdd"][4]), flat[4], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(model.predict(d["q"][:6], 0.0 * d["qd"][0], d["qdd"][:6]).shape, (6, 5))
+    path = model.save(tmp_path)
+    loaded = LearnedID.load(tmp_path, ROBOT)
+    np.testing.assert_array_equal(loaded.predict(d["q"], d["qd"], d["qdd"]),
+                                  model.predict(d["q"], d["qd"], d["qdd"]))
+    assert loaded.describe() == model.describe() and path.name == "learned_id.json"
+    with pytest.raises(ParamsError, match=r"robot_params_sha256: trained for robot 'intelbot5'"):
+        LearnedID.load(tmp_path, PUMA)
+    data = json.loads(path.read_text())
+    data["input_lo"] = data["input_lo"][:2]
+    path.write_text(json.dumps(data))
+    with pytest.raises(ParamsError, match=r"input_lo: must be a 5 × 25 array"):
+        LearnedID.load(tmp_path, ROBOT)
+    with pytest.raises(ValueError, match=r"qd must have shape \(\.\.\., 5\)"):
+        model.predict(d["q"][:2], d["qd"][:2, :4], d["qdd"][:2])
+    with pytest.raises(ValueError, match=r"must be finite"):
+        model.predict(np.full(5, np.nan), np.zeros(5), np.zeros(5))
+    with pytest.raises(ValueError, match=r"do not broadcast"):
+        model.predict(d["q"][:3], d["qd"][:2], d["qdd"][:2])
+
+
+@pytest.mark.parametrize("kwargs, change, message", [
+    (dict(inputs="torques"), None, r"inputs must be one of own, all, physics"),
+    (dict(residual="yes"), None, r"residual must be True or False"),
+    (dict(n_mfs=0), None, r"joint 1: .*n_mfs"),
+    ({}, lambda d: {k: v for k, v in d.items() if k != "tau"}, r"train must be a mapping with arrays 'q', 'qd', 'qdd', 'tau'"),
+    ({}, lambda d: {**d, "qd": d["qd"][:-1]}, r"train: q, qd, qdd, tau must have one row per sample"),
+    ({}, lambda d: {**d, "tau": np.where(np.arange(5) == 1, np.nan, d["tau"])}, r"train: tau contains NaN"),
+])
+def test_id_fit_refuses_bad_input_before_any_work(id_data, kwargs, change, message):
+    train = id_data["train"] if change is None else change(id_data["train"])
+    with pytest.raises(ValueError, match=message):
+        LearnedID(**kwargs).fit(ROBOT, train)

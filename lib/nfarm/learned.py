@@ -1,4 +1,6 @@
-"""Learned inverse kinematics: one ANFIS per joint behind one object (chapters 06 and 07).
+"""Learned inverse kinematics and inverse dynamics: one ANFIS per joint behind one object
+(chapters 06 and 07). :class:`LearnedIK` maps tool poses to joint angles; :class:`LearnedID`
+maps joint states to torques (section "Learned inverse dynamics" below).
 
 The dissertation's IK page feeds five trained ANFIS models, one per joint, with the target's
 orientation quaternion and position (7 inputs). :class:`LearnedIK` does that, and offers other
@@ -44,8 +46,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import time
 import os
+import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -54,14 +56,15 @@ import numpy as np
 
 from . import __version__
 from .anfis import ANFIS
+from .dynamics import rnea
 from .ik import check_targets
 from .kinematics import fk
 from .paths import atomic_path
 from .reading import ParamsError, Validator, json_ready, load_json, show
-from .robot import Robot, robot_hash
+from .robot import Robot, joint_array, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
-__all__ = ["LearnedIK", "Baseline", "encode", "out_of_plane", "ik_errors", "fit_cached",
+__all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "INPUT_SETS", "encode", "out_of_plane", "ik_errors", "fit_cached",
            "fingerprint", "ENCODINGS", "ANGULAR", "FILE_NAME", "BASELINES"]
 
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
@@ -112,14 +115,14 @@ def _unwrap(X: np.ndarray, columns: tuple, centre: np.ndarray) -> np.ndarray:
     return X
 
 
-def _check_q(q, robot: Robot, what: str) -> np.ndarray:
+def _check_q(q, robot: Robot, what: str, name: str = "q") -> np.ndarray:
     q = np.asarray(q)
     if q.dtype.kind not in "iuf" or q.ndim != 2 or q.shape[1] != robot.n:
-        raise ValueError(f"{what}: q must be a (N, {robot.n}) array of joint angles, got "
+        raise ValueError(f"{what}: {name} must be a (N, {robot.n}) array of real numbers, got "
                          f"shape {q.shape} of {q.dtype}")
     q = q.astype(float)
     if not np.isfinite(q).all():
-        raise ValueError(f"{what}: q contains NaN or inf (first in row "
+        raise ValueError(f"{what}: {name} contains NaN or inf (first in row "
                          f"{int(np.argmax(~np.isfinite(q).all(axis=1)))})")
     return q
 
@@ -205,29 +208,8 @@ class LearnedIK:
         """The ANFIS options of each joint, validated before any training."""
         if self.encoding not in ENCODINGS:
             raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
-        joint = self.joint_options
-        if joint is None:
-            joint = [{}] * n
-        if isinstance(joint, (str, bytes, Mapping)) or not isinstance(joint, Sequence) or \
-                len(joint) != n or not all(isinstance(o, Mapping) for o in joint):
-            raise ValueError(f"joint_options must be None or a list of {n} mappings (one per "
-                             f"joint), got {show(joint)}")
-        names = set(ANFIS._param_names()) - {"feature_names"}
-        options = []
-        for j, extra in enumerate([self.anfis_options, *joint]):
-            unknown = sorted(set(extra) - names)
-            if unknown:
-                where = "" if j == 0 else f"joint_options[{j - 1}]: "
-                raise ValueError(f"{where}unknown ANFIS option {unknown[0]!r}; valid: "
-                                 f"{', '.join(sorted(names))}")
-        for j in range(n):
-            merged = {**self.anfis_options, **joint[j]}
-            try:
-                ANFIS(**merged)._check_options(ENCODINGS[self.encoding])
-            except ValueError as exc:
-                raise ValueError(f"joint {j + 1}: {exc}") from None
-            options.append(merged)
-        return options
+        return _joint_anfis_options(self.anfis_options, self.joint_options, n,
+                                    [ENCODINGS[self.encoding]] * n)
 
     def fit(self, robot: Robot, train: Mapping, val: Mapping | None = None) -> "LearnedIK":
         """Train one ANFIS per joint on ``train`` (arrays ``T (N, 4, 4)`` and ``q (N, n)``),
@@ -310,16 +292,7 @@ class LearnedIK:
         lines = [f"LearnedIK for {self.robot_name_} ({self.n_joints_} joints), encoding "
                  f"{self.encoding!r} ({ENCODINGS[self.encoding]} inputs: "
                  f"{', '.join(_feature_names(self.encoding))})"]
-        for j, m in enumerate(self.models_):
-            R, n = m.consequents_.shape[0], m.n_features_in_
-            premise = sum(p.size for p in m.mfs_)
-            val = f", validation RMSE {m.val_loss_curve_[m.best_epoch_]:.4g} rad" \
-                if m.val_loss_curve_ else ""
-            lines.append(f"  joint {j + 1}: {m.partition} partition, {m.mf} functions, {R} "
-                         f"rule{'s' if R != 1 else ''}, "
-                         f"{premise + R * (n + 1)} parameters, kept epoch {m.best_epoch_ + 1} of "
-                         f"{m.n_epochs_}, training RMSE {m.loss_curve_[m.best_epoch_]:.4g} rad{val}")
-        return "\n".join(lines)
+        return "\n".join(lines + _model_lines(self.models_, "rad"))
 
     # -- persistence --------------------------------------------------------------------------
 
@@ -404,11 +377,280 @@ _KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options"
          "input_lo", "input_span", "fit_seconds", "models")
 
 
+def _joint_anfis_options(shared: Mapping, joint_options, n: int, n_inputs: list[int]) -> list[dict]:
+    """Each joint's ANFIS options (``shared`` overridden by ``joint_options[j]``), checked for
+    that joint's ``n_inputs[j]`` inputs; one ``ValueError`` naming the joint or the option."""
+    joint = [{}] * n if joint_options is None else joint_options
+    if isinstance(joint, (str, bytes, Mapping)) or not isinstance(joint, Sequence) or \
+            len(joint) != n or not all(isinstance(o, Mapping) for o in joint):
+        raise ValueError(f"joint_options must be None or a list of {n} mappings (one per "
+                         f"joint), got {show(joint)}")
+    names = set(ANFIS._param_names()) - {"feature_names"}
+    for j, extra in enumerate([shared, *joint]):
+        unknown = sorted(set(extra) - names)
+        if unknown:
+            where = "" if j == 0 else f"joint_options[{j - 1}]: "
+            raise ValueError(f"{where}unknown ANFIS option {unknown[0]!r}; valid: "
+                             f"{', '.join(sorted(names))}")
+    options = []
+    for j in range(n):
+        merged = {**shared, **joint[j]}
+        try:
+            ANFIS(**merged)._check_options(n_inputs[j])
+        except ValueError as exc:
+            raise ValueError(f"joint {j + 1}: {exc}") from None
+        options.append(merged)
+    return options
+
+
+def _model_lines(models: list, unit: str) -> list[str]:
+    """One line per joint model: rule base, size, kept epoch, errors [``unit``]."""
+    lines = []
+    for j, m in enumerate(models):
+        R, n = m.consequents_.shape[0], m.n_features_in_
+        premise = sum(p.size for p in m.mfs_)
+        val = f", validation RMSE {m.val_loss_curve_[m.best_epoch_]:.4g} {unit}" \
+            if m.val_loss_curve_ else ""
+        lines.append(f"  joint {j + 1}: {m.partition} partition, {m.mf} functions, {R} "
+                     f"rule{'s' if R != 1 else ''}, {premise + R * (n + 1)} parameters, kept "
+                     f"epoch {m.best_epoch_ + 1} of {m.n_epochs_}, training RMSE "
+                     f"{m.loss_curve_[m.best_epoch_]:.4g} {unit}{val}")
+    return lines
+
+
 def _feature_names(encoding: str) -> list[str]:
     return {"quat_xyz": ["qw", "qx", "qy", "qz", "x", "y", "z"],
             "axes_xyz": ["x", "y", "z", "ax", "ay", "az", "nx", "ny", "nz"],
             "arm_plane": ["azimuth", "r", "z", "cos_pitch", "sin_pitch", "roll"]}[encoding]
 
+
+
+# --------------------------------------------------------------------------------------------
+# Learned inverse dynamics
+
+#: Input sets of :class:`LearnedID`: what each joint's model sees of a state ``(q, q̇, q̈)``.
+INPUT_SETS = ("own", "all", "physics")
+ID_FILE_NAME = "learned_id.json"
+_ID_FORMAT = "nfarm-learned-id-1"
+
+
+def id_features(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, inputs: str, joint: int
+                ) -> np.ndarray:
+    """The inputs ``(N, d)`` joint ``joint``'s model sees of states ``(N, n)`` each:
+
+    * ``"own"`` — the joint's own ``q_i, q̇_i, q̈_i`` (3 inputs; the likely dissertation design);
+    * ``"all"`` — every joint's ``q, q̇, q̈`` (3n);
+    * ``"physics"`` — ``sin q, cos q`` (what gravity and the Coriolis terms see of the angles:
+      trigonometric, not linear), ``q̇``, ``q̈`` and ``q̇ ⊙ |q̇|`` (the sign-keeping square of the
+      centrifugal terms): 5n.
+    """
+    if inputs == "own":
+        return np.column_stack([q[:, joint], qd[:, joint], qdd[:, joint]])
+    if inputs == "all":
+        return np.concatenate([q, qd, qdd], axis=1)
+    return np.concatenate([np.sin(q), np.cos(q), qd, qdd, qd * np.abs(qd)], axis=1)
+
+
+def _id_width(inputs: str, n: int) -> int:
+    return {"own": 3, "all": 3 * n, "physics": 5 * n}[inputs]
+
+
+def _states(data: Mapping, robot: Robot, what: str, *, tau: bool = True) -> list[np.ndarray]:
+    """``q, qd, qdd`` (and ``tau``) ``(N, n)`` of an ID data set, checked."""
+    keys = ("q", "qd", "qdd", "tau") if tau else ("q", "qd", "qdd")
+    if not isinstance(data, Mapping) or any(k not in data for k in keys):
+        raise ValueError(f"{what} must be a mapping with arrays {', '.join(map(repr, keys))} "
+                         f"(N, {robot.n}), e.g. an ID data set of nfarm.datasets.load")
+    arrays = [_check_q(data[k], robot, what, k) for k in keys]
+    if len({len(a) for a in arrays}) != 1:
+        raise ValueError(f"{what}: {', '.join(keys)} must have one row per sample, got "
+                         f"{', '.join(str(len(a)) for a in arrays)} rows")
+    return arrays
+
+
+class LearnedID:
+    """Inverse dynamics learned by one ANFIS per joint (scikit-learn conventions).
+
+    Args:
+        inputs: what each joint's model sees (:data:`INPUT_SETS`, :func:`id_features`).
+        residual: learn ``τ − rnea(q, q̇, q̈)`` (what the rigid-body model misses: friction,
+            armature) and predict ``rnea + ANFIS`` (semi-parametric, Nguyen-Tuong & Peters
+            2010); ``False`` learns the torques themselves.
+        joint_options: ``None`` or one mapping per joint of ANFIS options overriding the shared.
+        **anfis_options: passed to every joint's :class:`nfarm.anfis.ANFIS`.
+
+    Learned attributes: ``models_``, ``robot_`` (the robot it was fitted or loaded with),
+    ``robot_hash_``, ``robot_name_``, ``n_joints_``, ``input_lo_``, ``input_span_`` (per joint, the inputs' scaling to ``[0, 1]``),
+    ``fit_seconds_``.
+    """
+
+    def __init__(self, inputs: str = "own", residual: bool = False,
+                 joint_options: Sequence[Mapping] | None = None, **anfis_options):
+        self.inputs = inputs
+        self.residual = residual
+        self.joint_options = joint_options
+        self.anfis_options = anfis_options
+
+    def get_params(self, deep: bool = True) -> dict:
+        return {"inputs": self.inputs, "residual": self.residual,
+                "joint_options": self.joint_options, **self.anfis_options}
+
+    def __repr__(self) -> str:
+        options = "".join(f", {k}={v!r}" for k, v in self.anfis_options.items())
+        return f"LearnedID(inputs={self.inputs!r}, residual={self.residual!r}{options})"
+
+    def _check_fitted(self):
+        if not hasattr(self, "models_"):
+            raise ValueError("this LearnedID is not fitted yet: call fit or load")
+
+    def _inputs(self, q, qd, qdd, j: int) -> np.ndarray:
+        return (id_features(q, qd, qdd, self.inputs, j) - self.input_lo_[j]) / self.input_span_[j]
+
+    def fit(self, robot: Robot, train: Mapping, val: Mapping | None = None) -> "LearnedID":
+        """Train one ANFIS per joint on ``train`` (arrays ``q, qd, qdd, tau (N, n)``), keeping
+        each model's epoch of least error on ``val`` when given.
+
+        Raises:
+            ValueError: bad options or data (shapes, NaN, lengths), before any training.
+        """
+        if self.inputs not in INPUT_SETS:
+            raise ValueError(f"inputs must be one of {', '.join(INPUT_SETS)}, got {self.inputs!r}")
+        if not isinstance(self.residual, bool):
+            raise ValueError(f"residual must be True or False, got {self.residual!r}")
+        n = robot.n
+        options = _joint_anfis_options(self.anfis_options, self.joint_options, n,
+                                       [_id_width(self.inputs, n)] * n)
+        q, qd, qdd, tau = _states(train, robot, "train")
+        val_states = _states(val, robot, "val") if val is not None else None
+        target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
+        if val_states is not None:
+            vq, vqd, vqdd, vtau = val_states
+            val_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
+        self.input_lo_, self.input_span_ = [], []
+        self.models_, self.fit_seconds_ = [], []
+        for j in range(n):
+            X = id_features(q, qd, qdd, self.inputs, j)
+            lo, span = X.min(axis=0), np.ptp(X, axis=0)
+            self.input_lo_.append(lo)
+            self.input_span_.append(np.where(span > 0, span, 1.0))
+            Xv = self._inputs(vq, vqd, vqdd, j) if val_states is not None else None
+            start = time.perf_counter()
+            model = ANFIS(**options[j]).fit(self._inputs(q, qd, qdd, j), target[:, j], Xv,
+                                             None if val_states is None else val_target[:, j])
+            self.fit_seconds_.append(time.perf_counter() - start)
+            self.models_.append(model)
+        self.robot_hash_, self.robot_name_, self.n_joints_ = robot_hash(robot), robot.name, n
+        self.robot_ = robot
+        return self
+
+    def predict(self, q, qd, qdd) -> np.ndarray:
+        """Joint torques ``(..., n)`` [N·m] for states ``q, qd, qdd (..., n)`` (batch shapes
+        broadcast; one state is the ``()`` batch). A residual model adds ``rnea`` of the robot
+        it was fitted or loaded with.
+
+        Raises:
+            ValueError: states that are not real ``(..., n)`` arrays, or NaN, before any work.
+        """
+        self._check_fitted()
+        robot = self.robot_
+        arrays = [joint_array(robot, x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
+        try:
+            arrays = np.broadcast_arrays(*arrays)
+        except ValueError:
+            raise ValueError(f"q, qd, qdd batch shapes do not broadcast: "
+                             f"{', '.join(str(np.shape(a)) for a in arrays)}") from None
+        batch = arrays[0].shape[:-1]
+        flat = [np.ascontiguousarray(a.reshape(-1, robot.n)) for a in arrays]
+        if not all(np.isfinite(a).all() for a in flat):
+            raise ValueError("q, qd, qdd must be finite (NaN or inf found)")
+        tau = np.empty((len(flat[0]), robot.n))
+        for start in range(0, len(tau), _CHUNK):
+            part = [a[start:start + _CHUNK] for a in flat]
+            for j, model in enumerate(self.models_):
+                tau[start:start + _CHUNK, j] = model._predict_fast(self._inputs(*part, j))[0]
+        if self.residual:
+            tau += rnea(robot, *flat)
+        return tau.reshape(*batch, robot.n)
+
+    def describe(self) -> str:
+        self._check_fitted()
+        what = "τ − rnea (residual)" if self.residual else "τ"
+        head = (f"LearnedID for {self.robot_name_} ({self.n_joints_} joints), inputs "
+                f"{self.inputs!r} ({len(self.input_lo_[0])} per joint), learning {what}")
+        return "\n".join([head] + _model_lines(self.models_, "N·m"))
+
+    def to_dict(self) -> dict:
+        self._check_fitted()
+        return {"format": _ID_FORMAT, "nfarm_version": __version__, "inputs": self.inputs,
+                "residual": self.residual, "anfis_options": json_ready(self.anfis_options),
+                "joint_options": json_ready(self.joint_options), "robot": self.robot_name_,
+                "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
+                "input_lo": json_ready(self.input_lo_), "input_span": json_ready(self.input_span_),
+                "fit_seconds": list(self.fit_seconds_),
+                "models": [m.to_dict() for m in self.models_]}
+
+    def save(self, directory: str | os.PathLike) -> Path:
+        """Write ``directory/learned_id.json`` atomically; :meth:`load` reproduces the
+        predictions bit for bit. Returns the file's path."""
+        path = Path(directory) / ID_FILE_NAME
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps(self.to_dict()), encoding="utf-8")
+        return path
+
+    @classmethod
+    def load(cls, directory: str | os.PathLike, robot: Robot) -> "LearnedID":
+        """Read a model saved by :meth:`save` for ``robot`` (a :class:`ParamsError` naming the
+        file and the field for a missing, damaged, edited or other robot's file)."""
+        path = Path(directory)
+        path = path / ID_FILE_NAME if path.is_dir() else path
+        return cls.from_dict(load_json(path, what="learned ID model"), robot, str(path))
+
+    @classmethod
+    def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedID":
+        v = Validator(source)
+        v.mapping(data, "", dict.fromkeys(_ID_KEYS, True))
+        if data["format"] != _ID_FORMAT:
+            v.fail("format", f"must be {_ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
+        inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
+        residual = v.boolean(data["residual"], "residual")
+        if data["robot_params_sha256"] != robot_hash(robot):
+            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other "
+                                          f"parameters than {robot.name!r} ({robot.source}): "
+                                          f"retrain it for this robot")
+        n = v.integer(data["n_joints"], "n_joints", lo=1, hi=64)
+        if n != robot.n:
+            v.fail("n_joints", f"must be {robot.n} for {robot.name}, got {n}")
+        d = _id_width(inputs, n)
+        lo = v.array(data["input_lo"], "input_lo", (n, d))
+        span = v.array(data["input_span"], "input_span", (n, d))
+        if (span <= 0).any():
+            v.fail("input_span", "must hold positive numbers")
+        option_names = dict.fromkeys(ANFIS._param_names(), False)
+        options = v.mapping(data["anfis_options"], "anfis_options", option_names)
+        joint_options = data["joint_options"]
+        if joint_options is not None:
+            joint_options = [v.mapping(o, f"joint_options[{j}]", option_names) for j, o in
+                             enumerate(v.sequence(joint_options, "joint_options", min_len=n,
+                                                  max_len=n))]
+        models = v.sequence(data["models"], "models", min_len=n, max_len=n)
+        fitted = [ANFIS.from_dict(m, f"{source}: models[{j}]") for j, m in enumerate(models)]
+        for j, m in enumerate(fitted):
+            if m.n_features_in_ != d:
+                v.fail(f"models[{j}]", f"must take the {d} inputs of input set {inputs!r}, "
+                                       f"takes {m.n_features_in_}")
+        seconds = v.array(data["fit_seconds"], "fit_seconds", (n,))
+        model = cls(inputs=inputs, residual=residual, joint_options=joint_options, **options)
+        model.models_, model.fit_seconds_ = fitted, seconds.tolist()
+        model.input_lo_, model.input_span_ = list(lo), list(span)
+        model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
+            data["robot"], n
+        model.robot_ = robot
+        return model
+
+
+_ID_KEYS = ("format", "nfarm_version", "inputs", "residual", "anfis_options", "joint_options",
+            "robot", "robot_params_sha256", "n_joints", "input_lo", "input_span", "fit_seconds",
+            "models")
 
 
 # --------------------------------------------------------------------------------------------
