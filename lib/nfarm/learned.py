@@ -303,17 +303,15 @@ class LearnedIK:
                 "joint_options": json_ready(self.joint_options), "max_out_of_plane":
                 self.max_out_of_plane, "robot": self.robot_name_,
                 "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
-                "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(), "input_span": self.input_span_.tolist(),
+                "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(),
+                "input_span": self.input_span_.tolist(),
                 "fit_seconds": list(self.fit_seconds_),
                 "models": [m.to_dict() for m in self.models_]}
 
     def save(self, directory: str | os.PathLike) -> Path:
         """Write ``directory/learned_ik.json`` atomically; :meth:`load` reproduces the
         predictions bit for bit. Returns the file's path."""
-        path = Path(directory) / FILE_NAME
-        with atomic_path(path) as tmp:
-            tmp.write_text(json.dumps(self.to_dict()), encoding="utf-8")
-        return path
+        return _write_model(Path(directory) / FILE_NAME, self.to_dict())
 
     @classmethod
     def load(cls, directory: str | os.PathLike, robot: Robot) -> "LearnedIK":
@@ -335,37 +333,18 @@ class LearnedIK:
         if data["format"] != _FORMAT:
             v.fail("format", f"must be {_FORMAT!r} (an nfarm learned IK model), got {show(data['format'])}")
         encoding = v.choice(data["encoding"], "encoding", tuple(ENCODINGS))
-        if data["robot_params_sha256"] != robot_hash(robot):
-            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other "
-                                          f"parameters than {robot.name!r} ({robot.source}): "
-                                          f"retrain it for this robot")
-        n = v.integer(data["n_joints"], "n_joints", lo=1, hi=64)
-        if n != robot.n:
-            v.fail("n_joints", f"must be {robot.n} for {robot.name}, got {n}")
         d = ENCODINGS[encoding]
+        n, options, joint_options, fitted, seconds = _read_joint_models(
+            v, data, robot, source, [d] * robot.n, f"encoding {encoding!r}")
         lo = v.array(data["input_lo"], "input_lo", (d,))
         span = v.array(data["input_span"], "input_span", (d,))
         if (span <= 0).any():
             v.fail("input_span", "must hold positive numbers")
-        option_names = dict.fromkeys(ANFIS._param_names(), False)
-        options = v.mapping(data["anfis_options"], "anfis_options", option_names)
-        joint_options = data["joint_options"]
-        if joint_options is not None:
-            joint_options = [v.mapping(o, f"joint_options[{j}]", option_names) for j, o in
-                             enumerate(v.sequence(joint_options, "joint_options", min_len=n,
-                                                  max_len=n))]
         max_out = v.number(data["max_out_of_plane"], "max_out_of_plane", lo=0.0)
         centre = v.array(data["angle_centre"], "angle_centre", (len(ANGULAR[encoding]),))
-        models = v.sequence(data["models"], "models", min_len=n, max_len=n)
-        fitted = [ANFIS.from_dict(m, f"{source}: models[{j}]") for j, m in enumerate(models)]
-        for j, m in enumerate(fitted):
-            if m.n_features_in_ != d:
-                v.fail(f"models[{j}]", f"must take the {d} inputs of encoding {encoding!r}, "
-                                       f"takes {m.n_features_in_}")
-        seconds = v.array(data["fit_seconds"], "fit_seconds", (n,))
         model = cls(encoding=encoding, joint_options=joint_options, max_out_of_plane=max_out,
                     **options)
-        model.models_, model.fit_seconds_ = fitted, seconds.tolist()
+        model.models_, model.fit_seconds_ = fitted, seconds
         model.angle_centre_, model.input_lo_, model.input_span_ = centre, lo, span
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
@@ -375,6 +354,41 @@ class LearnedIK:
 _KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options",
          "max_out_of_plane", "robot", "robot_params_sha256", "n_joints", "angle_centre",
          "input_lo", "input_span", "fit_seconds", "models")
+
+
+def _write_model(path: Path, data: dict) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(data), encoding="utf-8")
+    return path
+
+
+def _read_joint_models(v: Validator, data: Mapping, robot: Robot, source: str, widths: list[int],
+                       what: str) -> tuple[int, dict, list | None, list, list]:
+    """The fields every per-joint model file holds, validated for ``robot``: the joint count,
+    the shared and per-joint ANFIS options, the fitted models (joint j taking ``widths[j]``
+    inputs, those of ``what``) and the training times."""
+    if data["robot_params_sha256"] != robot_hash(robot):
+        v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other "
+                                      f"parameters than {robot.name!r} ({robot.source}): "
+                                      f"retrain it for this robot")
+    n = v.integer(data["n_joints"], "n_joints", lo=1, hi=64)
+    if n != robot.n:
+        v.fail("n_joints", f"must be {robot.n} for {robot.name}, got {n}")
+    option_names = dict.fromkeys(ANFIS._param_names(), False)
+    options = v.mapping(data["anfis_options"], "anfis_options", option_names)
+    joint_options = data["joint_options"]
+    if joint_options is not None:
+        joint_options = [v.mapping(o, f"joint_options[{j}]", option_names) for j, o in
+                         enumerate(v.sequence(joint_options, "joint_options", min_len=n,
+                                              max_len=n))]
+    models = v.sequence(data["models"], "models", min_len=n, max_len=n)
+    fitted = [ANFIS.from_dict(m, f"{source}: models[{j}]") for j, m in enumerate(models)]
+    for j, m in enumerate(fitted):
+        if m.n_features_in_ != widths[j]:
+            v.fail(f"models[{j}]", f"must take the {widths[j]} inputs of {what}, takes "
+                                   f"{m.n_features_in_}")
+    seconds = v.array(data["fit_seconds"], "fit_seconds", (n,))
+    return n, dict(options), joint_options, fitted, seconds.tolist()
 
 
 def _joint_anfis_options(shared: Mapping, joint_options, n: int, n_inputs: list[int]) -> list[dict]:
@@ -592,10 +606,7 @@ class LearnedID:
     def save(self, directory: str | os.PathLike) -> Path:
         """Write ``directory/learned_id.json`` atomically; :meth:`load` reproduces the
         predictions bit for bit. Returns the file's path."""
-        path = Path(directory) / ID_FILE_NAME
-        with atomic_path(path) as tmp:
-            tmp.write_text(json.dumps(self.to_dict()), encoding="utf-8")
-        return path
+        return _write_model(Path(directory) / ID_FILE_NAME, self.to_dict())
 
     @classmethod
     def load(cls, directory: str | os.PathLike, robot: Robot) -> "LearnedID":
@@ -613,34 +624,15 @@ class LearnedID:
             v.fail("format", f"must be {_ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
         inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
         residual = v.boolean(data["residual"], "residual")
-        if data["robot_params_sha256"] != robot_hash(robot):
-            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other "
-                                          f"parameters than {robot.name!r} ({robot.source}): "
-                                          f"retrain it for this robot")
-        n = v.integer(data["n_joints"], "n_joints", lo=1, hi=64)
-        if n != robot.n:
-            v.fail("n_joints", f"must be {robot.n} for {robot.name}, got {n}")
-        d = _id_width(inputs, n)
+        d = _id_width(inputs, robot.n)
+        n, options, joint_options, fitted, seconds = _read_joint_models(
+            v, data, robot, source, [d] * robot.n, f"input set {inputs!r}")
         lo = v.array(data["input_lo"], "input_lo", (n, d))
         span = v.array(data["input_span"], "input_span", (n, d))
         if (span <= 0).any():
             v.fail("input_span", "must hold positive numbers")
-        option_names = dict.fromkeys(ANFIS._param_names(), False)
-        options = v.mapping(data["anfis_options"], "anfis_options", option_names)
-        joint_options = data["joint_options"]
-        if joint_options is not None:
-            joint_options = [v.mapping(o, f"joint_options[{j}]", option_names) for j, o in
-                             enumerate(v.sequence(joint_options, "joint_options", min_len=n,
-                                                  max_len=n))]
-        models = v.sequence(data["models"], "models", min_len=n, max_len=n)
-        fitted = [ANFIS.from_dict(m, f"{source}: models[{j}]") for j, m in enumerate(models)]
-        for j, m in enumerate(fitted):
-            if m.n_features_in_ != d:
-                v.fail(f"models[{j}]", f"must take the {d} inputs of input set {inputs!r}, "
-                                       f"takes {m.n_features_in_}")
-        seconds = v.array(data["fit_seconds"], "fit_seconds", (n,))
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options, **options)
-        model.models_, model.fit_seconds_ = fitted, seconds.tolist()
+        model.models_, model.fit_seconds_ = fitted, seconds
         model.input_lo_, model.input_span_ = list(lo), list(span)
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
