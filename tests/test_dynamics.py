@@ -12,7 +12,8 @@ from conftest import random_chains
 import dataclasses
 import math
 
-from nfarm.dynamics import coriolis, gravity_torques, joint_drive_torques, mass_matrix, rnea
+from nfarm.dynamics import (coriolis, gravity_torques, inertial_parameters, joint_drive_torques,
+                            mass_matrix, regressor, rnea)
 from nfarm.kinematics import jacobian
 from nfarm.pinocchio_ref import pinocchio_model
 from nfarm.reading import ParamsError
@@ -200,3 +201,45 @@ def test_drive_fields_load_validate_and_keep_old_hashes(intelbot5):
         bad["joints"][2][key] = value
         with pytest.raises(ParamsError, match=rf"joints\[2\]\.{key}: .*{rule}"):
             robot_from_dict(bad, source="x.yaml")
+
+
+# -- the dynamic regressor ---------------------------------------------------------------------
+
+#: Pinocchio orders a link's inertia Ixx, Ixy, Iyy, Ixz, Iyz, Izz; nfarm Ixx, Ixy, Ixz, Iyy, Iyz, Izz.
+_PIN_ORDER = np.array([0, 1, 2, 3, 4, 5, 7, 6, 8, 9])
+
+
+def check_regressor(robot, seed):
+    P = pinocchio_model(robot)
+    q, qd, qdd = states(robot, 8, seed)
+    Y = regressor(robot, q, qd, qdd)
+    perm = np.concatenate([10 * k + _PIN_ORDER for k in range(robot.n)])
+    expected = np.array([pin.computeJointTorqueRegressor(P.model, P.data, *x)
+                         .reshape(robot.n, -1)[:, perm] for x in zip(q, qd, qdd)])
+    assert_close(Y, expected)
+    assert_close(Y @ inertial_parameters(robot), rnea(robot, q, qd, qdd))
+
+
+def test_regressor_matches_pinocchio(robot):
+    check_regressor(robot, seed=3)
+
+
+@given(random_chains(), st.integers(0, 2**32 - 1))
+def test_random_chains_regressor_matches_pinocchio(robot, seed):
+    check_regressor(robot, seed)
+
+
+def test_regressor_is_linear_in_any_masses(intelbot5):
+    """The same regressor gives the torques of the arm with other masses, centres and
+    inertias (the geometry alone decides Y), and has the batch shapes of rnea."""
+    rng = np.random.default_rng(4)
+    n = intelbot5.n
+    A = rng.normal(size=(n, 3, 3)) * 0.01
+    other = dataclasses.replace(intelbot5, mass=rng.uniform(0.1, 2.0, n),
+                                com=rng.normal(size=(n, 3)) * 0.05,
+                                inertia=A @ np.swapaxes(A, 1, 2) + 1e-4 * np.eye(3))
+    q, qd, qdd = states(intelbot5, 6, 5)
+    Y = regressor(intelbot5, q.reshape(2, 3, n), qd.reshape(2, 3, n), qdd.reshape(2, 3, n))
+    assert Y.shape == (2, 3, n, 10 * n)
+    assert_close(Y @ inertial_parameters(other), rnea(other, q, qd, qdd).reshape(2, 3, n))
+    assert regressor(intelbot5, q[0], qd[0], qdd[0]).shape == (n, 10 * n)

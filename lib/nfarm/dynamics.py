@@ -37,7 +37,8 @@ from .kinematics import cos_sin, snap_right_angles
 from .robot import Robot, joint_array
 from .urdf import joint_placements
 
-__all__ = ["rnea", "joint_drive_torques", "gravity_torques", "mass_matrix", "coriolis", "CHUNK"]
+__all__ = ["rnea", "joint_drive_torques", "gravity_torques", "mass_matrix", "coriolis", "regressor",
+           "inertial_parameters", "INERTIAL_NAMES", "CHUNK"]
 
 #: Samples per chunk (keeps the working set in cache).
 CHUNK = 32768
@@ -279,3 +280,102 @@ def mass_matrix(robot: Robot, q) -> np.ndarray:
     q = np.broadcast_to(a["q"][..., None, :], (*batch, n, n))   # one copy of q per column
     columns = rnea(robot, q, np.zeros(n), np.eye(n), gravity=np.zeros(3))   # (..., j, i)
     return np.swapaxes(columns, -1, -2)
+
+
+# --------------------------------------------------------------------------------------------
+# The dynamic regressor: torques linear in the inertial parameters
+
+#: Names of one link's inertial parameters in :func:`regressor`'s column order (about the
+#: origin of the link's joint frame F_k, in its axes).
+INERTIAL_NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz")
+
+_UNIT_INERTIAS = np.zeros((6, 3, 3))
+for _k, (_r, _c) in enumerate([(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]):
+    _UNIT_INERTIAS[_k, _r, _c] = _UNIT_INERTIAS[_k, _c, _r] = 1.0
+
+
+def inertial_parameters(robot: Robot) -> np.ndarray:
+    """``π (10 n,)``: per link, in the order of :data:`INERTIAL_NAMES`, its mass [kg], first
+    moment ``m c`` [kg m] and inertia about the joint frame's origin
+    ``I_o = I_c + m (|c|² 1 − c cᵀ)`` [kg m²] (parallel axes), in the joint frame F_k of
+    :func:`rnea`, so that ``rnea(robot, q, q̇, q̈) = regressor(robot, q, q̇, q̈) @ π``."""
+    L = _links(robot)
+    out = []
+    for k in range(robot.n):
+        m = L.m[k]
+        c = np.array([0.0 if x is None else x for x in L.c[k]])
+        I = np.array(L.I[k], dtype=float) + m * (c @ c * np.eye(3) - np.outer(c, c))
+        out.append([m, *(m * c), I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2]])
+    return np.array(out).ravel()
+
+
+def _dense(v, N: int) -> np.ndarray:
+    return np.stack([np.broadcast_to(0.0 if x is None else x, (N,)) for x in v])
+
+
+def regressor(robot: Robot, q, qd, qdd, *, gravity=None) -> np.ndarray:
+    """The rigid-body dynamic regressor ``Y (..., n, 10 n)``: ``τ = Y(q, q̇, q̈) π`` with the
+    inertial parameters ``π`` of :func:`inertial_parameters` (Atkeson, An & Hollerbach 1986).
+
+    Newton–Euler is linear in each link's mass ``m``, first moment ``h = m c`` and inertia
+    about its frame origin ``I_o``: link k's wrench about the origin of F_k is
+    ``f = m a + ω̇ × h + ω × (ω × h)``, ``n = I_o ω̇ + ω × (I_o ω) + h × a``, with ``a, ω, ω̇``
+    of :func:`rnea`'s outward pass (gravity in ``a``). Column (k, p) is that wrench for the
+    unit parameter p of link k alone, carried inward to each joint i ≤ k
+    (``f ← ᶦR f``, ``n ← ᶦR n + p × ᶦR f``) and projected on its axis; columns of links beyond
+    joint i are zero in row i. Armature and friction are not in it.
+
+    It tells what the torques can depend on for a known geometry and unknown masses: chapter
+    06 feeds each joint's row to ANFIS (``LearnedID(inputs="regressor")``).
+    """
+    batch, a = _check(robot, q=q, qd=qd, qdd=qdd)
+    g = robot.gravity if gravity is None else np.asarray(gravity, dtype=float)
+    if g.shape != (3,) or not np.isfinite(g).all():
+        raise ValueError(f"gravity must be 3 finite numbers, got {g!r}")
+    n = robot.n
+    q, qd, qdd = (np.ascontiguousarray(np.broadcast_to(a[k], (*batch, n)).reshape(-1, n).T)
+                  for k in ("q", "qd", "qdd"))
+    N = q.shape[1]
+    L = _links(robot)
+    c, s = cos_sin(q)
+    Y = np.zeros((n, 10 * n, N))
+    # Outward: each link's frame motion, then the wrench columns of its parameters.
+    w, dw, acc = [None] * 3, [None] * 3, _const(-g)
+    own = []
+    for i in range(n):
+        p, RT = L.p[i], L.RT[i]
+        acc = _rz_T(c[i], s[i], _lin(RT, _plus(acc, _plus(_cross(dw, p), _cross(w, _cross(w, p))))))
+        w = _rz_T(c[i], s[i], _lin(RT, w))
+        dw = _rz_T(c[i], s[i], _lin(RT, dw))
+        dw = _plus(dw, [_mul2(w[1], qd[i]), _mul2(_mul(-1.0, w[0]), qd[i]), qdd[i]])
+        w = [w[0], w[1], _add(w[2], qd[i])]
+        A, W, DW = _dense(acc, N), _dense(w, N), _dense(dw, N)
+        f = np.zeros((3, 10, N))
+        m = np.zeros((3, 10, N))
+        f[:, 0] = A
+        for j in range(3):
+            e = np.zeros((3, 1))
+            e[j] = 1.0
+            f[:, 1 + j] = np.cross(DW, e, axis=0) + np.cross(W, np.cross(W, e, axis=0), axis=0)
+            m[:, 1 + j] = np.cross(e, A, axis=0)
+        for j, E in enumerate(_UNIT_INERTIAS):
+            m[:, 4 + j] = E @ DW + np.cross(W, E @ W, axis=0)
+        own.append((f, m))
+    # Inward: the columns of links i..n, about F_i's origin, in its axes.
+    f_acc = m_acc = None
+    for i in reversed(range(n)):
+        if f_acc is not None:
+            R = np.asarray(L.R[i + 1], dtype=float)
+            ci, si = c[i + 1], s[i + 1]
+            f_acc = np.einsum("ij,jkN->ikN", R, np.stack(
+                [ci * f_acc[0] - si * f_acc[1], si * f_acc[0] + ci * f_acc[1], f_acc[2]]))
+            m_acc = np.einsum("ij,jkN->ikN", R, np.stack(
+                [ci * m_acc[0] - si * m_acc[1], si * m_acc[0] + ci * m_acc[1], m_acc[2]]))
+            p = np.array([0.0 if x is None else x for x in L.p[i + 1]])[:, None, None]
+            m_acc = m_acc + np.cross(np.broadcast_to(p, f_acc.shape), f_acc, axis=0)
+            f_acc = np.concatenate([own[i][0], f_acc], axis=1)
+            m_acc = np.concatenate([own[i][1], m_acc], axis=1)
+        else:
+            f_acc, m_acc = own[i]
+        Y[i, 10 * i:] = m_acc[2]
+    return np.moveaxis(Y, -1, 0).reshape(*batch, n, 10 * n)

@@ -44,6 +44,7 @@ validated like a parameter file (:mod:`nfarm.reading`).
 from __future__ import annotations
 
 import hashlib
+import functools
 import json
 import math
 import os
@@ -56,7 +57,7 @@ import numpy as np
 
 from . import __version__
 from .anfis import ANFIS
-from .dynamics import rnea
+from .dynamics import regressor, rnea
 from .ik import check_targets
 from .kinematics import fk
 from .paths import atomic_path
@@ -64,7 +65,7 @@ from .reading import ParamsError, Validator, json_ready, load_json, show
 from .robot import Robot, joint_array, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
-__all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "INPUT_SETS", "encode", "out_of_plane", "ik_errors", "fit_cached",
+__all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS", "encode", "out_of_plane", "ik_errors", "fit_cached",
            "fingerprint", "ENCODINGS", "ANGULAR", "FILE_NAME", "BASELINES"]
 
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
@@ -443,30 +444,63 @@ def _feature_names(encoding: str) -> list[str]:
 # Learned inverse dynamics
 
 #: Input sets of :class:`LearnedID`: what each joint's model sees of a state ``(q, q̇, q̈)``.
-INPUT_SETS = ("own", "all", "physics")
+INPUT_SETS = ("own", "all", "trig", "regressor")
 ID_FILE_NAME = "learned_id.json"
 _ID_FORMAT = "nfarm-learned-id-1"
 
 
-def id_features(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, inputs: str, joint: int
-                ) -> np.ndarray:
-    """The inputs ``(N, d)`` joint ``joint``'s model sees of states ``(N, n)`` each:
+def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, inputs: str
+                ) -> list[np.ndarray]:
+    """The inputs each joint's model sees of states ``q, qd, qdd (N, n)``: one ``(N, d_j)``
+    array per joint j.
 
-    * ``"own"`` — the joint's own ``q_i, q̇_i, q̈_i`` (3 inputs; the likely dissertation design);
+    * ``"own"`` — the joint's own ``q_j, q̇_j, q̈_j`` (3 inputs; the likely dissertation design);
     * ``"all"`` — every joint's ``q, q̇, q̈`` (3n);
-    * ``"physics"`` — ``sin q, cos q`` (what gravity and the Coriolis terms see of the angles:
+    * ``"trig"`` — ``sin q, cos q`` (what gravity and the Coriolis terms see of the angles:
       trigonometric, not linear), ``q̇``, ``q̈`` and ``q̇ ⊙ |q̇|`` (the sign-keeping square of the
-      centrifugal terms): 5n.
+      centrifugal terms): 5n;
+    * ``"regressor"`` — row j of the rigid-body regressor ``Y(q, q̇, q̈)``
+      (:func:`nfarm.dynamics.regressor`): the columns of links j..n that are not zero for
+      every state (:func:`regressor_columns`; for intelbot5 34, 38, 28, 17 and 8). The
+      geometry (DH parameters) is known, the masses are not: ``τ_j`` is linear in these
+      inputs, so one rule (least squares) can already be exact.
     """
     if inputs == "own":
-        return np.column_stack([q[:, joint], qd[:, joint], qdd[:, joint]])
+        return [np.column_stack([q[:, j], qd[:, j], qdd[:, j]]) for j in range(robot.n)]
     if inputs == "all":
-        return np.concatenate([q, qd, qdd], axis=1)
-    return np.concatenate([np.sin(q), np.cos(q), qd, qdd, qd * np.abs(qd)], axis=1)
+        X = np.concatenate([q, qd, qdd], axis=1)
+        return [X] * robot.n
+    if inputs == "trig":
+        X = np.concatenate([np.sin(q), np.cos(q), qd, qdd, qd * np.abs(qd)], axis=1)
+        return [X] * robot.n
+    Y = regressor(robot, q, qd, qdd)
+    return [np.ascontiguousarray(Y[:, j, cols]) for j, cols in enumerate(regressor_columns(robot))]
 
 
-def _id_width(inputs: str, n: int) -> int:
-    return {"own": 3, "all": 3 * n, "physics": 5 * n}[inputs]
+@functools.lru_cache(maxsize=16)
+def _regressor_columns(robot: Robot) -> tuple[tuple[int, ...], ...]:
+    rng = np.random.default_rng(0)
+    lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
+    q = lo + (hi - lo) * rng.random((256, robot.n))
+    Y = regressor(robot, q, rng.normal(size=q.shape), rng.normal(size=q.shape))
+    size = np.abs(Y).max(axis=0)                                           # (n, 10 n)
+    return tuple(tuple(int(k) for k in np.flatnonzero(row > 1e-9 * max(row.max(), 1e-300)))
+                 for row in size)
+
+
+def regressor_columns(robot: Robot) -> list[np.ndarray]:
+    """Per joint j, the columns of the regressor (:func:`nfarm.dynamics.regressor`) that
+    joint j's torque depends on: those not zero at any of 256 seeded random states (the
+    others are zero for every state — the parameters of links before j, and e.g. a link's
+    moments about axes its torque never sees)."""
+    return [np.array(cols, dtype=int) for cols in _regressor_columns(robot)]
+
+
+def _id_widths(inputs: str, robot: Robot) -> list[int]:
+    if inputs == "regressor":
+        return [len(cols) for cols in _regressor_columns(robot)]
+    n = robot.n
+    return [{"own": 3, "all": 3 * n, "trig": 5 * n}[inputs]] * n
 
 
 def _states(data: Mapping, robot: Robot, what: str, *, tau: bool = True) -> list[np.ndarray]:
@@ -517,8 +551,11 @@ class LearnedID:
         if not hasattr(self, "models_"):
             raise ValueError("this LearnedID is not fitted yet: call fit or load")
 
-    def _inputs(self, q, qd, qdd, j: int) -> np.ndarray:
-        return (id_features(q, qd, qdd, self.inputs, j) - self.input_lo_[j]) / self.input_span_[j]
+    def _inputs(self, q, qd, qdd) -> list[np.ndarray]:
+        """Each joint's inputs, scaled to [0, 1] over the training data."""
+        return [(X - lo) / span for X, lo, span in
+                zip(id_features(self.robot_, q, qd, qdd, self.inputs), self.input_lo_,
+                    self.input_span_)]
 
     def fit(self, robot: Robot, train: Mapping, val: Mapping | None = None) -> "LearnedID":
         """Train one ANFIS per joint on ``train`` (arrays ``q, qd, qdd, tau (N, n)``), keeping
@@ -533,28 +570,30 @@ class LearnedID:
             raise ValueError(f"residual must be True or False, got {self.residual!r}")
         n = robot.n
         options = _joint_anfis_options(self.anfis_options, self.joint_options, n,
-                                       [_id_width(self.inputs, n)] * n)
+                                       _id_widths(self.inputs, robot))
         q, qd, qdd, tau = _states(train, robot, "train")
         val_states = _states(val, robot, "val") if val is not None else None
         target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
         if val_states is not None:
             vq, vqd, vqdd, vtau = val_states
             val_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
+        self.__dict__.pop("models_", None)       # a failed refit leaves no half-fitted model
+        self.robot_ = robot
         self.input_lo_, self.input_span_ = [], []
-        self.models_, self.fit_seconds_ = [], []
-        for j in range(n):
-            X = id_features(q, qd, qdd, self.inputs, j)
+        for X in id_features(robot, q, qd, qdd, self.inputs):
             lo, span = X.min(axis=0), np.ptp(X, axis=0)
             self.input_lo_.append(lo)
-            self.input_span_.append(np.where(span > 0, span, 1.0))
-            Xv = self._inputs(vq, vqd, vqdd, j) if val_states is not None else None
+            self.input_span_.append(np.where(span > 0, span, 1.0))   # ANFIS refuses constants
+        X = self._inputs(q, qd, qdd)
+        Xv = self._inputs(vq, vqd, vqdd) if val_states is not None else [None] * n
+        models, seconds = [], []
+        for j in range(n):
             start = time.perf_counter()
-            model = ANFIS(**options[j]).fit(self._inputs(q, qd, qdd, j), target[:, j], Xv,
-                                             None if val_states is None else val_target[:, j])
-            self.fit_seconds_.append(time.perf_counter() - start)
-            self.models_.append(model)
+            models.append(ANFIS(**options[j]).fit(X[j], target[:, j], Xv[j],
+                                                  None if val_states is None else val_target[:, j]))
+            seconds.append(time.perf_counter() - start)
         self.robot_hash_, self.robot_name_, self.n_joints_ = robot_hash(robot), robot.name, n
-        self.robot_ = robot
+        self.models_, self.fit_seconds_ = models, seconds
         return self
 
     def predict(self, q, qd, qdd) -> np.ndarray:
@@ -580,8 +619,9 @@ class LearnedID:
         tau = np.empty((len(flat[0]), robot.n))
         for start in range(0, len(tau), _CHUNK):
             part = [a[start:start + _CHUNK] for a in flat]
+            X = self._inputs(*part)
             for j, model in enumerate(self.models_):
-                tau[start:start + _CHUNK, j] = model._predict_fast(self._inputs(*part, j))[0]
+                tau[start:start + _CHUNK, j] = model._predict_fast(X[j])[0]
         if self.residual:
             tau += rnea(robot, *flat)
         return tau.reshape(*batch, robot.n)
@@ -590,7 +630,8 @@ class LearnedID:
         self._check_fitted()
         what = "τ − rnea (residual)" if self.residual else "τ"
         head = (f"LearnedID for {self.robot_name_} ({self.n_joints_} joints), inputs "
-                f"{self.inputs!r} ({len(self.input_lo_[0])} per joint), learning {what}")
+                f"{self.inputs!r} ({', '.join(str(len(lo)) for lo in self.input_lo_)} per joint), "
+                f"learning {what}")
         return "\n".join([head] + _model_lines(self.models_, "N·m"))
 
     def to_dict(self) -> dict:
@@ -624,12 +665,15 @@ class LearnedID:
             v.fail("format", f"must be {_ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
         inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
         residual = v.boolean(data["residual"], "residual")
-        d = _id_width(inputs, robot.n)
+        widths = _id_widths(inputs, robot)
         n, options, joint_options, fitted, seconds = _read_joint_models(
-            v, data, robot, source, [d] * robot.n, f"input set {inputs!r}")
-        lo = v.array(data["input_lo"], "input_lo", (n, d))
-        span = v.array(data["input_span"], "input_span", (n, d))
-        if (span <= 0).any():
+            v, data, robot, source, widths, f"input set {inputs!r}")
+        lo = [v.array(x, f"input_lo[{j}]", (d,)) for j, (x, d) in
+              enumerate(zip(v.sequence(data["input_lo"], "input_lo", min_len=n, max_len=n), widths))]
+        span = [v.array(x, f"input_span[{j}]", (d,)) for j, (x, d) in
+                enumerate(zip(v.sequence(data["input_span"], "input_span", min_len=n, max_len=n),
+                              widths))]
+        if any((x <= 0).any() for x in span):
             v.fail("input_span", "must hold positive numbers")
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
@@ -733,27 +777,35 @@ def fingerprint(*arrays: np.ndarray) -> str:
     return digest.hexdigest()
 
 
-def fit_cached(model: LearnedIK, robot: Robot, train: Mapping, val: Mapping | None,
-               directory: str | os.PathLike) -> tuple[LearnedIK, str]:
-    """Fit ``model``, or load the one saved in ``directory`` if it was fitted with the same
-    options on the same data for the same robot by the same nfarm version.
+def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
+               directory: str | os.PathLike) -> tuple[Any, str]:
+    """Fit ``model`` (a :class:`LearnedIK` or :class:`LearnedID`), or load the one saved in
+    ``directory`` if it was fitted with the same options on the same data for the same robot
+    by the same nfarm version.
 
-    The inputs' hash (options, the data's :func:`fingerprint`, the robot's hash, the model
-    format and the nfarm version) is stored beside the model as ``inputs.sha256``; a model
-    whose stored hash differs is retrained and replaced (atomically). Returns the model and
-    ``"made"`` or ``"reused"``.
+    The inputs' hash (the model's class and options, the data's :func:`fingerprint`, the
+    robot's hash, the model format and the nfarm version) is stored beside the model as
+    ``inputs.sha256``; a model whose stored hash differs is retrained and replaced
+    (atomically). Returns the model and ``"made"`` or ``"reused"``.
     """
     directory = Path(directory)
-    T, q = _pairs(train, robot, "train")
-    parts = [json.dumps(json_ready(model.get_params()), sort_keys=True), fingerprint(T, q),
-             robot_hash(robot), _FORMAT, __version__]
+    if isinstance(model, LearnedIK):
+        cls, name, form = LearnedIK, FILE_NAME, _FORMAT
+        arrays = lambda data, what: _pairs(data, robot, what)          # noqa: E731
+    elif isinstance(model, LearnedID):
+        cls, name, form = LearnedID, ID_FILE_NAME, _ID_FORMAT
+        arrays = lambda data, what: _states(data, robot, what)         # noqa: E731
+    else:
+        raise TypeError(f"model must be a LearnedIK or a LearnedID, got {type(model).__name__}")
+    parts = [cls.__name__, json.dumps(json_ready(model.get_params()), sort_keys=True),
+             fingerprint(*arrays(train, "train")), robot_hash(robot), form, __version__]
     if val is not None:
-        parts.append(fingerprint(*_pairs(val, robot, "val")))
+        parts.append(fingerprint(*arrays(val, "val")))
     key = hashlib.sha256("\n".join(parts).encode()).hexdigest()
     stamp = directory / "inputs.sha256"
-    if stamp.is_file() and (directory / FILE_NAME).is_file() and \
+    if stamp.is_file() and (directory / name).is_file() and \
             stamp.read_text(encoding="utf-8").strip() == key:
-        return LearnedIK.load(directory, robot), "reused"
+        return cls.load(directory, robot), "reused"
     model.fit(robot, train, val)
     stamp.unlink(missing_ok=True)          # a model without its stamp is never reused
     model.save(directory)
