@@ -93,6 +93,12 @@ def test_stored_data_obey_the_models(built):
         assert ((idd["q"] >= study.robot.qlim[:, 0]) & (idd["q"] <= study.robot.qlim[:, 1])).all()
         assert (np.abs(idd["qd"]) <= study.id.max_velocity).all()
         assert (np.abs(idd["qdd"]) <= study.id.max_acceleration).all()
+        # The "measured" torques: rigid body + the study's drives + noise of the stated size.
+        noise = idd["tau_measured"] - rnea(study.id.measured, idd["q"], idd["qd"], idd["qdd"],
+                                           drive=True)
+        assert noise.shape == idd["tau"].shape
+        np.testing.assert_allclose(noise.std(axis=0), study.id.noise, rtol=0.2)
+        assert np.abs(noise.mean(axis=0)).max() < 4 * study.id.noise.max() / np.sqrt(len(noise))
         full = load(out / f"ik_full_{split}.npz", study.robot, study)
         assert not study.ik_region.contains(full["q"]).all(), "the full range is wider"
 
@@ -255,6 +261,11 @@ def bad(path, value):
     (("id", "max_velocity_deg_s"), [1, 2, 3], r"id.max_velocity_deg_s: must be a list of 5 items, got 3"),
     (("id", "max_acceleration_deg_s2"), -5, r"id.max_acceleration_deg_s2: must be > 0, got -5.0"),
     (("id", "trajectories", "val"), 2.5, r"id.trajectories.val: must be a whole number"),
+    (("id", "measured", "viscous"), -0.1, r"id.measured.viscous: must be >= 0, got -0.1"),
+    (("id", "measured", "coulomb"), [0.1] * 4, r"id.measured.coulomb: must be a list of 5 items"),
+    (("id", "measured", "coulomb_velocity_deg_s"), 0, r"id.measured.coulomb_velocity_deg_s: must be > 0"),
+    (("id", "measured", "noise_nm"), KeyError, r"id.measured.noise_nm: required field is missing"),
+    (("id", "measured", "armature_kg"), 1, r"id.measured.armature_kg: unknown field"),
 ])
 def test_every_study_rule_has_a_bad_file(tmp_path, path, value, message):
     file = tmp_path / "bad.yaml"

@@ -17,7 +17,11 @@ PCHIP does) and whose via accelerations are zero. Each segment gets a random dur
 the time its largest move needs from rest to rest within the bounds; the trajectory is then
 slowed down uniformly until its velocities and accelerations are within the study's bounds
 (time scaling by ``s`` divides velocities by ``s`` and accelerations by ``s²``). Torques are
-``rnea(q, qd, qdd)``. Splits are by whole trajectories.
+``rnea(q, qd, qdd)`` of the rigid-body model. With a ``measured`` arm in the study, the files
+also hold ``tau_measured``: what a real arm's joint sensors would record on the same
+trajectories — the rigid-body torques plus the joint drives' armature and friction
+(:func:`nfarm.dynamics.joint_drive_torques`) plus Gaussian sensor noise. Splits are by whole
+trajectories.
 
 **Files** (:func:`build_datasets`, ``python -m nfarm datasets STUDY``):
 ``build/datasets/<robot>/{ik,ik_full,id}_{train,val,test}.npz`` of plain arrays (``np.load(...,
@@ -33,6 +37,7 @@ Every random draw comes from the study's ``seed``, through one named stream per 
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import io
 import json
@@ -49,7 +54,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from . import __version__
-from .dynamics import rnea
+from .dynamics import joint_drive_torques, rnea
 from .ik import solve
 from .kinematics import fk
 from .paths import BUILD, atomic_path, project_path
@@ -64,7 +69,7 @@ __all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "lo
 #: Version of the generating code: bump when the same inputs would give different data.
 DATA_VERSION = 3
 SPLITS = ("train", "val", "test")
-_STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5}
+_STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5, "id_noise": 6}
 _SPLIT_STREAM = {"train": 0, "val": 1, "test": 2}
 
 
@@ -306,6 +311,9 @@ class IDSettings:
 
     Attributes:
         trajectories: trajectories per split.
+        measured: the "real" arm of ``tau_measured`` — the robot with the study's joint
+            drives (viscous and Coulomb friction, armature) — or ``None``.
+        noise: ``(n,)`` standard deviation of the torque sensors' noise [N·m].
         via_points: via points per trajectory (the first is the start).
         segment_time: ``(lo, hi)`` nominal duration of each segment [s], drawn uniformly.
         dt: sampling step [s].
@@ -320,6 +328,8 @@ class IDSettings:
     margin: float
     max_velocity: np.ndarray
     max_acceleration: np.ndarray
+    measured: Robot | None = None
+    noise: np.ndarray | None = None
 
 
 def _quintic(p0, v0, p1, v1, T, s):
@@ -445,7 +455,10 @@ _APPROACH = {"axis": True, "max_angle_deg": True}
 _SIZES = dict.fromkeys(SPLITS, True)
 _CHECK = {"targets": True, "starts": True}
 _ID = {"trajectories": True, "via_points": True, "segment_time_s": True, "dt_s": True,
-       "margin_deg": False, "max_velocity_deg_s": True, "max_acceleration_deg_s2": True}
+       "margin_deg": False, "max_velocity_deg_s": True, "max_acceleration_deg_s2": True,
+       "measured": False}
+_MEASURED = {"viscous": True, "coulomb": True, "coulomb_velocity_deg_s": True, "armature": True,
+             "noise_nm": True}
 
 
 def load_study(path: str | os.PathLike) -> Study:
@@ -465,13 +478,14 @@ def _bounds(v: Validator, value: Any, at: str, *, positive: bool = False) -> tup
     return out
 
 
-def _per_joint(v: Validator, value: Any, at: str, n: int) -> np.ndarray:
+def _per_joint(v: Validator, value: Any, at: str, n: int, *, zero: bool = False) -> np.ndarray:
+    """One number for every joint, or one per joint; > 0 (``>= 0`` with ``zero``)."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        values = [v.number(value, at, lo=0.0, lo_open=True)] * n
+        values = [v.number(value, at, lo=0.0, lo_open=not zero)] * n
     else:
-        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=True)
+        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=not zero)
                   for k, x in enumerate(v.sequence(value, at, min_len=n, max_len=n))]
-    return np.array(values)
+    return np.array(values, dtype=float)
 
 
 def study_from_dict(data: Any, source: str = "<dict>") -> Study:
@@ -552,13 +566,22 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
                                 f"({math.degrees(narrowest):.6g} deg), got {math.degrees(margin):.6g}")
     vmax = np.radians(_per_joint(v, idd["max_velocity_deg_s"], "id.max_velocity_deg_s", n))
     amax = np.radians(_per_joint(v, idd["max_acceleration_deg_s2"], "id.max_acceleration_deg_s2", n))
+    measured = noise = None
+    if idd.get("measured") is not None:
+        m = v.mapping(idd["measured"], "id.measured", _MEASURED)
+        drives = {key: _per_joint(v, m[key], f"id.measured.{key}", n, zero=True)
+                  for key in ("viscous", "coulomb", "armature")}
+        drives["coulomb_velocity"] = np.radians(_per_joint(
+            v, m["coulomb_velocity_deg_s"], "id.measured.coulomb_velocity_deg_s", n))
+        measured = dataclasses.replace(robot, **drives)
+        noise = _per_joint(v, m["noise_nm"], "id.measured.noise_nm", n, zero=True)
 
     return Study(
         source=source, name=name, robot_file=robot_file, robot=robot, seed=seed,
         ik_region=IKRegion(robot, box, radial, height, axis, angle, reach), ik_sampler=sampler,
         ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
         check_starts=check_starts,
-        id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax),
+        id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax, measured, noise),
         params=json.loads(json.dumps(data)))
 
 
@@ -715,6 +738,12 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
                 data = random_trajectories(study.robot, study.id, study.id.trajectories[split],
                                            np.random.SeedSequence(seed))
                 data["tau"] = rnea(study.robot, data["q"], data["qd"], data["qdd"])
+                if study.id.measured is not None:
+                    noise = np.random.default_rng(np.random.SeedSequence(
+                        [study.seed, _STREAMS["id_noise"], _SPLIT_STREAM[split]]))
+                    data["tau_measured"] = data["tau"] + \
+                        joint_drive_torques(study.id.measured, data["qd"], data["qdd"]) + \
+                        study.id.noise * noise.standard_normal(data["tau"].shape)
             else:
                 region = study.ik_region if kind == "ik" else IKRegion.full(study.robot)
                 data = ik_samples(region, study.ik_sizes[split], np.random.SeedSequence(seed),
