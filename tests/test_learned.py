@@ -391,3 +391,34 @@ def test_id_fit_refuses_bad_input_before_any_work(id_data, kwargs, change, messa
     train = id_data["train"] if change is None else change(id_data["train"])
     with pytest.raises(ValueError, match=message):
         LearnedID(**kwargs).fit(ROBOT, train)
+
+
+# -- the model cache ---------------------------------------------------------------------------
+
+from nfarm.learned import fit_cached  # noqa: E402
+
+
+@pytest.mark.parametrize("kind", ["ik", "id"])
+def test_fit_cached_reuses_only_what_was_fitted_on_the_same_inputs(kind, data, id_data, tmp_path):
+    """Made, then reused with bit-identical predictions; other options, other data or a
+    damaged stamp retrain; a model of the other kind never answers for this one."""
+    if kind == "ik":
+        make = lambda **o: LearnedIK(**{**SMALL, "epochs": 2, **o})                    # noqa: E731
+        train, val, other = data["train"], data["val"], {k: v[:-5] for k, v in data["train"].items()}
+        inputs = (data["test"]["T"],)
+    else:
+        make = lambda **o: LearnedID(inputs="own", n_mfs=2, epochs=2, **o)              # noqa: E731
+        train, val, other = id_data["train"], id_data["val"], {k: v[:-5] for k, v in id_data["train"].items()}
+        inputs = tuple(id_data["test"][k] for k in ("q", "qd", "qdd"))
+    model, how = fit_cached(make(), ROBOT, train, val, tmp_path)
+    assert how == "made" and (tmp_path / "inputs.sha256").is_file()
+    again, how = fit_cached(make(), ROBOT, train, val, tmp_path)
+    assert how == "reused"
+    np.testing.assert_array_equal(again.predict(*inputs), model.predict(*inputs))
+    assert fit_cached(make(mf="gauss"), ROBOT, train, val, tmp_path)[1] == "made"
+    assert fit_cached(make(mf="gauss"), ROBOT, other, val, tmp_path)[1] == "made"
+    (tmp_path / "inputs.sha256").write_text("0" * 64 + "\n")
+    assert fit_cached(make(mf="gauss"), ROBOT, other, val, tmp_path)[1] == "made"
+    assert fit_cached(make(mf="gauss"), ROBOT, other, val, tmp_path)[1] == "reused"
+    with pytest.raises(TypeError, match="must be a LearnedIK or a LearnedID"):
+        fit_cached(object(), ROBOT, train, val, tmp_path)

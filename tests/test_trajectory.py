@@ -14,7 +14,7 @@ import pytest
 from nfarm.dynamics import rnea
 from nfarm.kinematics import fk
 from nfarm.ik import solve
-from nfarm.recording import record_ik_paths, record_trajectory
+from nfarm.recording import record_id_trajectory, record_ik_paths, record_trajectory
 from nfarm.trajectory import (TrajectoryLimitWarning, arm_plane_poses, cubic, line_path, quintic,
                               time_grid, via_points)
 
@@ -154,6 +154,29 @@ def test_ik_path_recording_holds_both_arms_and_their_errors(intelbot5, tmp_path)
     assert list(tmp_path.iterdir()) == [path]
     with pytest.raises(ValueError, match=r"solutions\['off'\] must have shape \(21, 5\)"):
         record_ik_paths(intelbot5, t, fk(intelbot5, q), {"off": off[:3]}, tmp_path / "x.rrd")
+    assert not (tmp_path / "x.rrd").exists()
+
+
+def test_id_recording_holds_the_arm_and_every_torque_series(intelbot5, tmp_path):
+    """The arm's motion and, per joint and label, one torque time series at every step; bad
+    shapes are refused before a file is made."""
+    t = np.linspace(0.0, 2.0, 21)
+    q = np.linspace(np.zeros(5), np.radians([30, 20, -20, 10, 40]), len(t))
+    tau = np.sin(t)[:, None] * np.arange(1, 6)
+    path = record_id_trajectory(intelbot5, t, q, {"true": tau, "anfis": tau + 0.01},
+                                tmp_path / "id.rrd", seed=2)
+    subprocess.run([sys.executable, "-m", "rerun", "rrd", "verify", str(path)], check=True,
+                   capture_output=True)
+    rows = chunk_rows(path)
+    for joint in intelbot5.joint_names:
+        assert rows[f"/transforms/{joint}"] == len(t)
+        assert rows[f"/tau/{joint}/true"] == len(t) and rows[f"/tau/{joint}/anfis"] == len(t)
+    assert rows["/tool_path"] == len(t)
+    assert list(tmp_path.iterdir()) == [path]
+    with pytest.raises(ValueError, match=r"torques\['anfis'\] must have shape \(21, 5\)"):
+        record_id_trajectory(intelbot5, t, q, {"anfis": tau[:, :4]}, tmp_path / "x.rrd")
+    with pytest.raises(ValueError, match=r"at least one"):
+        record_id_trajectory(intelbot5, t, q, {}, tmp_path / "x.rrd")
     assert not (tmp_path / "x.rrd").exists()
 
 

@@ -309,6 +309,11 @@ def inertial_parameters(robot: Robot) -> np.ndarray:
     return np.array(out).ravel()
 
 
+def _cross0(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` over the first axis (length 3) of broadcasting arrays."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def _dense(v, N: int) -> np.ndarray:
     return np.stack([np.broadcast_to(0.0 if x is None else x, (N,)) for x in v])
 
@@ -337,6 +342,20 @@ def regressor(robot: Robot, q, qd, qdd, *, gravity=None) -> np.ndarray:
                   for k in ("q", "qd", "qdd"))
     N = q.shape[1]
     L = _links(robot)
+    Y = np.empty((N, n, 10 * n))
+    for start in range(0, N, _REGRESSOR_CHUNK):
+        sl = slice(start, min(start + _REGRESSOR_CHUNK, N))
+        Y[sl] = np.moveaxis(_regressor_T(L, q[:, sl], qd[:, sl], qdd[:, sl], g), -1, 0)
+    return Y.reshape(*batch, n, 10 * n)
+
+
+#: Samples per chunk of :func:`regressor` (its (n, 10 n) columns per sample stay in cache).
+_REGRESSOR_CHUNK = 2048
+
+
+def _regressor_T(L: _Links, q, qd, qdd, g) -> np.ndarray:
+    """The regressor's recursion on ``(n, N)`` inputs; returns ``Y (n, 10 n, N)``."""
+    n, N = q.shape
     c, s = cos_sin(q)
     Y = np.zeros((n, 10 * n, N))
     # Outward: each link's frame motion, then the wrench columns of its parameters.
@@ -356,10 +375,10 @@ def regressor(robot: Robot, q, qd, qdd, *, gravity=None) -> np.ndarray:
         for j in range(3):
             e = np.zeros((3, 1))
             e[j] = 1.0
-            f[:, 1 + j] = np.cross(DW, e, axis=0) + np.cross(W, np.cross(W, e, axis=0), axis=0)
-            m[:, 1 + j] = np.cross(e, A, axis=0)
+            f[:, 1 + j] = _cross0(DW, e) + _cross0(W, _cross0(W, e))
+            m[:, 1 + j] = _cross0(e, A)
         for j, E in enumerate(_UNIT_INERTIAS):
-            m[:, 4 + j] = E @ DW + np.cross(W, E @ W, axis=0)
+            m[:, 4 + j] = E @ DW + _cross0(W, E @ W)
         own.append((f, m))
     # Inward: the columns of links i..n, about F_i's origin, in its axes.
     f_acc = m_acc = None
@@ -372,10 +391,10 @@ def regressor(robot: Robot, q, qd, qdd, *, gravity=None) -> np.ndarray:
             m_acc = np.einsum("ij,jkN->ikN", R, np.stack(
                 [ci * m_acc[0] - si * m_acc[1], si * m_acc[0] + ci * m_acc[1], m_acc[2]]))
             p = np.array([0.0 if x is None else x for x in L.p[i + 1]])[:, None, None]
-            m_acc = m_acc + np.cross(np.broadcast_to(p, f_acc.shape), f_acc, axis=0)
+            m_acc = m_acc + _cross0(p, f_acc)
             f_acc = np.concatenate([own[i][0], f_acc], axis=1)
             m_acc = np.concatenate([own[i][1], m_acc], axis=1)
         else:
             f_acc, m_acc = own[i]
         Y[i, 10 * i:] = m_acc[2]
-    return np.moveaxis(Y, -1, 0).reshape(*batch, n, 10 * n)
+    return Y

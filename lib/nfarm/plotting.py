@@ -12,6 +12,7 @@ import os
 from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
+import matplotlib.ticker as mticker
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -426,4 +427,8 @@ def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label:
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].set_ylabel(label)
     axes[0, 0].legend(fontsize=8)
+    lo, hi = axes[0, 0].get_ylim()
+    if hi / lo < 30:     # less than about a decade and a half: label the minor ticks too
+        for which in (axes[0, 0].yaxis.set_major_formatter, axes[0, 0].yaxis.set_minor_formatter):
+            which(mticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
     return fig

@@ -9,6 +9,8 @@ torques on the right.
 :func:`record_ik_paths` shows
 several arms (copies of one robot, told apart by colour and name prefix) following one
 Cartesian path with different IK solutions, with their tool errors over time.
+:func:`record_id_trajectory` shows one arm moving along a joint trajectory and, per joint, the
+true torque beside the predictions of several models, as time series.
 Nothing is displayed: open the file with the pinned viewer, ``.venv/bin/rerun FILE.rrd``.
 The recording id comes from the name and the seed, so the same inputs give the same recording
 (the file itself also stores when it was written).
@@ -32,7 +34,7 @@ from .robot import Robot
 from .trajectory import Trajectory
 from .urdf import to_urdf
 
-__all__ = ["record_trajectory", "record_ik_paths", "TIMELINE"]
+__all__ = ["record_trajectory", "record_ik_paths", "record_id_trajectory", "TIMELINE"]
 
 #: The timeline every recording uses (seconds of trajectory time).
 TIMELINE = "time"
@@ -150,6 +152,52 @@ def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
             rec.send_columns(f"orientation_error_deg/{label}", indexes=times, columns=rr.Scalars.columns(
                 scalars=np.degrees(np.linalg.norm(twist[:, 3:], axis=1))))
             _log_growing_path(rec, f"{label}_tool_path", t, T_q[:, :3, 3], path_rgb)
+        rec.flush()
+        rec.disconnect()
+    return path
+
+
+def record_id_trajectory(robot: Robot, t: np.ndarray, q: np.ndarray,
+                         torques: dict[str, np.ndarray], path: str | os.PathLike, *,
+                         name: str = "id_trajectory", seed: int = 0) -> Path:
+    """Write a joint trajectory of ``robot`` and labelled torques along it to the rerun file
+    ``path`` (atomically); return it.
+
+    Args:
+        t: ``(K,)`` time [s]; ``q (K, n)`` joint angles [rad].
+        torques: label → ``tau (K, n)`` [N·m], e.g. ``{"true": …, "anfis": …}`` (labels are
+            entity-path names; at least one).
+
+    Entities: the arm (``/{robot.name}``, ``/transforms/{joint}``), ``/tool_path``, and
+    ``/tau/{joint}/{label}`` — one plot per joint in the blueprint, all labels in it, so that
+    prediction and truth lie on top of each other.
+    """
+    t = np.asarray(t, dtype=float)
+    q = np.asarray(q, dtype=float)
+    if t.ndim != 1 or q.shape != (len(t), robot.n):
+        raise ValueError(f"q must have shape ({len(t)}, {robot.n}) (one row per time), got {q.shape}")
+    if not torques:
+        raise ValueError("torques must hold at least one labelled torque series")
+    for label, tau in torques.items():
+        if np.shape(tau) != q.shape:
+            raise ValueError(f"torques[{label!r}] must have shape {q.shape}, got {np.shape(tau)}")
+    path = Path(path)
+    blueprint = rrb.Blueprint(rrb.Horizontal(
+        rrb.Spatial3DView(origin="/", name=f"{robot.name}: a held-out trajectory"),
+        rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/tau/{joint}", name=f"{joint} torque [N·m]")
+                       for joint in robot.joint_names)),
+        column_shares=[3, 2]), collapse_panels=True)
+    rec = rr.RecordingStream(f"nfarm_{name}", recording_id=f"nfarm-{name}-{seed}")
+    with tempfile.TemporaryDirectory() as tmp, atomic_path(path) as out:
+        rec.save(out, default_blueprint=blueprint)
+        times = [rr.TimeColumn(TIMELINE, duration=t)]
+        _log_arm(rec, robot, q, times, Path(tmp))
+        for label, tau in torques.items():
+            tau = np.asarray(tau, dtype=float)
+            for j, joint in enumerate(robot.joint_names):
+                rec.send_columns(f"tau/{joint}/{label}", indexes=times,
+                                 columns=rr.Scalars.columns(scalars=tau[:, j]))
+        _log_growing_path(rec, "tool_path", t, fk(robot, q)[:, :3, 3], (230, 120, 30))
         rec.flush()
         rec.disconnect()
     return path
