@@ -327,11 +327,14 @@ def regressor(robot: Robot, q, qd, qdd, *, gravity=None) -> np.ndarray:
     ``f = m a + ω̇ × h + ω × (ω × h)``, ``n = I_o ω̇ + ω × (I_o ω) + h × a``, with ``a, ω, ω̇``
     of :func:`rnea`'s outward pass (gravity in ``a``). Column (k, p) is that wrench for the
     unit parameter p of link k alone, carried inward to each joint i ≤ k
-    (``f ← ᶦR f``, ``n ← ᶦR n + p × ᶦR f``) and projected on its axis; columns of links beyond
-    joint i are zero in row i. Armature and friction are not in it.
+    (``f ← ᶦR f``, ``n ← ᶦR n + p × ᶦR f``) and projected on its axis; the columns of links
+    before joint i are zero in row i. Armature and friction are not in it. Checked against
+    Pinocchio's ``computeJointTorqueRegressor`` (tests).
 
     It tells what the torques can depend on for a known geometry and unknown masses: chapter
-    06 feeds each joint's row to ANFIS (``LearnedID(inputs="regressor")``).
+    06 feeds each joint's row to ANFIS (``LearnedID(inputs="regressor")``). It carries 10 n
+    columns inward where :func:`rnea` carries one wrench, and costs about ten times as much per
+    sample (``make bench``); samples are processed in chunks that stay in cache.
     """
     batch, a = _check(robot, q=q, qd=qd, qdd=qdd)
     g = robot.gravity if gravity is None else np.asarray(gravity, dtype=float)

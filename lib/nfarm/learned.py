@@ -56,8 +56,8 @@ validated like a parameter file (:mod:`nfarm.reading`).
 
 from __future__ import annotations
 
-import hashlib
 import functools
+import hashlib
 import json
 import math
 import os
@@ -78,8 +78,9 @@ from .reading import ParamsError, Validator, json_ready, load_json, show
 from .robot import Robot, joint_array, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
-__all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS", "encode", "out_of_plane", "ik_errors", "fit_cached",
-           "fingerprint", "ENCODINGS", "ANGULAR", "FILE_NAME", "BASELINES"]
+__all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
+           "encode", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "ENCODINGS",
+           "ANGULAR", "FILE_NAME", "ID_FILE_NAME", "BASELINES"]
 
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
 #: Columns of each encoding that are angles [rad] (unwrapped about a centre).
