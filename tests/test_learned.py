@@ -422,3 +422,13 @@ def test_fit_cached_reuses_only_what_was_fitted_on_the_same_inputs(kind, data, i
     assert fit_cached(make(mf="gauss"), ROBOT, other, val, tmp_path)[1] == "reused"
     with pytest.raises(TypeError, match="must be a LearnedIK or a LearnedID"):
         fit_cached(object(), ROBOT, train, val, tmp_path)
+
+
+def test_fit_cached_does_not_reuse_a_model_trained_in_another_numerical_environment(
+        data, tmp_path, monkeypatch):
+    options = dict(SMALL, epochs=1)
+    monkeypatch.setenv("NPY_DISABLE_CPU_FEATURES", "X86_V4")
+    assert fit_cached(LearnedIK(**options), ROBOT, data["train"], None, tmp_path)[1] == "made"
+    assert fit_cached(LearnedIK(**options), ROBOT, data["train"], None, tmp_path)[1] == "reused"
+    monkeypatch.delenv("NPY_DISABLE_CPU_FEATURES")
+    assert fit_cached(LearnedIK(**options), ROBOT, data["train"], None, tmp_path)[1] == "made"
