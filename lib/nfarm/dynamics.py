@@ -3,7 +3,7 @@
 The recursion runs over the joints; every quantity is a component array with the samples
 last (``(3, N)`` for a vector), so one recursion step is a few dozen vector operations over
 the whole batch. Both DH conventions share one formulation: the chain is split at the joint
-rotations (:func:`nfarm.urdf.joint_placements`), so that joint i turns its *joint frame* F_i
+rotations (:func:`nfarm.kinematics.joint_placements`), so that joint i turns its *joint frame* F_i
 about its own z axis, F_i = F_{i−1} · P_i · Rz(q_i) with a constant placement
 ``P_i = (R_i, p_i)``. The inertial parameters of link i are moved once into F_i.
 
@@ -33,9 +33,8 @@ import functools
 
 import numpy as np
 
-from .kinematics import cos_sin, snap_right_angles
+from .kinematics import cos_sin, joint_placements, snap_right_angles
 from .robot import Robot, joint_array
-from .urdf import joint_placements
 
 __all__ = ["rnea", "joint_drive_torques", "gravity_torques", "mass_matrix", "coriolis", "regressor",
            "inertial_parameters", "INERTIAL_NAMES", "CHUNK"]

@@ -2,7 +2,7 @@
 
 Used by the tests, the benchmarks and the chapters to check nfarm's own algorithms against
 Pinocchio (Featherstone's spatial algebra, a different derivation from the DH recursions).
-The model is built with ``Model.addJoint`` from :func:`nfarm.urdf.joint_placements`, not from
+The model is built with ``Model.addJoint`` from :func:`nfarm.kinematics.joint_placements`, not from
 the URDF, so it also checks :func:`nfarm.urdf.to_urdf` (see the tests).
 
 Frames: ``dh_frame1``…``dh_framen`` (the DH link frames) and ``tool``.
@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from .robot import Robot
-from .urdf import joint_placements
+from .kinematics import joint_placements
 
 __all__ = ["PinocchioRobot", "pinocchio_model", "pinocchio_from_urdf"]
 

@@ -21,50 +21,11 @@ import re
 
 import numpy as np
 
+from .kinematics import joint_placements
 from .robot import Robot
 from .rotations import matrix_to_rpy
 
-__all__ = ["to_urdf", "joint_placements"]
-
-
-def _Rz(t: float) -> np.ndarray:
-    T = np.eye(4)
-    T[:2, :2] = [[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]
-    return T
-
-
-def _Rx(t: float) -> np.ndarray:
-    T = np.eye(4)
-    T[1:3, 1:3] = [[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]
-    return T
-
-
-def _Tr(x: float, y: float, z: float) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, 3] = x, y, z
-    return T
-
-
-def joint_placements(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Split the DH chain at the joint rotations.
-
-    Returns:
-        ``(J, B)``: ``J[i]`` is the 4×4 placement of joint i+1 in the frame of the body moved
-        by joint i (the base for i = 0); ``B[i]`` is the placement of DH frame i+1 in the body
-        moved by joint i+1. Then ``T_0k = J_0 Rz(q_1) B_0 · B_0⁻¹ J_1 Rz(q_2) B_1 ···``.
-    """
-    J, B = [], []
-    previous = np.eye(4)
-    for a, alpha, d, offset in zip(robot.a, robot.alpha, robot.d, robot.offset):
-        if robot.convention == "standard":
-            F = _Rz(offset) @ _Tr(0, 0, d) @ _Tr(a, 0, 0) @ _Rx(alpha)
-            J.append(previous)
-            B.append(F)
-            previous = F
-        else:
-            J.append(_Rx(alpha) @ _Tr(a, 0, 0) @ _Tr(0, 0, d) @ _Rz(offset))
-            B.append(np.eye(4))
-    return J, B
+__all__ = ["to_urdf"]
 
 
 def _f(x: float) -> str:
