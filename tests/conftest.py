@@ -78,7 +78,13 @@ def random_chains(draw, min_joints: int = 1, max_joints: int = 7) -> Robot:
     if draw(st.booleans()):
         tool[:3, :3] = quat_to_matrix(rng.normal(size=4))
         tool[:3, 3] = rng.uniform(-0.2, 0.2, 3)
+    extra = {}
+    if draw(st.booleans()):          # a base that places DH frame 0 anywhere in the world
+        base = np.eye(4)
+        base[:3, :3] = quat_to_matrix(rng.normal(size=4))
+        base[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+        extra["base"] = base.tolist()
     return robot_from_dict({
         "name": f"random{n}{convention[0]}", "convention": convention,
-        "gravity": [0.0, 0.0, -9.81], "tool": tool.tolist(), "joints": joints,
+        "gravity": [0.0, 0.0, -9.81], "tool": tool.tolist(), "joints": joints, **extra,
     }, source="<random chain>")

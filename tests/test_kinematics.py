@@ -119,3 +119,37 @@ def test_fk_refuses_what_is_not_real_numbers(intelbot5, q, kind):
     """Not cast: a complex angle's imaginary part would be dropped, None would become NaN."""
     with pytest.raises(ValueError, match=f"intelbot5: q must hold real numbers, got {kind}"):
         fk(intelbot5, q)
+
+
+def test_a_base_places_the_chain_in_the_world(intelbot5):
+    """With a base B: poses are B · (the chain's), frame 0 is B, the Jacobian's rows turn with
+    B's rotation, and the torques for gravity turned by B equal those without a base; a file
+    without a base keeps its hash, one with a bad base is refused."""
+    import dataclasses
+
+    from nfarm.dynamics import rnea
+    from nfarm.reading import ParamsError
+    from nfarm.robot import robot_from_dict, robot_hash, robot_to_dict
+    from nfarm.rotations import quat_to_matrix
+
+    rng = np.random.default_rng(7)
+    B = np.eye(4)
+    B[:3, :3] = quat_to_matrix(rng.normal(size=4))
+    B[:3, 3] = [0.3, -0.2, 0.1]
+    placed = dataclasses.replace(intelbot5, base=B)
+    q = sample_configurations(intelbot5, (20,), rng)
+    np.testing.assert_allclose(fk(placed, q), B @ fk(intelbot5, q), atol=1e-12)
+    np.testing.assert_allclose(fk_all(placed, q)[:, 0], np.broadcast_to(B, (20, 4, 4)), atol=1e-15)
+    R6 = np.kron(np.eye(2), B[:3, :3])
+    np.testing.assert_allclose(jacobian(placed, q), R6 @ jacobian(intelbot5, q), atol=1e-12)
+    qd, qdd = rng.normal(size=(2, 20, 5))
+    np.testing.assert_allclose(rnea(placed, q, qd, qdd, gravity=B[:3, :3] @ intelbot5.gravity),
+                               rnea(intelbot5, q, qd, qdd), atol=1e-12)
+    f = rng.normal(size=(20, 6))
+    extra = rnea(placed, q, qd, qdd, f_tip=f) - rnea(placed, q, qd, qdd)
+    np.testing.assert_allclose(extra, np.einsum("nki,nk->ni", jacobian(placed, q), f), atol=1e-12)
+    data = robot_to_dict(intelbot5)
+    assert "base" not in data and robot_hash(robot_from_dict(data)) == robot_hash(intelbot5)
+    assert robot_from_dict(robot_to_dict(placed)).base.tolist() == B.tolist()
+    with pytest.raises(ParamsError, match=r"base: .*determinant|base: .*orthonormal"):
+        robot_from_dict({**data, "base": np.diag([1.0, 1.0, -1.0, 1.0]).tolist()})

@@ -119,17 +119,21 @@ class IKRegion:
             self.reach != (None, None) or self.approach_axis is not None
 
     def contains_pose(self, T_0e: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
-        """Whether tool poses ``(..., 4, 4)`` pass the task-space filters: ``(...)``. The
-        reach filter also needs the configurations ``q (..., n)`` [rad] of the poses."""
+        """Whether tool poses ``(..., 4, 4)`` (world frame) pass the task-space filters:
+        ``(...)``. Distance and reach are measured from the base axis, the z axis of DH frame 0
+        (the robot's ``base`` places it in the world); the height and the approach axis are
+        the world's. The reach filter also needs the configurations ``q (..., n)`` [rad]."""
         p = T_0e[..., :3, 3]
         ok = np.ones(T_0e.shape[:-2], bool)
-        r = np.hypot(p[..., 0], p[..., 1])
+        B = self.robot.base
+        p0 = p if np.array_equal(B, np.eye(4)) else (p - B[:3, 3]) @ B[:3, :3]   # in frame 0
+        r = np.hypot(p0[..., 0], p0[..., 1])
         bounds = [(r, self.radial), (p[..., 2], self.height)]
         if self.reach != (None, None):
             if q is None:
                 raise ValueError("the region's reach filter needs the poses' configurations q")
             theta1 = q[..., 0] + self.robot.offset[0]
-            bounds.append((p[..., 0] * np.cos(theta1) + p[..., 1] * np.sin(theta1), self.reach))
+            bounds.append((p0[..., 0] * np.cos(theta1) + p0[..., 1] * np.sin(theta1), self.reach))
         for value, (lo, hi) in bounds:
             if lo is not None:
                 ok &= value >= lo

@@ -178,19 +178,19 @@ def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None, drive: bool = Fa
     Args:
         q, qd, qdd: ``(..., n)`` joint positions [rad], velocities [rad/s], accelerations
             [rad/s²]; batch shapes broadcast.
-        gravity: ``(3,)`` gravity in the base frame [m/s²]; default the robot's.
+        gravity: ``(3,)`` gravity in the world frame [m/s²]; default the robot's.
         f_tip: ``(..., 6)`` wrench ``[force; moment]`` that the **tool exerts on its
-            environment**, in base coordinates, the moment taken about the tool frame origin
+            environment**, in world coordinates, the moment taken about the tool frame origin
             [N, N·m]; it adds ``Jᵀ f_tip`` (J: :func:`nfarm.kinematics.jacobian`). Default none.
+            Both are in world coordinates; the recursion runs in DH frame 0, the robot's
+            ``base`` rotating them into it.
         drive: add the joint drives' armature and friction torques (default: the rigid
             links alone, as chapter 03 and the dissertation).
     Returns:
         ``(..., n)`` joint torques [N·m].
     """
     batch, a = _check(robot, q=q, qd=qd, qdd=qdd)
-    g = robot.gravity if gravity is None else np.asarray(gravity, dtype=float)
-    if g.shape != (3,) or not np.isfinite(g).all():
-        raise ValueError(f"gravity must be 3 finite numbers, got {g!r}")
+    g = _gravity_in_frame_0(robot, gravity)
     flat = [np.ascontiguousarray(np.broadcast_to(a[k], (*batch, robot.n)).reshape(-1, robot.n).T)
             for k in ("q", "qd", "qdd")]
     wrench = None
@@ -199,6 +199,8 @@ def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None, drive: bool = Fa
         if f_tip.ndim == 0 or f_tip.shape[-1] != 6:
             raise ValueError(f"f_tip must have shape (..., 6), got {f_tip.shape}")
         wrench = np.ascontiguousarray(np.broadcast_to(f_tip, (*batch, 6)).reshape(-1, 6).T)
+        R0 = robot.base[:3, :3].T                     # world → DH frame 0
+        wrench = np.concatenate([R0 @ wrench[:3], R0 @ wrench[3:]])
     N = flat[0].shape[1]
     tau = np.empty((robot.n, N))
     links = _links(robot)
@@ -210,6 +212,14 @@ def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None, drive: bool = Fa
     if drive:
         tau = tau + joint_drive_torques(robot, a["qd"], a["qdd"])
     return tau
+
+
+def _gravity_in_frame_0(robot: Robot, gravity) -> np.ndarray:
+    """Gravity [m/s²] (world coordinates; default the robot's) in DH frame 0."""
+    g = robot.gravity if gravity is None else np.asarray(gravity, dtype=float)
+    if g.shape != (3,) or not np.isfinite(g).all():
+        raise ValueError(f"gravity must be 3 finite numbers, got {g!r}")
+    return g if np.array_equal(robot.base, np.eye(4)) else robot.base[:3, :3].T @ g
 
 
 def _rnea_T(L: _Links, q, qd, qdd, g, wrench):
@@ -336,9 +346,7 @@ def regressor(robot: Robot, q, qd, qdd, *, gravity=None) -> np.ndarray:
     sample (``make bench``); samples are processed in chunks that stay in cache.
     """
     batch, a = _check(robot, q=q, qd=qd, qdd=qdd)
-    g = robot.gravity if gravity is None else np.asarray(gravity, dtype=float)
-    if g.shape != (3,) or not np.isfinite(g).all():
-        raise ValueError(f"gravity must be 3 finite numbers, got {g!r}")
+    g = _gravity_in_frame_0(robot, gravity)
     n = robot.n
     q, qd, qdd = (np.ascontiguousarray(np.broadcast_to(a[k], (*batch, n)).reshape(-1, n).T)
                   for k in ("q", "qd", "qdd"))

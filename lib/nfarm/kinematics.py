@@ -11,7 +11,8 @@ Link transforms (see :mod:`nfarm.robot`), θ = q + offset:
 * standard: ``T_i = T_{i-1} · Rz(θ_i) · Tz(d_i) · Tx(a_i) · Rx(α_i)``
 * modified: ``T_i = T_{i-1} · Rx(α_i) · Tx(a_i) · Rz(θ_i) · Tz(d_i)``
 
-and the tool pose is ``T_0e = T_n · tool``.
+and the tool pose is ``T_0e = base · T_n · tool`` (the robot's ``base`` places DH frame 0 in
+the world; every pose and Jacobian is in world coordinates).
 """
 
 from __future__ import annotations
@@ -119,13 +120,23 @@ class _Chain:
         self.ca, self.sa = snap_right_angles(np.cos(robot.alpha)).tolist(), snap_right_angles(np.sin(robot.alpha)).tolist()
         self.tool = snap_right_angles(robot.tool).tolist()
         self.n = robot.n
+        base = snap_right_angles(robot.base)
+        self.base = None if np.array_equal(base, np.eye(4)) else (base[:3, :3], base[:3, 3:])
 
     def frames(self, qT: np.ndarray, every: bool):
         """Yield ``(k, X, Y, Z, p)`` for frames k = 0..n (only k = n unless ``every``).
 
-        ``qT (n, N)``; each of ``X, Y, Z, p`` is ``(3, N)``: the columns of ``R_0k`` and its
-        origin in base coordinates.
+        ``qT (n, N)``; each of ``X, Y, Z, p`` is ``(3, N)``: the columns of ``base · T_0k`` and
+        its origin in world coordinates.
         """
+        if self.base is None:
+            yield from self._frames(qT, every)
+            return
+        R, t = self.base
+        for k, X, Y, Z, p in self._frames(qT, every):
+            yield k, R @ X, R @ Y, R @ Z, R @ p + t
+
+    def _frames(self, qT: np.ndarray, every: bool):
         N = qT.shape[1]
         theta = qT + self.offset[:, None]
         ct, st = cos_sin(theta)
@@ -210,7 +221,7 @@ def _pose_buffer(*lead: int) -> np.ndarray:
 
 
 def fk(robot: Robot, q) -> np.ndarray:
-    """Base-to-tool poses ``T_0e = A_1(q_1) ··· A_n(q_n) · tool``.
+    """Tool poses in the world ``T_0e = base · A_1(q_1) ··· A_n(q_n) · tool``.
 
     Args:
         q: ``(..., n)`` joint angles [rad].
@@ -227,12 +238,13 @@ def fk(robot: Robot, q) -> np.ndarray:
 
 
 def fk_all(robot: Robot, q) -> np.ndarray:
-    """Poses of every link frame ``T_0k``, k = 0..n (base first, the tool not included).
+    """World poses of every link frame ``base · T_0k``, k = 0..n (the base first, the tool not
+    included).
 
     Args:
         q: ``(..., n)`` joint angles [rad].
     Returns:
-        ``(..., n + 1, 4, 4)`` homogeneous transforms; ``[..., 0, :, :]`` is the identity.
+        ``(..., n + 1, 4, 4)`` homogeneous transforms; ``[..., 0, :, :]`` is ``base``.
     """
     batch, qT = _batch(robot, q)
     chain, N = _chain(robot), qT.shape[1]
@@ -244,7 +256,7 @@ def fk_all(robot: Robot, q) -> np.ndarray:
 
 
 def jacobian(robot: Robot, q) -> np.ndarray:
-    """Geometric Jacobian of the tool frame origin, in base coordinates, linear rows first.
+    """Geometric Jacobian of the tool frame origin, in world coordinates, linear rows first.
 
     Column k of a revolute joint with unit axis ``z_k`` through the point ``o_k``::
 

@@ -10,7 +10,7 @@ Frames: ``dh_frame1``…``dh_framen`` (the DH link frames) and ``tool``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -29,6 +29,7 @@ class PinocchioRobot:
     data: pin.Data
     frame_ids: list[int]
     tool_id: int
+    base: np.ndarray = field(default_factory=lambda: np.eye(4))
 
     def fk(self, q: np.ndarray) -> np.ndarray:
         """``T_0e`` (4×4) of one configuration ``q (n,)``."""
@@ -38,7 +39,7 @@ class PinocchioRobot:
     def fk_all(self, q: np.ndarray) -> np.ndarray:
         """``(n + 1, 4, 4)``: the base frame then every DH frame, for one ``q (n,)``."""
         pin.framesForwardKinematics(self.model, self.data, q)
-        return np.stack([np.eye(4)] + [self.data.oMf[f].homogeneous for f in self.frame_ids])
+        return np.stack([self.base] + [self.data.oMf[f].homogeneous for f in self.frame_ids])
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """``(6, n)`` tool Jacobian in ``LOCAL_WORLD_ALIGNED`` (linear rows first)."""
@@ -63,7 +64,8 @@ def pinocchio_model(robot: Robot) -> PinocchioRobot:
     for i in range(robot.n):
         lo, hi = robot.qlim[i]
         big = np.array([1e6])
-        parent = model.addJoint(parent, pin.JointModelRZ(), _se3(J[i]), robot.joint_names[i],
+        placement = robot.base @ J[i] if i == 0 else J[i]
+        parent = model.addJoint(parent, pin.JointModelRZ(), _se3(placement), robot.joint_names[i],
                                 big, big, np.array([lo]), np.array([hi]))
         body = _se3(B[i])
         inertia = pin.Inertia(float(robot.mass[i]), np.array(robot.com[i]),
@@ -74,7 +76,7 @@ def pinocchio_model(robot: Robot) -> PinocchioRobot:
     tool_id = model.addFrame(
         pin.Frame("tool", parent, _se3(B[-1] @ robot.tool), pin.FrameType.OP_FRAME))
     model.armature = np.asarray(robot.armature, dtype=float).copy()   # pin.rnea adds I_a q̈
-    return PinocchioRobot(model, model.createData(), frame_ids, tool_id)
+    return PinocchioRobot(model, model.createData(), frame_ids, tool_id, np.array(robot.base))
 
 
 def pinocchio_from_urdf(urdf: str) -> PinocchioRobot:
@@ -82,4 +84,7 @@ def pinocchio_from_urdf(urdf: str) -> PinocchioRobot:
     model = pin.buildModelFromXML(urdf)
     n = model.nq
     frame_ids = [model.getFrameId(f"dh_frame{i + 1}") for i in range(n)]
-    return PinocchioRobot(model, model.createData(), frame_ids, model.getFrameId("tool"))
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, np.zeros(n))
+    base = data.oMf[model.getFrameId("dh_frame0")].homogeneous.copy()
+    return PinocchioRobot(model, data, frame_ids, model.getFrameId("tool"), base)

@@ -16,6 +16,8 @@ Conventions (SI units, radians):
       A_i = Rx(alpha_i) · Tx(a_i) · Rz(q_i + offset_i) · Tz(d_i)
 
 ``com`` and ``inertia`` of link i are about the link's centre of mass, expressed in DH frame i.
+The chain hangs from the world frame at ``base`` (DH frame 0 in the world; default identity) and
+carries the ``tool``: ``T_0e = base · A_1 ··· A_n · tool``.
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ __all__ = [
 
 CONVENTIONS = ("standard", "modified")
 TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
-            "tool": False, "description": False}
+            "tool": False, "base": False, "description": False}
 JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
               "com": True, "inertia": True, "name": False, "viscous": False, "coulomb": False,
               "coulomb_velocity": False, "armature": False}
@@ -76,8 +78,11 @@ class Robot:
         mass: ``(n,)`` link masses [kg].
         com: ``(n, 3)`` centres of mass in link frames [m].
         inertia: ``(n, 3, 3)`` inertia tensors about the centre of mass, link frame [kg m²].
-        gravity: ``(3,)`` gravity acceleration in the base frame [m/s²].
+        gravity: ``(3,)`` gravity acceleration in the world frame [m/s²].
         tool: ``(4, 4)`` pose of the tool frame in the last link frame.
+        base: ``(4, 4)`` pose of DH frame 0 in the world frame (identity unless the file or
+            the URDF gives one); poses, Jacobians, gravity and tip wrenches are in the world
+            frame.
         joint_names: ``n`` names (``"q1"``… when the file gives none).
         viscous, coulomb, coulomb_velocity, armature: ``(n,)`` joint-drive terms (viscous
             [N·m·s/rad] and Coulomb [N·m] friction, the Coulomb smoothing speed [rad/s], the
@@ -105,8 +110,11 @@ class Robot:
     coulomb: np.ndarray | None = None
     coulomb_velocity: np.ndarray | None = None
     armature: np.ndarray | None = None
+    base: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        if self.base is None:
+            object.__setattr__(self, "base", np.eye(4))
         for key, default in DRIVE_DEFAULTS.items():
             if getattr(self, key) is None:
                 object.__setattr__(self, key, np.full(self.a.shape[0], default))
@@ -155,6 +163,9 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
     tool = v.pose(data["tool"], "tool") if data.get("tool") is not None else np.eye(4)
     for k in range(3):
         v.plausible(float(tool[k, 3]), f"tool[{k}][3]", "length")
+    base = v.pose(data["base"], "base") if data.get("base") is not None else np.eye(4)
+    for k in range(3):
+        v.plausible(float(base[k, 3]), f"base[{k}][3]", "length")
     description = v.string(data["description"], "description", allow_empty=True) \
         if "description" in data else ""
 
@@ -198,7 +209,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         a=np.array(fields["a"]), alpha=np.array(fields["alpha"]), d=np.array(fields["d"]),
         offset=np.array(fields["offset"]), qlim=np.array(fields["qlim"], dtype=float),
         mass=np.array(fields["mass"]), com=np.array(fields["com"]),
-        inertia=np.array(fields["inertia"]), gravity=gravity, tool=tool,
+        inertia=np.array(fields["inertia"]), gravity=gravity, tool=tool, base=base,
         joint_names=tuple(fields["name"]), source=source, description=description,
         **{key: np.array(fields[key]) for key in DRIVE_DEFAULTS},
     )
@@ -223,6 +234,8 @@ def robot_to_dict(robot: Robot) -> dict:
                            DRIVE_DEFAULTS.items() if getattr(robot, key)[i] != default})
     out = {"name": robot.name, "convention": robot.convention,
            "gravity": robot.gravity.tolist(), "tool": robot.tool.tolist(), "joints": joints}
+    if not np.array_equal(robot.base, np.eye(4)):     # as the drive terms: old hashes kept
+        out["base"] = robot.base.tolist()
     if robot.description:
         out["description"] = robot.description
     return out

@@ -75,7 +75,11 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
     lines = ['<?xml version="1.0"?>', f'<robot name="{robot.name}">',
              f'  <material name="link"><color rgba="{" ".join(_f(c) for c in color)} 1"/></material>',
              '  <link name="base_link">',
-             _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>']
+             _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>',
+             '  <joint name="dh_frame0_fixed" type="fixed">',
+             f'    <parent link="base_link"/><child link="dh_frame0"/>{_origin(robot.base)}',
+             '  </joint>',
+             '  <link name="dh_frame0"/>']
     for i in range(n):
         child = f"link{i + 1}"
         parent = "base_link" if i == 0 else f"link{i}"
@@ -83,7 +87,7 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
         lines += [
             f'  <joint name="{robot.joint_names[i]}" type="revolute">',
             f'    <parent link="{parent}"/><child link="{child}"/>',
-            f'    {_origin(J[i])}<axis xyz="0 0 1"/>',
+            f'    {_origin(robot.base @ J[i] if i == 0 else J[i])}<axis xyz="0 0 1"/>',
             f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="0" velocity="0"/>',
             '  </joint>',
         ]
