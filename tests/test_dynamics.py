@@ -149,7 +149,7 @@ def test_armature_matches_pinocchio(intelbot5, puma560):
     """Pinocchio's rnea adds model.armature · q̈: the same robot with armature only."""
     for robot in (intelbot5, puma560):
         driven = with_drives(robot, friction=False)
-        P = pinocchio_model(driven)
+        P = pinocchio_model(driven, armature=True)
         assert np.array_equal(P.model.armature, driven.armature)
         q, qd, qdd = states(robot, 20, 1)
         expected = np.array([pin.rnea(P.model, P.data, *x) for x in zip(q, qd, qdd)])

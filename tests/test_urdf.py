@@ -61,3 +61,242 @@ def test_rerun_loads_the_urdf(intelbot5, tmp_path):
     for i in range(intelbot5.n):
         assert f"/intelbot5/visual_geometries/link{i + 1}/visual_0" in printed
     assert "Cylinders3D" in printed
+
+
+# -- reading a URDF ----------------------------------------------------------------------------
+
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from nfarm.dynamics import gravity_torques, mass_matrix, rnea  # noqa: E402
+from nfarm.kinematics import fk, jacobian  # noqa: E402
+from nfarm.paths import PARAMS  # noqa: E402
+from nfarm.reading import ParamsError  # noqa: E402
+from nfarm.rotations import quat_to_matrix, matrix_to_rpy  # noqa: E402
+from nfarm.urdf import from_urdf  # noqa: E402
+
+SO101 = PARAMS / "robots" / "so101" / "so101.urdf"
+AGREE = 1e-10
+
+
+def pinocchio_locked(path, locked: dict[str, float]):
+    """Pinocchio's own parse of the URDF file, the joints off the chain locked."""
+    model = pin.buildModelFromUrdf(str(path))
+    q_ref = pin.neutral(model)
+    ids = []
+    for name, value in locked.items():
+        jid = model.getJointId(name)
+        ids.append(jid)
+        q_ref[model.joints[jid].idx_q] = value
+    return pin.buildReducedModel(model, ids, q_ref) if ids else model
+
+
+def check_against_pinocchio(robot, path, tip, locked, seed=0):
+    model = pinocchio_locked(path, locked)
+    model.gravity.linear = robot.gravity
+    data, fid = model.createData(), model.getFrameId(tip)
+    names = [model.names[j] for j in range(1, model.njoints)]
+    assert names == list(robot.joint_names)
+    rng = np.random.default_rng(seed)
+    for _ in range(5):
+        q = rng.uniform(robot.qlim[:, 0], robot.qlim[:, 1])
+        qd, qdd = rng.normal(size=(2, robot.n))
+        pin.framesForwardKinematics(model, data, q)
+        np.testing.assert_allclose(fk(robot, q), data.oMf[fid].homogeneous, rtol=0, atol=AGREE)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        J = pin.getFrameJacobian(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        np.testing.assert_allclose(jacobian(robot, q), J.reshape(6, robot.n), rtol=0, atol=AGREE)
+        np.testing.assert_allclose(rnea(robot, q, qd, qdd), pin.rnea(model, data, q, qd, qdd),
+                                   rtol=0, atol=AGREE)
+        M = pin.crba(model, data, q)
+        np.testing.assert_allclose(mass_matrix(robot, q), np.triu(M) + np.triu(M, 1).T, rtol=0, atol=AGREE)
+        np.testing.assert_allclose(gravity_torques(robot, q), pin.computeGeneralizedGravity(model, data, q),
+                                   rtol=0, atol=AGREE)
+
+
+def test_so101_agrees_with_pinocchios_own_parse():
+    robot = from_urdf(SO101, tip="gripper_frame_link")
+    assert robot.n == 5 and robot.joint_names[0] == "shoulder_pan"
+    np.testing.assert_allclose(robot.effort, 10.0)
+    check_against_pinocchio(robot, SO101, "gripper_frame_link", {"gripper": 0.0})
+    opened = from_urdf(SO101, tip="gripper_frame_link", lock={"gripper": 1.0})
+    check_against_pinocchio(opened, SO101, "gripper_frame_link", {"gripper": 1.0})
+    assert not np.allclose(opened.com[-1], robot.com[-1]), "the jaw's position moves the last link's centre"
+
+
+def _origin(rng, scale=0.3):
+    xyz = rng.uniform(-scale, scale, 3)
+    if rng.random() < 0.3:
+        xyz[:] = 0.0
+    rpy = matrix_to_rpy(quat_to_matrix(rng.normal(size=4))) if rng.random() < 0.8 else np.zeros(3)
+    return f'<origin xyz="{" ".join(map(str, xyz.tolist()))}" rpy="{" ".join(map(str, np.asarray(rpy).tolist()))}"/>'
+
+
+def _inertial(rng):
+    R = quat_to_matrix(rng.normal(size=4))
+    I = (R @ np.diag(rng.uniform(0.05, 0.1, 3)) @ R.T * 0.1).tolist()   # a physical body
+    return (f'<inertial>{_origin(rng, 0.1)}<mass value="{float(rng.uniform(0.1, 2.0))!r}"/>'
+            f'<inertia ixx="{I[0][0]!r}" ixy="{I[0][1]!r}" ixz="{I[0][2]!r}" iyy="{I[1][1]!r}" '
+            f'iyz="{I[1][2]!r}" izz="{I[2][2]!r}"/></inertial>')
+
+
+def random_urdf(seed: int, n: int) -> tuple[str, dict[str, float]]:
+    """A random tree: a chain of n revolute joints about random axes (some parallel to or
+    intersecting the previous one), fixed joints on it, and side branches on revolute joints
+    locked at random angles. Returns the URDF and the side joints' lock positions."""
+    rng = np.random.default_rng(seed)
+    lines = ['<robot name="random">', f'<link name="root">{_inertial(rng)}</link>']
+    parent, locks, axis = "root", {}, rng.normal(size=3)
+    for i in range(n):
+        if rng.random() < 0.3:                                   # a fixed joint on the chain
+            lines += [f'<joint name="fixed{i}" type="fixed"><parent link="{parent}"/>'
+                      f'<child link="mid{i}"/>{_origin(rng)}</joint>', f'<link name="mid{i}"/>']
+            parent = f"mid{i}"
+        kind = rng.random()
+        origin = _origin(rng)
+        if kind < 0.25:     # same axis as the joint frame's z, no rotation: parallel axes
+            origin = f'<origin xyz="{float(rng.uniform(-0.3, 0.3))!r} {float(rng.uniform(-0.3, 0.3))!r} 0"/>'
+            axis = np.array([0.0, 0.0, 1.0]) if i == 0 else axis
+        else:
+            axis = rng.normal(size=3)
+        lines += [f'<joint name="j{i}" type="revolute"><parent link="{parent}"/><child link="l{i}"/>'
+                  f'{origin}<axis xyz="{" ".join(map(str, axis.tolist()))}"/>'
+                  f'<limit lower="-2" upper="2" effort="5" velocity="3"/></joint>',
+                  f'<link name="l{i}">{_inertial(rng)}</link>']
+        parent = f"l{i}"
+        if rng.random() < 0.4:                                   # a side branch, locked
+            locks[f"side{i}"] = float(rng.uniform(-1, 1))
+            lines += [f'<joint name="side{i}" type="revolute"><parent link="{parent}"/>'
+                      f'<child link="s{i}"/>{_origin(rng)}<axis xyz="0 1 0"/>'
+                      f'<limit lower="-2" upper="2" effort="1" velocity="1"/></joint>',
+                      f'<link name="s{i}">{_inertial(rng)}</link>']
+    lines += [f'<joint name="tip_fixed" type="fixed"><parent link="{parent}"/><child link="tip"/>'
+              f'{_origin(rng)}</joint>', '<link name="tip"/>', '</robot>']
+    return "\n".join(lines), locks
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 7))
+def test_random_urdfs_agree_with_pinocchios_own_parse(tmp_path_factory, seed, n):
+    text, locks = random_urdf(seed, n)
+    path = tmp_path_factory.mktemp("urdf") / "random.urdf"
+    path.write_text(text)
+    robot = from_urdf(path, tip="tip", lock=locks)
+    assert robot.n == n
+    check_against_pinocchio(robot, path, "tip", locks, seed)
+
+
+def test_a_written_urdf_reads_back_as_the_same_robot(robot, tmp_path):
+    path = tmp_path / "robot.urdf"
+    path.write_text(to_urdf(robot))
+    again = from_urdf(path, tip="tool")
+    rng = np.random.default_rng(1)
+    q = rng.uniform(robot.qlim[:, 0], robot.qlim[:, 1], (20, robot.n))
+    qd, qdd = rng.normal(size=(2, 20, robot.n))
+    np.testing.assert_allclose(fk(again, q), fk(robot, q), atol=1e-12)
+    np.testing.assert_allclose(rnea(again, q, qd, qdd), rnea(robot, q, qd, qdd), rtol=1e-10, atol=1e-10)
+    np.testing.assert_array_equal(again.qlim, robot.qlim)
+    assert again.joint_names == robot.joint_names
+
+
+GOOD = """<robot name="two">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="2" velocity="3"/></joint>
+  <link name="l1"><inertial><origin xyz="0 0 0.05"/><mass value="0.5"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.2 0 0" rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="2" velocity="3"/></joint>
+  <link name="l2"/>
+</robot>
+"""
+
+
+def test_a_small_urdf_reads_as_expected(tmp_path):
+    path = tmp_path / "two.urdf"
+    path.write_text(GOOD)
+    robot = from_urdf(path)                        # its single leaf is the tip
+    assert robot.n == 2 and robot.joint_names == ("j1", "j2") and robot.name == "two"
+    np.testing.assert_allclose(robot.qlim, [[-1, 1], [-1, 1]])
+    np.testing.assert_allclose(robot.effort, 2.0)
+    np.testing.assert_allclose(robot.velocity, 3.0)
+    np.testing.assert_allclose(abs(robot.a[0]), 0.2, atol=1e-12)       # the common normal
+    np.testing.assert_allclose(abs(np.degrees(robot.alpha[0])), 90, atol=1e-9)
+    check_against_pinocchio(robot, path, "l2", {})
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda s: s.replace('type="revolute"><parent link="l1"/>', 'type="prismatic"><parent link="l1"/>'),
+     r"joint 'j2': type 'prismatic' on the chain to 'l2': only revolute and fixed joints"),
+    (lambda s: s.replace('type="revolute"><parent link="l1"/>', 'type="continuous"><parent link="l1"/>'),
+     r"joint 'j2': type 'continuous' on the chain"),
+    (lambda s: s.replace('<parent link="l1"/>', '<parent link="l9"/>'),
+     r"joint 'j2' <parent link>: names a link that does not exist: 'l9'"),
+    (lambda s: s.replace('</robot>', '<joint name="loop" type="fixed"><parent link="l2"/><child link="l1"/></joint></robot>'),
+     r"joint 'loop': link 'l1' already has parent joint 'j1': a closed loop"),
+    (lambda s: s.replace('xyz="0.2 0 0"', 'xyz="0.2 zero 0"'),
+     r"joint 'j2' <origin xyz>: must be 3 finite numbers, got '0.2 zero 0'"),
+    (lambda s: s.replace('xyz="0.2 0 0"', 'xyz="0.2 0"'),
+     r"joint 'j2' <origin xyz>: must be 3 finite numbers"),
+    (lambda s: s.replace('<mass value="0.5"/>', '<mass value="-1"/>'),
+     r"link 'l1' <inertial><mass value>: must be >= 0"),
+    (lambda s: s.replace('ixx="0.01"', 'ixx="-0.5"'),
+     r"link 'l1' <inertial><inertia>: must be positive semi-definite"),
+    (lambda s: s.replace('lower="-1" upper="1" effort="2" velocity="3"/></joint>\n  <link name="l2"/>',
+                         'lower="1" upper="-1" effort="2" velocity="3"/></joint>\n  <link name="l2"/>'),
+     r"joint 'j2' <limit>: must satisfy lower < upper"),
+    (lambda s: s.replace('<axis xyz="0 0 1"/>\n    <limit lower="-1" upper="1" effort="2" velocity="3"/></joint>\n  <link name="l2"/>',
+                         '<axis xyz="0 0 0"/>\n    <limit lower="-1" upper="1" effort="2" velocity="3"/></joint>\n  <link name="l2"/>'),
+     r"joint 'j2' <axis xyz>: must not be the zero vector"),
+    (lambda s: s.replace('<link name="l2"/>', '<link name="l2"/><link name="l1"/>'),
+     r"link 'l1': is defined twice"),
+    (lambda s: s.replace('</robot>', '<link name="stray"/></robot>'),
+     r"<robot>: must have one root link, got 2: base, stray"),
+    (lambda s: s.replace('<robot name="two">', '<!DOCTYPE r [<!ENTITY a "x">]><robot name="two">'),
+     r"<!DOCTYPE>/<!ENTITY> declarations are not accepted"),
+    (lambda s: s.replace('</robot>', '</robt>'), r"not well-formed XML at line \d+, column \d+"),
+    (lambda s: s.replace('<robot name="two">', '<robots name="two">').replace('</robot>', '</robots>'),
+     r"<robot>: the root element must be <robot>, got <robots>"),
+    (lambda s: s.replace('</robot>', '<joint name="j3" type="fixed"><parent link="l1"/><child link="l3"/></joint><link name="l3"/></robot>'),
+     r"tip: the URDF has 2 leaf links \(l2, l3\): name the chain's last link"),
+])
+def test_every_urdf_rule_has_a_bad_file(tmp_path, change, message):
+    path = tmp_path / "bad.urdf"
+    path.write_text(change(GOOD))
+    with pytest.raises(ParamsError, match=message) as caught:
+        from_urdf(path)
+    assert str(caught.value).startswith(f"{path}: ") and "\n" not in str(caught.value)
+
+
+def test_robot_files_naming_a_urdf(tmp_path):
+    """A YAML robot file takes a URDF relative to itself, its tip, locks, gravity and drive
+    terms; check-params accepts it and the URDF; their mistakes are one-line errors."""
+    from nfarm.robot import load_robot
+    (tmp_path / "two.urdf").write_text(GOOD)
+    good = "name: two\nurdf: two.urdf\ntip: l2\ndrive: {viscous: 0.1, armature: [0.01, 0.02]}\n"
+    (tmp_path / "two.yaml").write_text(good)
+    robot = load_robot(tmp_path / "two.yaml")
+    assert robot.name == "two" and robot.source == str(tmp_path / "two.yaml")
+    np.testing.assert_array_equal(robot.viscous, [0.1, 0.1])
+    np.testing.assert_array_equal(robot.armature, [0.01, 0.02])
+    np.testing.assert_array_equal(load_robot(tmp_path / "two.urdf").a, robot.a)
+    for text, message in [
+        (good.replace("urdf: two.urdf", "urdf: two.yaml"), r"urdf: must name a .urdf file"),
+        (good.replace("tip: l2", "tip: l7"), r"tip: no link 'l7' in the URDF"),
+        (good + "lock: {j1: 0.3}\n", r"lock.j1: is on the chain"),
+        (good + "lock: {j9: 0.3}\n", r"lock.j9: names no joint"),
+        (good.replace("viscous: 0.1", "viscous: -0.1"), r"drive.viscous: must be >= 0"),
+        (good.replace("[0.01, 0.02]", "[0.01]"), r"drive.armature: must be one number or 2, got 1"),
+        (good + "joints_deg: 3\n", r"joints_deg: unknown field"),
+    ]:
+        (tmp_path / "bad.yaml").write_text(text)
+        with pytest.raises(ParamsError, match=message):
+            load_robot(tmp_path / "bad.yaml")
+    checked = subprocess.run([sys.executable, "-m", "nfarm", "check-params", str(tmp_path / "two.yaml"),
+                              str(tmp_path / "two.urdf")], capture_output=True, text=True)
+    assert checked.returncode == 0, checked.stderr
+    assert "two, 2 joints" in checked.stdout

@@ -14,3 +14,5 @@ __version__ = "0.1.0"
 from . import _allocator
 
 _allocator.tune()   # batched kernels' speed must not depend on the caller's environment
+
+from . import urdf as _urdf  # noqa: E402,F401 — registers the URDF reader with load_robot

@@ -6,13 +6,16 @@ import argparse
 import sys
 import warnings
 
-from .robot import ParamsError, ParamsWarning, robot_from_dict
+from .robot import ParamsError, ParamsWarning, load_robot
 
 
 def _check_one(path: str) -> str:
     """Validate one robot or study file (told apart by their required fields); the summary."""
     from .reading import load_yaml
 
+    if path.lower().endswith(".urdf"):
+        robot = load_robot(path)
+        return f"{robot.name}, {robot.n} joints converted from the URDF to {robot.convention} DH"
     data = load_yaml(path)
     if isinstance(data, dict) and "robot_file" in data and "joints" not in data:
         from .datasets import study_from_dict
@@ -21,8 +24,9 @@ def _check_one(path: str) -> str:
         return (f"study {study.name!r} of {study.robot.name}, IK sizes "
                 f"{'/'.join(str(study.ik_sizes[k]) for k in ('train', 'val', 'test'))}, ID "
                 f"trajectories {'/'.join(str(study.id.trajectories[k]) for k in ('train', 'val', 'test'))}")
-    robot = robot_from_dict(data, source=path)
-    return f"{robot.name}, {robot.n} joints, {robot.convention} DH"
+    robot = load_robot(path)
+    via = " (from its URDF)" if isinstance(data, dict) and "urdf" in data else ""
+    return f"{robot.name}, {robot.n} joints, {robot.convention} DH{via}"
 
 
 def check_params(files: list[str]) -> int:

@@ -54,8 +54,10 @@ def _se3(T: np.ndarray) -> pin.SE3:
     return pin.SE3(np.array(T[:3, :3]), np.array(T[:3, 3]))
 
 
-def pinocchio_model(robot: Robot) -> PinocchioRobot:
-    """Build the Pinocchio model of ``robot`` (revolute-z joints, inertias, gravity, frames)."""
+def pinocchio_model(robot: Robot, *, armature: bool = False) -> PinocchioRobot:
+    """Build the Pinocchio model of ``robot`` (revolute-z joints, inertias, gravity, frames);
+    with ``armature``, the robot's armature too (``pin.rnea`` then adds ``I_a q̈``, as
+    ``rnea(..., drive=True)`` does without friction)."""
     model = pin.Model()
     model.name = robot.name
     model.gravity.linear = np.array(robot.gravity)
@@ -75,7 +77,8 @@ def pinocchio_model(robot: Robot) -> PinocchioRobot:
             pin.Frame(f"dh_frame{i + 1}", parent, body, pin.FrameType.OP_FRAME)))
     tool_id = model.addFrame(
         pin.Frame("tool", parent, _se3(B[-1] @ robot.tool), pin.FrameType.OP_FRAME))
-    model.armature = np.asarray(robot.armature, dtype=float).copy()   # pin.rnea adds I_a q̈
+    if armature:
+        model.armature = np.asarray(robot.armature, dtype=float).copy()   # pin.rnea adds I_a q̈
     return PinocchioRobot(model, model.createData(), frame_ids, tool_id, np.array(robot.base))
 
 

@@ -56,7 +56,7 @@ TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
             "tool": False, "base": False, "description": False}
 JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
               "com": True, "inertia": True, "name": False, "viscous": False, "coulomb": False,
-              "coulomb_velocity": False, "armature": False}
+              "coulomb_velocity": False, "armature": False, "effort": False, "velocity": False}
 #: Joint-drive terms (optional per joint; see :func:`nfarm.dynamics.joint_drive_torques`) and
 #: their defaults: viscous [N·m·s/rad], Coulomb [N·m], Coulomb smoothing speed [rad/s],
 #: armature (reflected rotor inertia) [kg·m²].
@@ -88,6 +88,9 @@ class Robot:
             [N·m·s/rad] and Coulomb [N·m] friction, the Coulomb smoothing speed [rad/s], the
             reflected rotor inertia [kg·m²]); zero friction and armature unless the file gives
             them. Used only where asked (``rnea(..., drive=True)``).
+        effort, velocity: ``(n,)`` the joints' torque [N·m] and speed [rad/s] limits (a URDF's
+            ``<limit effort velocity>``; ``inf`` unless given). Informative: no solver
+            enforces them.
         source: the file the robot was loaded from, or a description.
     """
 
@@ -111,8 +114,13 @@ class Robot:
     coulomb_velocity: np.ndarray | None = None
     armature: np.ndarray | None = None
     base: np.ndarray | None = None
+    effort: np.ndarray | None = None
+    velocity: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        for key in ("effort", "velocity"):
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, np.full(self.a.shape[0], np.inf))
         if self.base is None:
             object.__setattr__(self, "base", np.eye(4))
         for key, default in DRIVE_DEFAULTS.items():
@@ -136,8 +144,26 @@ class Robot:
 # Loading
 
 
+#: Readers of robot descriptions in other formats, by file suffix. The URDF reader registers
+#: itself (:mod:`nfarm.urdf`, imported by the package), so that this model layer does not
+#: import the file-format layer.
+_READERS: dict[str, Any] = {}
+URDF_FILE_KEYS = {"name": True, "urdf": True, "tip": False, "lock": False, "gravity": False,
+                  "drive": False, "description": False}
+_DRIVE_KEYS = dict.fromkeys(DRIVE_DEFAULTS, False)
+
+
+def register_reader(suffix: str, reader) -> None:
+    """Let :func:`load_robot` read files ending in ``suffix`` with ``reader(path, tip=None,
+    lock=None, name=None) -> Robot``."""
+    _READERS[suffix.lower()] = reader
+
+
 def load_robot(path: str | Path) -> Robot:
-    """Load and validate a robot parameter file (YAML; schema in ``params/README.md``).
+    """Load and validate a robot file: a DH parameter file (YAML; schema in
+    ``params/README.md``), a URDF (``.urdf``: :func:`nfarm.urdf.from_urdf`, its single leaf the
+    tip), or a YAML file naming a URDF with its ``tip``, the ``lock`` positions of joints off the
+    chain, and optional ``gravity``, joint ``drive`` terms and ``description``.
 
     The file goes through :func:`nfarm.reading.load_yaml` (regular file, size limit, no
     duplicate keys, bounded aliases and nesting, YAML 1.2 decimal numbers).
@@ -150,7 +176,44 @@ def load_robot(path: str | Path) -> Robot:
             value (an angle beyond 2π, a length beyond 10 m: degrees or millimetres by mistake?).
     """
     path = Path(path)
-    return robot_from_dict(load_yaml(path, what="robot file"), source=str(path))
+    if path.suffix.lower() in _READERS:
+        return _READERS[path.suffix.lower()](path)
+    data = load_yaml(path, what="robot file")
+    if isinstance(data, dict) and "urdf" in data and "joints" not in data:
+        return _from_described_urdf(data, path)
+    return robot_from_dict(data, source=str(path))
+
+
+def _from_described_urdf(data: dict, path: Path) -> Robot:
+    """A robot file naming a URDF (``urdf`` relative to the file) and what to take from it."""
+    v = _Validator(str(path))
+    v.mapping(data, "", URDF_FILE_KEYS)
+    name = v.string(data["name"], "name")
+    urdf = path.parent / v.string(data["urdf"], "urdf")
+    if urdf.suffix.lower() not in _READERS:
+        v.fail("urdf", f"must name a .urdf file, got {show(data['urdf'])}")
+    tip = v.string(data["tip"], "tip") if data.get("tip") is not None else None
+    lock = {}
+    if data.get("lock") is not None:
+        if not isinstance(data["lock"], dict):
+            v.fail("lock", f"must map joint names to positions, got {show(data['lock'])}")
+        lock = {str(k): v.number(x, f"lock.{k}") for k, x in data["lock"].items()}
+    robot = _READERS[urdf.suffix.lower()](urdf, tip=tip, lock=lock, name=name)
+    changes: dict[str, Any] = {"source": str(path)}
+    if data.get("gravity") is not None:
+        changes["gravity"] = np.array(v.vector(data["gravity"], "gravity", 3))
+    if "description" in data:
+        changes["description"] = v.string(data["description"], "description", allow_empty=True)
+    if data.get("drive") is not None:
+        drive = v.mapping(data["drive"], "drive", _DRIVE_KEYS)
+        for key, value in drive.items():
+            values = value if isinstance(value, list) else [value] * robot.n
+            if len(values) != robot.n:
+                v.fail(f"drive.{key}", f"must be one number or {robot.n}, got {len(values)}")
+            numbers = [v.number(x, f"drive.{key}", lo=0.0, lo_open=key == "coulomb_velocity")
+                       for x in values]
+            changes[key] = np.array(numbers)
+    return dataclasses.replace(robot, **changes)
 
 
 def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
@@ -203,6 +266,9 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
                 v.fail(f"{at}.{key}", f"must be {'> 0' if key == 'coulomb_velocity' else '>= 0'}, "
                                       f"got {value!r}")
             fields.setdefault(key, []).append(value)
+        for key in ("effort", "velocity"):
+            fields.setdefault(key, []).append(
+                v.number(joint[key], f"{at}.{key}", lo=0.0, lo_open=True) if key in joint else math.inf)
 
     return Robot(
         name=name, convention=convention,
@@ -212,6 +278,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         inertia=np.array(fields["inertia"]), gravity=gravity, tool=tool, base=base,
         joint_names=tuple(fields["name"]), source=source, description=description,
         **{key: np.array(fields[key]) for key in DRIVE_DEFAULTS},
+        effort=np.array(fields["effort"], dtype=float), velocity=np.array(fields["velocity"], dtype=float),
     )
 
 
@@ -232,6 +299,8 @@ def robot_to_dict(robot: Robot) -> dict:
         # hash (and its data sets and models stay valid).
         joints[-1].update({key: float(getattr(robot, key)[i]) for key, default in
                            DRIVE_DEFAULTS.items() if getattr(robot, key)[i] != default})
+        joints[-1].update({key: float(getattr(robot, key)[i]) for key in ("effort", "velocity")
+                           if np.isfinite(getattr(robot, key)[i])})
     out = {"name": robot.name, "convention": robot.convention,
            "gravity": robot.gravity.tolist(), "tool": robot.tool.tolist(), "joints": joints}
     if not np.array_equal(robot.base, np.eye(4)):     # as the drive terms: old hashes kept

@@ -17,19 +17,27 @@ the links' common normals and offsets.
 
 from __future__ import annotations
 
+import os
 import re
+from collections.abc import Mapping
+from pathlib import Path
 
 import numpy as np
 
 from .kinematics import joint_placements
-from .robot import Robot
+from .robot import Robot, register_reader
 from .rotations import matrix_to_rpy
 
-__all__ = ["to_urdf"]
+__all__ = ["to_urdf", "from_urdf"]
 
 
 def _f(x: float) -> str:
     return repr(float(x)) if x != 0 else "0"
+
+
+def _limit(x: float) -> str:
+    """A URDF limit: 0 stands for none."""
+    return _f(x) if np.isfinite(x) else "0"
 
 
 def _origin(T: np.ndarray) -> str:
@@ -88,7 +96,8 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
             f'  <joint name="{robot.joint_names[i]}" type="revolute">',
             f'    <parent link="{parent}"/><child link="{child}"/>',
             f'    {_origin(robot.base @ J[i] if i == 0 else J[i])}<axis xyz="0 0 1"/>',
-            f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="0" velocity="0"/>',
+            f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="{_limit(robot.effort[i])}" '
+            f'velocity="{_limit(robot.velocity[i])}"/>',
             '  </joint>',
         ]
         # Inertial: the centre of mass and inertia are given in DH frame i+1 = B[i] in the body.
@@ -126,3 +135,394 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
     if prefix:
         text = re.sub(r'(<robot name="|<link name="|<joint name="|link=")', lambda m: m[1] + prefix, text)
     return text
+
+
+# --------------------------------------------------------------------------------------------
+# Reading: a URDF's serial chain as a DH robot
+
+#: Joint types a chain may hold (``fixed`` ones are folded into the geometry).
+_CHAIN_TYPES = ("revolute", "fixed")
+#: Joint types a side branch may hold: locked at the position ``lock`` gives (default 0).
+_LOCKABLE = ("revolute", "continuous", "prismatic", "fixed")
+#: Axes closer than this (the sine of their angle) are parallel; lines closer than
+#: ``_NEAR`` metres intersect.
+_PARALLEL = 1e-9
+_NEAR = 1e-12
+
+
+def _rpy_matrix(r: float, p: float, y: float) -> np.ndarray:
+    """URDF's fixed-axis roll, pitch, yaw: ``Rz(y) · Ry(p) · Rx(r)``."""
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rodrigues: rotation by ``angle`` about the unit ``axis``."""
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+class _Reader:
+    """The URDF's elements, validated, with one-line errors naming the file and element."""
+
+    def __init__(self, source: str, root):
+        from .reading import Validator
+        self.v = Validator(source)
+        if root.tag != "robot":
+            self.v.fail("<robot>", f"the root element must be <robot>, got <{root.tag}>")
+        self.name = root.get("name") or "urdf_robot"
+        self.links, self.joints = {}, {}
+        for link in root.findall("link"):
+            name = self._name(link, "link")
+            if name in self.links:
+                self.v.fail(f"link {name!r}", "is defined twice")
+            self.links[name] = self._inertial(link, f"link {name!r}")
+        for joint in root.findall("joint"):
+            name = self._name(joint, "joint")
+            if name in self.joints:
+                self.v.fail(f"joint {name!r}", "is defined twice")
+            self.joints[name] = self._joint(joint, f"joint {name!r}")
+        if not self.links:
+            self.v.fail("<robot>", "has no <link>")
+
+    def _name(self, element, kind: str) -> str:
+        name = element.get("name")
+        if not name:
+            self.v.fail(f"<{kind}>", "needs a non-empty name attribute")
+        return name
+
+    def _numbers(self, text, at: str, count: int, default=None) -> np.ndarray:
+        if text is None:
+            if default is None:
+                self.v.fail(at, "is required")
+            return np.array(default, dtype=float)
+        what = "a finite number" if count == 1 else f"{count} finite numbers"
+        try:
+            values = np.array([float(x) for x in text.split()])
+        except ValueError:
+            self.v.fail(at, f"must be {what}, got {text!r}")
+        if values.shape != (count,) or not np.isfinite(values).all():
+            self.v.fail(at, f"must be {what}, got {text!r}")
+        return values
+
+    def _origin(self, element, at: str) -> np.ndarray:
+        T = np.eye(4)
+        origin = element.find("origin")
+        if origin is not None:
+            xyz = self._numbers(origin.get("xyz"), f"{at} <origin xyz>", 3, (0, 0, 0))
+            rpy = self._numbers(origin.get("rpy"), f"{at} <origin rpy>", 3, (0, 0, 0))
+            T[:3, :3], T[:3, 3] = _rpy_matrix(*rpy), xyz
+        return T
+
+    def _inertial(self, link, at: str):
+        inertial = link.find("inertial")
+        if inertial is None:
+            return None
+        mass_el = inertial.find("mass")
+        mass = self._numbers(None if mass_el is None else mass_el.get("value"),
+                             f"{at} <inertial><mass value>", 1)[0]
+        if mass < 0:
+            self.v.fail(f"{at} <inertial><mass value>", f"must be >= 0, got {mass!r}")
+        el = inertial.find("inertia")
+        keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+        values = {k: self._numbers(None if el is None else el.get(k, "0"),
+                                   f"{at} <inertial><inertia {k}>", 1)[0] for k in keys}
+        I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
+                      [values["ixy"], values["iyy"], values["iyz"]],
+                      [values["ixz"], values["iyz"], values["izz"]]])
+        if np.linalg.eigvalsh(I).min() < -1e-9 * max(np.abs(I).max(), 1e-300):
+            self.v.fail(f"{at} <inertial><inertia>", "must be positive semi-definite")
+        T = self._origin(inertial, f"{at} <inertial>")
+        return mass, T, I          # inertia about the centre of mass, axes of T
+
+    def _joint(self, joint, at: str) -> dict:
+        kind = joint.get("type")
+        parent, child = joint.find("parent"), joint.find("child")
+        out = {"type": kind, "origin": self._origin(joint, at),
+               "parent": None if parent is None else parent.get("link"),
+               "child": None if child is None else child.get("link")}
+        for key in ("parent", "child"):
+            if not out[key]:
+                self.v.fail(f"{at} <{key} link>", "is required")
+        axis = self._numbers(None if joint.find("axis") is None else joint.find("axis").get("xyz"),
+                             f"{at} <axis xyz>", 3, (1, 0, 0))       # URDF's default axis
+        if kind in ("revolute", "continuous", "prismatic"):
+            norm = float(np.linalg.norm(axis))
+            if norm < 1e-12:
+                self.v.fail(f"{at} <axis xyz>", "must not be the zero vector")
+            axis = axis / norm
+        out["axis"] = axis
+        limit = joint.find("limit")
+        if kind == "revolute":
+            if limit is None:
+                self.v.fail(f"{at} <limit>", "is required for a revolute joint")
+            lo = self._numbers(limit.get("lower", "0"), f"{at} <limit lower>", 1)[0]
+            hi = self._numbers(limit.get("upper", "0"), f"{at} <limit upper>", 1)[0]
+            if not lo < hi:
+                self.v.fail(f"{at} <limit>", f"must satisfy lower < upper, got [{lo!r}, {hi!r}]")
+            out["limits"] = (lo, hi)
+            out["effort"] = self._numbers(limit.get("effort"), f"{at} <limit effort>", 1)[0]
+            out["velocity"] = self._numbers(limit.get("velocity"), f"{at} <limit velocity>", 1)[0]
+        return out
+
+
+def _parse(path: Path):
+    import xml.etree.ElementTree as ET
+
+    from .reading import ParamsError, read_bytes
+    raw = read_bytes(path, max_bytes=16 << 20, what="URDF")
+    if b"<!DOCTYPE" in raw or b"<!ENTITY" in raw:
+        raise ParamsError(f"{path}: <!DOCTYPE>/<!ENTITY> declarations are not accepted in a URDF")
+    try:
+        return ET.fromstring(raw)
+    except ET.ParseError as exc:
+        line, column = exc.position
+        raise ParamsError(f"{path}: not well-formed XML at line {line}, column {column + 1}") from None
+
+
+def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarray,
+                   x_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """DH frame origin on the line ``(p1, z1)`` and its x axis, from the line ``(o0, z0)``:
+    the foot of their common normal and its direction (skew lines); the intersection and
+    ``z0 × z1`` (intersecting); the foot of the normal through ``o0`` (parallel, so that
+    ``d = 0``); ``o0`` and ``x_prev`` (the same line)."""
+    cross = np.cross(z0, z1)
+    sine = float(np.linalg.norm(cross))
+    if sine < _PARALLEL:                                         # parallel or the same line
+        foot = p1 + np.dot(o0 - p1, z1) * z1
+        gap = foot - o0
+        gap -= np.dot(gap, z0) * z0
+        distance = float(np.linalg.norm(gap))
+        if distance < _NEAR:
+            return o0.copy(), x_prev.copy()
+        return o0 + gap, gap / distance
+    n = cross / sine
+    # Closest points o0 + t0 z0 and p1 + t1 z1.
+    w = o0 - p1
+    b = np.dot(z0, z1)
+    denom = 1 - b * b
+    t0 = (b * np.dot(z1, w) - np.dot(z0, w)) / denom
+    t1 = (np.dot(z1, w) - b * np.dot(z0, w)) / denom
+    f0, f1 = o0 + t0 * z0, p1 + t1 * z1
+    gap = f1 - f0
+    distance = float(np.linalg.norm(gap))
+    if distance < _NEAR:
+        return f1, n
+    return f1, gap / distance
+
+
+def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = o
+    return T
+
+
+def _lump(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+    """One rigid body from bodies ``(mass, com, inertia about the com)`` in one frame."""
+    m = sum(b[0] for b in bodies)
+    if not bodies:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    # Massless bodies keep their rotational inertia (the Puma's first link is one).
+    com = sum(b[0] * b[1] for b in bodies) / m if m > 0 else bodies[0][1]
+    I = np.zeros((3, 3))
+    for mass, c, Ic in bodies:
+        r = c - com
+        I += Ic + mass * (r @ r * np.eye(3) - np.outer(r, r))
+    return m, com, I
+
+
+def from_urdf(path: str | os.PathLike, tip: str | None = None,
+              lock: Mapping[str, float] | None = None, *, name: str | None = None) -> Robot:
+    """The serial chain of a URDF from its root link to ``tip`` as an nfarm :class:`Robot`
+    (standard DH, a base and a tool transform).
+
+    Args:
+        path: the URDF file.
+        tip: the chain's last link (default: the single leaf; several leaves are an error that
+            lists them). The tool frame is this link's frame.
+        lock: positions [rad or m] of joints off the chain (e.g. a gripper's jaw), default 0.
+        name: the robot's name (default the URDF's).
+
+    The chain holds revolute and fixed joints. At ``q = 0`` each joint axis is a line in the
+    world; DH frame i sits on axis i+1 (standard DH, ``z_i`` along it), at the foot of the
+    common normal from axis i, ``x_i`` along that normal: for intersecting axes at the
+    intersection with ``x_i = z_{i−1} × z_i``, for parallel axes where the normal through the
+    previous origin meets it (``d_i = 0``), for one line continuing the previous frame. Frame 0
+    sits on axis 1 where it passes nearest the root's origin, with ``x_0`` along ``x_1`` (so
+    ``offset_1 = 0``); frame n at the tip's origin with ``z_n`` along axis n. Every DH row is
+    then read off consecutive frames; ``base`` is frame 0 in the root's frame, ``tool`` the tip
+    in frame n. Each moving link's inertia, with everything fixed or locked to it (side
+    branches, massless frames), becomes one rigid body in its DH frame (parallel axes);
+    bodies before joint 1 never move and are left out. Limits, effort and velocity carry over;
+    gravity is ``[0, 0, −9.81]`` in the root's frame.
+
+    Raises:
+        ParamsError: one line naming the file, the element and the rule (a prismatic or
+            continuous joint on the chain, a closed loop, a missing link, a malformed number…).
+    """
+    from .reading import ParamsError
+    from .robot import robot_from_dict
+
+    path = Path(path)
+    source = str(path)
+    r = _Reader(source, _parse(path))
+    v = r.v
+    children: dict[str, list[str]] = {name_: [] for name_ in r.links}
+    parent_joint: dict[str, str] = {}
+    for jname, j in r.joints.items():
+        for key in ("parent", "child"):
+            if j[key] not in r.links:
+                v.fail(f"joint {jname!r} <{key} link>", f"names a link that does not exist: {j[key]!r}")
+        if j["child"] in parent_joint:
+            v.fail(f"joint {jname!r}", f"link {j['child']!r} already has parent joint "
+                                       f"{parent_joint[j['child']]!r}: a closed loop, not a tree")
+        parent_joint[j["child"]] = jname
+        children[j["parent"]].append(jname)
+    roots = [l for l in r.links if l not in parent_joint]
+    if len(roots) != 1:
+        v.fail("<robot>", f"must have one root link, got {len(roots)}: {', '.join(roots) or 'none (a loop)'}")
+    root = roots[0]
+    reached, stack = {root}, [root]
+    while stack:
+        for jname in children[stack.pop()]:
+            reached.add(r.joints[jname]["child"])
+            stack.append(r.joints[jname]["child"])
+    if len(reached) != len(r.links):
+        v.fail("<robot>", f"links not connected to the root {root!r} (a loop): "
+                          f"{', '.join(sorted(set(r.links) - reached))}")
+    leaves = sorted(l for l in r.links if not children[l])
+    if tip is None:
+        if len(leaves) != 1:
+            v.fail("tip", f"the URDF has {len(leaves)} leaf links ({', '.join(leaves)}): name the "
+                          f"chain's last link")
+        tip = leaves[0]
+    elif tip not in r.links:
+        v.fail("tip", f"no link {tip!r} in the URDF (leaves: {', '.join(leaves)})")
+    chain, link = [], tip                       # joint names from the root to the tip
+    while link != root:
+        chain.append(parent_joint[link])
+        link = r.joints[chain[-1]]["parent"]
+    chain.reverse()
+    for jname in chain:
+        kind = r.joints[jname]["type"]
+        if kind not in _CHAIN_TYPES:
+            v.fail(f"joint {jname!r}", f"type {kind!r} on the chain to {tip!r}: only revolute and "
+                                       f"fixed joints are supported there")
+    moving = [j for j in chain if r.joints[j]["type"] == "revolute"]
+    if not moving:
+        v.fail("tip", f"the chain from {root!r} to {tip!r} has no revolute joint")
+    lock = dict(lock or {})
+    for jname, value in lock.items():
+        if jname not in r.joints:
+            v.fail(f"lock.{jname}", "names no joint of the URDF")
+        if jname in chain:
+            v.fail(f"lock.{jname}", "is on the chain: only joints off it are locked")
+
+    # World poses at q = 0 (side joints at their lock positions) of every link.
+    pose = {root: np.eye(4)}
+    order = [root]
+    for link in order:
+        for jname in children[link]:
+            j = r.joints[jname]
+            T = pose[link] @ j["origin"]
+            value = float(lock.get(jname, 0.0)) if jname not in chain else 0.0
+            if j["type"] in ("revolute", "continuous") and value:
+                T[:3, :3] = T[:3, :3] @ _axis_rotation(j["axis"], value)
+            elif j["type"] == "prismatic" and value:
+                T[:3, 3] += T[:3, :3] @ j["axis"] * value
+            elif j["type"] not in _LOCKABLE:
+                v.fail(f"joint {jname!r}", f"type {j['type']!r} cannot be locked off the chain")
+            pose[j["child"]] = T
+            order.append(j["child"])
+
+    # Joint axes as world lines, then the DH frames.
+    axes = []
+    for jname in moving:
+        T = pose[r.joints[jname]["parent"]] @ r.joints[jname]["origin"]
+        axes.append((T[:3, 3], T[:3, :3] @ r.joints[jname]["axis"]))
+    n = len(moving)
+    p_tip = pose[tip][:3, 3]
+    frames = [None] * (n + 1)
+    for i in range(1, n):
+        prev_o = None if i == 1 else frames[i - 1][:3, 3]
+        o0, z0 = axes[i - 1]
+        if i == 1:
+            o0 = o0 + np.dot(-o0, z0) * z0              # nearest the root's origin
+        o, x = _common_normal(o0 if prev_o is None else prev_o, z0, *axes[i],
+                              np.zeros(3) if i == 1 else frames[i - 1][:3, 0])
+        if i == 1 and np.linalg.norm(x) == 0:            # axes 1 and 2 the same line
+            x = _perpendicular(z0)
+        frames[i] = _frame(x, axes[i][1], o)
+    # Frame n at the tip's origin, z along axis n; frame 0 on axis 1, x_0 = x_1.
+    o_prev = frames[n - 1][:3, 3] if n > 1 else axes[0][0] + np.dot(-axes[0][0], axes[0][1]) * axes[0][1]
+    z_last = axes[-1][1]
+    gap = p_tip - o_prev
+    gap -= np.dot(gap, z_last) * z_last
+    if np.linalg.norm(gap) > _NEAR:
+        x_n = gap / np.linalg.norm(gap)
+    else:
+        x_n = frames[n - 1][:3, 0] if n > 1 else _perpendicular(z_last)
+    frames[n] = _frame(x_n, z_last, p_tip)
+    z_0 = axes[0][1]
+    o_0 = axes[0][0] + np.dot(-axes[0][0], z_0) * z_0
+    x_1 = frames[1][:3, 0]
+    frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0) if n > 1 else _frame(x_n, z_0, o_0)
+    frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
+
+    rows = []
+    for i in range(1, n + 1):
+        F0, F1 = frames[i - 1], frames[i]
+        z0, x0, x1, z1 = F0[:3, 2], F0[:3, 0], F1[:3, 0], F1[:3, 2]
+        step = F1[:3, 3] - F0[:3, 3]
+        rows.append({"a": float(np.dot(step, x1)), "d": float(np.dot(step, z0)),
+                     "offset": float(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
+                     "alpha": float(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
+
+    # Inertias: each moving link with what is fixed or locked to it, in its DH frame.
+    owner = {}
+    for link in order:
+        if link == root:
+            continue
+        jname = parent_joint[link]
+        owner[link] = moving.index(jname) if jname in moving else owner.get(r.joints[jname]["parent"])
+    bodies = [[] for _ in range(n)]
+    for link, k in owner.items():
+        if k is None or r.links[link] is None:
+            continue
+        mass, T_in, I = r.links[link]
+        G = np.linalg.solve(frames[k + 1], pose[link] @ T_in)    # inertial frame in DH frame k
+        bodies[k].append((mass, G[:3, 3], G[:3, :3] @ I @ G[:3, :3].T))
+    joints = []
+    for k, jname in enumerate(moving):
+        m, com, I = _lump(bodies[k])
+        j = r.joints[jname]
+        joints.append({**rows[k], "name": jname, "qlim": list(j["limits"]), "mass": m,
+                       "com": com.tolist(),
+                       "inertia": [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]],
+                       **{key: j[key] for key in ("effort", "velocity") if j[key] > 0}})
+    tool = np.linalg.solve(frames[n], pose[tip])
+    try:
+        return robot_from_dict({"name": name or r.name, "convention": "standard",
+                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                "tool": tool.tolist(), "joints": joints,
+                                "description": f"from {path.name}, chain {root} → {tip}"},
+                               source=source)
+    except ParamsError as exc:
+        raise ParamsError(f"{exc} (converted from the URDF)") from None
+
+
+def _perpendicular(z: np.ndarray) -> np.ndarray:
+    helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = helper - np.dot(helper, z) * z
+    return x / np.linalg.norm(x)
+
+
+def _orthonormal(R: np.ndarray) -> np.ndarray:
+    U, _, Vt = np.linalg.svd(R)
+    return U @ Vt
+
+
+register_reader(".urdf", from_urdf)
