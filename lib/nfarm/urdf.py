@@ -477,9 +477,9 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         F0, F1 = frames[i - 1], frames[i]
         z0, x0, x1, z1 = F0[:3, 2], F0[:3, 0], F1[:3, 0], F1[:3, 2]
         step = F1[:3, 3] - F0[:3, 3]
-        rows.append({"a": float(np.dot(step, x1)), "d": float(np.dot(step, z0)),
-                     "offset": float(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
-                     "alpha": float(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
+        rows.append({"a": _snap(np.dot(step, x1)), "d": _snap(np.dot(step, z0)),
+                     "offset": _snap(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
+                     "alpha": _snap(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
 
     # Inertias: each moving link with what is fixed or locked to it, in its DH frame.
     owner = {}
@@ -512,6 +512,12 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
                                source=source)
     except ParamsError as exc:
         raise ParamsError(f"{exc} (converted from the URDF)") from None
+
+
+def _snap(x: float, tol: float = 1e-12) -> float:
+    """A DH parameter, 0 when it is rounding (below 1e-12 m or rad): the frames are built
+    from products of rounded numbers, and a table of 1e-20 values reads as data."""
+    return 0.0 if abs(x) < tol else float(x)
 
 
 def _perpendicular(z: np.ndarray) -> np.ndarray:
