@@ -300,3 +300,26 @@ def test_robot_files_naming_a_urdf(tmp_path):
                               str(tmp_path / "two.urdf")], capture_output=True, text=True)
     assert checked.returncode == 0, checked.stderr
     assert "two, 2 joints" in checked.stdout
+
+
+def test_a_urdf_robot_is_hashed_by_its_sources(tmp_path):
+    """The same files give the same robot hash under another floating-point set-up (the
+    converted parameters' last bits may differ); an edited URDF or a robot changed after
+    loading gives another."""
+    import dataclasses
+
+    from nfarm.robot import load_robot, robot_hash
+    robot = load_robot(PARAMS / "robots" / "so101.yaml")
+    script = ("from nfarm.robot import load_robot, robot_hash; import sys; "
+              "print(robot_hash(load_robot(sys.argv[1])))")
+    env = {**__import__("os").environ, "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR AVX2 FMA3",
+           "OPENBLAS_CORETYPE": "Sandybridge"}
+    other = subprocess.run([sys.executable, "-c", script, str(PARAMS / "robots" / "so101.yaml")],
+                           capture_output=True, text=True, env=env, check=True).stdout.strip()
+    assert other == robot_hash(robot)
+    assert robot_hash(dataclasses.replace(robot, viscous=robot.viscous * 2)) != robot_hash(robot)
+    (tmp_path / "two.urdf").write_text(GOOD)
+    first = robot_hash(from_urdf(tmp_path / "two.urdf"))
+    (tmp_path / "two.urdf").write_text(GOOD.replace('<mass value="0.5"/>', '<mass value="0.6"/>'))
+    assert robot_hash(from_urdf(tmp_path / "two.urdf")) != first
+    assert robot_hash(from_urdf(tmp_path / "two.urdf", name="renamed")) != robot_hash(from_urdf(tmp_path / "two.urdf"))

@@ -35,6 +35,7 @@ import numpy as np
 
 from .paths import shown_path
 from .reading import ParamsError, ParamsWarning, Validator, load_yaml, show
+from .reading import read_bytes as _read_bytes
 
 __all__ = [
     "ParamsError",
@@ -49,6 +50,8 @@ __all__ = [
     "poses_for",
     "dh_rows",
     "DRIVE_DEFAULTS",
+    "register_reader",
+    "with_provenance",
 ]
 
 CONVENTIONS = ("standard", "modified")
@@ -116,6 +119,7 @@ class Robot:
     base: np.ndarray | None = None
     effort: np.ndarray | None = None
     velocity: np.ndarray | None = None
+    provenance: tuple[str, str] | None = dataclasses.field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         for key in ("effort", "velocity"):
@@ -213,7 +217,9 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
             numbers = [v.number(x, f"drive.{key}", lo=0.0, lo_open=key == "coulomb_velocity")
                        for x in values]
             changes[key] = np.array(numbers)
-    return dataclasses.replace(robot, **changes)
+    robot = dataclasses.replace(robot, **changes)
+    fields = json.dumps(data, sort_keys=True, default=str).encode("utf-8")
+    return with_provenance(robot, fields, _read_bytes(urdf))
 
 
 def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
@@ -310,12 +316,33 @@ def robot_to_dict(robot: Robot) -> dict:
     return out
 
 
+def _canonical(robot: Robot) -> str:
+    return json.dumps(robot_to_dict(robot), sort_keys=True, separators=(",", ":"))
+
+
 def robot_hash(robot: Robot) -> str:
     """SHA-256 of the robot's parameters as loaded (canonical JSON of :func:`robot_to_dict`,
     floats written exactly): two files that differ only in comments or layout are one robot.
-    Data sets and saved models record it, and refuse to be used with another robot."""
-    blob = json.dumps(robot_to_dict(robot), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(blob.encode("utf-8")).hexdigest()
+    Data sets and saved models record it, and refuse to be used with another robot.
+
+    A robot converted from a URDF is hashed by its sources instead (the URDF's bytes and what
+    the robot file takes from it, :func:`with_provenance`) as long as its parameters are the
+    ones converted: the conversion's last bits depend on the machine's floating point (BLAS
+    kernels, SIMD paths), and the same files must be the same robot everywhere. A robot
+    changed after loading (``dataclasses.replace``) is hashed by its parameters again."""
+    canonical = _canonical(robot)
+    if robot.provenance is not None and robot.provenance[1] == canonical:
+        return robot.provenance[0]
+    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def with_provenance(robot: Robot, *sources: bytes) -> Robot:
+    """``robot`` hashed by ``sources`` (e.g. a URDF's bytes and the robot file's canonical
+    fields) while its parameters stay as they are now (:func:`robot_hash`)."""
+    digest = hashlib.sha256()
+    for part in sources:
+        digest.update(hashlib.sha256(part).digest())
+    return dataclasses.replace(robot, provenance=(digest.hexdigest(), _canonical(robot)))
 
 
 def sample_configurations(robot: Robot, size: int | tuple[int, ...], seed: int | np.random.Generator,

@@ -17,6 +17,7 @@ the links' common normals and offsets.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 from collections.abc import Mapping
@@ -363,8 +364,8 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         ParamsError: one line naming the file, the element and the rule (a prismatic or
             continuous joint on the chain, a closed loop, a missing link, a malformed number…).
     """
-    from .reading import ParamsError
-    from .robot import robot_from_dict
+    from .reading import ParamsError, read_bytes
+    from .robot import robot_from_dict, with_provenance
 
     path = Path(path)
     source = str(path)
@@ -505,13 +506,15 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
                        **{key: j[key] for key in ("effort", "velocity") if j[key] > 0}})
     tool = np.linalg.solve(frames[n], pose[tip])
     try:
-        return robot_from_dict({"name": name or r.name, "convention": "standard",
+        robot = robot_from_dict({"name": name or r.name, "convention": "standard",
                                 "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
                                 "tool": tool.tolist(), "joints": joints,
                                 "description": f"from {path.name}, chain {root} → {tip}"},
                                source=source)
     except ParamsError as exc:
         raise ParamsError(f"{exc} (converted from the URDF)") from None
+    how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
+    return with_provenance(robot, read_bytes(path, max_bytes=16 << 20, what="URDF"), how)
 
 
 def _snap(x: float, tol: float = 1e-12) -> float:
