@@ -79,16 +79,43 @@ ROBOT_CHAPTERS = [nb for nb in NOTEBOOK_FILES
 
 
 @pytest.mark.notebook
+@pytest.mark.parametrize("robot", ["puma560", "so101"])
 @pytest.mark.parametrize("notebook", ROBOT_CHAPTERS, ids=lambda p: p.stem)
-def test_runs_for_another_shipped_robot_without_touching_figures(notebook, tmp_path):
-    """A chapter takes any shipped robot (here the 6-joint Puma 560), and a run by hand never
-    writes into figures/."""
+def test_runs_for_another_shipped_robot_without_touching_figures(notebook, robot, tmp_path):
+    """A chapter takes any shipped robot (the 6-joint Puma 560, the SO-101 read from its
+    URDF), and a run by hand never writes into figures/."""
     before = {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")}
     parameters = {"smoke": True, "out_dir": str(tmp_path / "out"),
-                  "robot_file": "params/robots/puma560.yaml"}
+                  "robot_file": f"params/robots/{robot}.yaml"}
     for name in ("recordings_dir", "data_dir", "models_dir"):
         if name in papermill.inspect_notebook(str(notebook)):
             parameters[name] = str(tmp_path / name)
     run_notebook(notebook, tmp_path / notebook.name, parameters)
-    assert "puma560" in (tmp_path / notebook.name).read_text()
+    assert robot in (tmp_path / notebook.name).read_text()
     assert {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")} == before
+
+
+STUDY_CHAPTERS = [nb for nb in NOTEBOOK_FILES
+                  if "study_file" in papermill.inspect_notebook(str(nb))]
+
+
+@pytest.fixture(scope="module")
+def so101_shared(tmp_path_factory):
+    return tmp_path_factory.mktemp("so101")
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("notebook", STUDY_CHAPTERS, ids=lambda p: p.stem)
+def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
+    """Chapters 05–07 in order on the SO-101's study: its data, its models, their tests."""
+    parameters = {"smoke": True, "out_dir": str(so101_shared / f"out_{notebook.stem}"),
+                  "study_file": "params/studies/so101.yaml"}
+    for name in ("recordings_dir", "data_dir", "models_dir"):
+        if name in papermill.inspect_notebook(str(notebook)):
+            parameters[name] = str(so101_shared / name)
+    if notebook.name.startswith("07") and not (so101_shared / "models_dir" / "id").is_dir():
+        (training,) = [nb for nb in STUDY_CHAPTERS if nb.name.startswith("06")]
+        run_notebook(training, so101_shared / training.name, {**parameters, "out_dir": str(so101_shared / "06")})
+    run_notebook(notebook, so101_shared / notebook.name, parameters)
+    assert "so101" in (so101_shared / notebook.name).read_text()
+    assert sorted((so101_shared / f"out_{notebook.stem}").glob("*.png"))

@@ -23,6 +23,10 @@ orientation quaternion and position (7 inputs). :class:`LearnedIK` does that, an
   pitch angle would jump by 2π inside the region. For intelbot5 in a region that keeps the tool
   in front of the base axis, ``q1`` *is* the azimuth and ``q5`` the roll less a constant, so two of
   the five models are linear maps, which a first-order Sugeno rule represents exactly.
+  The pose is read in the robot's :func:`arm_chart`: in DH frame 0 (whose z is the base axis),
+  at the point of the roll axis nearest the tool point — the identity for intelbot5; for the
+  SO-101, whose tool point is 7.9 mm off its roll axis, the difference between its approach axis
+  leaving the arm's plane by up to 27° (in the world) and by 0.13° (in the chart).
 
 Angular inputs (the azimuth and the roll of ``"arm_plane"``) are unwrapped about the circular
 mean of the training data (stored with the model), so a region that straddles ±180° is not cut.
@@ -72,14 +76,14 @@ from . import __version__
 from .anfis import ANFIS
 from .dynamics import regressor, rnea
 from .ik import check_targets
-from .kinematics import fk
+from .kinematics import fk, fk_all
 from .paths import atomic_path
 from .reading import ParamsError, Validator, json_ready, load_json, show
 from .robot import Robot, joint_array, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
 __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
-           "encode", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "ENCODINGS",
+           "encode", "arm_chart", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "ENCODINGS",
            "ANGULAR", "FILE_NAME", "ID_FILE_NAME", "BASELINES"]
 
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
@@ -90,11 +94,48 @@ _FORMAT = "nfarm-learned-ik-1"
 _CHUNK = 16384
 
 
-def encode(T_0e: np.ndarray, encoding: str) -> np.ndarray:
-    """Input features ``(..., d)`` of tool poses ``T_0e (..., 4, 4)`` (module docstring)."""
+def arm_chart(robot: Robot) -> np.ndarray | None:
+    """``(2, 4, 4)``: the poses ``[B, W]`` that put a tool pose into the frame ``"arm_plane"``
+    reads, ``B · T_0e · W``, or ``None`` when both are the identity (intelbot5).
+
+    ``B = base⁻¹`` moves the world into DH frame 0, whose z axis is the base axis. ``W`` is, in
+    the tool frame, the frame on the last joint's axis nearest the tool point, its z along that
+    axis (on the side of the tool's z) and its x the tool's x made perpendicular to it. For an
+    arm whose tool point lies off its roll axis (the SO-101's, by 7.9 mm) the tool point leaves
+    the arm's vertical plane as the wrist rolls, the point on the roll axis does not.
+    """
+    F = fk_all(robot, np.zeros(robot.n))
+    axis_frame = F[-2] if robot.convention == "standard" else F[-1]
+    tool = F[-1] @ robot.tool
+    inv = np.linalg.inv(tool)
+    c = inv[:3, :3] @ axis_frame[:3, 3] + inv[:3, 3]            # a point on the axis, tool frame
+    u = inv[:3, :3] @ axis_frame[:3, 2]
+    u = u if u[2] >= 0 else -u
+    w = c - np.dot(c, u) * u
+    x = np.array([1.0, 0.0, 0.0]) - u[0] * u
+    x /= np.linalg.norm(x)
+    W = np.eye(4)
+    W[:3, :3], W[:3, 3] = np.column_stack([x, np.cross(u, x), u]), w
+    W[np.abs(W) < 1e-12] = 0.0
+    W[np.abs(W - 1) < 1e-12] = 1.0
+    B = np.linalg.inv(robot.base)
+    if np.array_equal(W, np.eye(4)) and np.array_equal(robot.base, np.eye(4)):
+        return None
+    return np.stack([B, W])
+
+
+def _in_chart(T: np.ndarray, chart: np.ndarray | None) -> np.ndarray:
+    return T if chart is None else chart[0] @ T @ chart[1]
+
+
+def encode(T_0e: np.ndarray, encoding: str, chart: np.ndarray | None = None) -> np.ndarray:
+    """Input features ``(..., d)`` of tool poses ``T_0e (..., 4, 4)`` (module docstring);
+    ``"arm_plane"`` reads the poses in the robot's :func:`arm_chart` when given."""
     if encoding not in ENCODINGS:
         raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {encoding!r}")
     T = np.asarray(T_0e, dtype=float)
+    if encoding == "arm_plane":
+        T = _in_chart(T, chart)
     p, R = T[..., :3, 3], T[..., :3, :3]
     if encoding == "quat_xyz":
         quat = matrix_to_quat(R)                         # [w, x, y, z]
@@ -113,10 +154,11 @@ def encode(T_0e: np.ndarray, encoding: str) -> np.ndarray:
                      np.sin(pitch), roll], axis=-1)
 
 
-def out_of_plane(T_0e: np.ndarray) -> np.ndarray:
+def out_of_plane(T_0e: np.ndarray, chart: np.ndarray | None = None) -> np.ndarray:
     """Angle [rad] ``(...)`` by which the tool's approach axis leaves the vertical plane through
-    the tool point and the base axis: 0 for every pose of an arm ``"arm_plane"`` describes."""
-    T = np.asarray(T_0e, dtype=float)
+    the tool point and the base axis: 0 for every pose of an arm ``"arm_plane"`` describes
+    (with ``chart``, :func:`arm_chart`: the roll axis and its point nearest the tool)."""
+    T = _in_chart(np.asarray(T_0e, dtype=float), chart)
     azimuth = np.arctan2(T[..., 1, 3], T[..., 0, 3])
     normal = -np.sin(azimuth) * T[..., 0, 2] + np.cos(azimuth) * T[..., 1, 2]
     return np.arcsin(np.clip(np.abs(normal), 0.0, 1.0))
@@ -206,7 +248,7 @@ class LearnedIK:
     def _fit_inputs(self, T: np.ndarray) -> np.ndarray:
         """Learn the inputs' unwrapping centres and scaling from training poses ``T (N, 4, 4)``
         and return their scaled inputs ``(N, d)``."""
-        X = encode(T, self.encoding)
+        X = encode(T, self.encoding, getattr(self, "chart_", None))
         columns = ANGULAR[self.encoding]
         self.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
             else np.zeros(0)
@@ -216,7 +258,8 @@ class LearnedIK:
         return (X - self.input_lo_) / self.input_span_
 
     def _inputs(self, T: np.ndarray) -> np.ndarray:
-        X = _unwrap(encode(T, self.encoding), ANGULAR[self.encoding], self.angle_centre_)
+        X = _unwrap(encode(T, self.encoding, getattr(self, "chart_", None)), ANGULAR[self.encoding],
+                    self.angle_centre_)
         return (X - self.input_lo_) / self.input_span_
 
     def _options(self, n: int) -> list[dict]:
@@ -237,8 +280,9 @@ class LearnedIK:
         options = self._options(robot.n)
         T, q = _pairs(train, robot, "train")
         T_val, q_val = _pairs(val, robot, "val") if val is not None else (None, None)
+        self.chart_ = arm_chart(robot) if self.encoding == "arm_plane" else None
         if self.encoding == "arm_plane":
-            worst = float(out_of_plane(T).max())
+            worst = float(out_of_plane(T, self.chart_).max())
             if not worst <= self.max_out_of_plane:
                 raise ValueError(f"encoding 'arm_plane' needs the tool's approach axis in the "
                                  f"vertical plane through the tool point; {robot.name}'s training "
@@ -321,7 +365,8 @@ class LearnedIK:
                 "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(),
                 "input_span": self.input_span_.tolist(),
                 "fit_seconds": list(self.fit_seconds_),
-                "models": [m.to_dict() for m in self.models_]}
+                "models": [m.to_dict() for m in self.models_]} | \
+            ({} if getattr(self, "chart_", None) is None else {"chart": self.chart_.tolist()})
 
     def save(self, directory: str | os.PathLike) -> Path:
         """Write ``directory/learned_ik.json`` atomically; :meth:`load` reproduces the
@@ -344,7 +389,7 @@ class LearnedIK:
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedIK":
         v = Validator(source)
-        v.mapping(data, "", dict.fromkeys(_KEYS, True))
+        v.mapping(data, "", {**dict.fromkeys(_KEYS, True), "chart": False})
         if data["format"] != _FORMAT:
             v.fail("format", f"must be {_FORMAT!r} (an nfarm learned IK model), got {show(data['format'])}")
         encoding = v.choice(data["encoding"], "encoding", tuple(ENCODINGS))
@@ -361,6 +406,8 @@ class LearnedIK:
                     **options)
         model.models_, model.fit_seconds_ = fitted, seconds
         model.angle_centre_, model.input_lo_, model.input_span_ = centre, lo, span
+        model.chart_ = v.array(data["chart"], "chart", (2, 4, 4)) if data.get("chart") is not None \
+            else None
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
         return model
@@ -751,6 +798,7 @@ class Baseline:
             raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
         T, q = _pairs(train, robot, "train")
         self.scaler_ = LearnedIK(self.encoding)      # the same inputs as the learned IK's
+        self.scaler_.chart_ = arm_chart(robot) if self.encoding == "arm_plane" else None
         X = self.scaler_._fit_inputs(T)
         start = time.perf_counter()
         if self.kind == "nearest":
