@@ -13,7 +13,7 @@ import time
 import numpy as np
 import papermill
 
-from common import seconds_per_call  # noqa: F401 — sets the benchmark environment
+from common import best_of
 from nfarm import datasets, ik
 from nfarm.learned import Baseline, LearnedIK
 from nfarm.paths import NOTEBOOKS, PARAMS
@@ -29,15 +29,6 @@ def chosen_options() -> dict:
 
 N_PREDICT = 1_000_000
 N_LM = 2000
-
-
-def best_of(fn, repeat: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def main() -> None:

@@ -9,12 +9,11 @@ sample reported against ``rnea``. The options are chapter 06's (``id_chosen``,
 from __future__ import annotations
 
 import ast
-import time
 
 import numpy as np
 import papermill
 
-from common import seconds_per_call  # noqa: F401 — sets the benchmark environment
+from common import best_of
 from nfarm import datasets
 from nfarm.dynamics import regressor, rnea
 from nfarm.learned import LearnedID
@@ -30,15 +29,6 @@ def chapter_options() -> dict[str, dict]:
     seed = ast.literal_eval(declared["seed"]["default"])
     return {key: {**ast.literal_eval(declared[key]["default"]), "random_state": seed}
             for key in ("id_chosen", "id_dissertation", "id_residual")}
-
-
-def best_of(fn, repeat: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def main() -> None:

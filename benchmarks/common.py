@@ -27,3 +27,13 @@ def seconds_per_call(fn: Callable[[], object], *, min_time: float = 0.2, repeat:
                 break
         best = min(best, elapsed / calls)
     return best
+
+
+def best_of(fn: Callable[[], object], repeat: int = 3) -> float:
+    """Best-of-``repeat`` wall time of one call of ``fn`` (for calls of a second or more)."""
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
