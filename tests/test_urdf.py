@@ -272,6 +272,16 @@ def test_every_urdf_rule_has_a_bad_file(tmp_path, change, message):
     assert str(caught.value).startswith(f"{path}: ") and "\n" not in str(caught.value)
 
 
+def test_a_lock_position_must_be_a_finite_number(tmp_path):
+    path = tmp_path / "two.urdf"
+    path.write_text(GOOD.replace('</robot>', '<joint name="jaw" type="revolute"><parent link="l1"/>'
+                                 '<child link="jaw"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" '
+                                 'effort="1" velocity="1"/></joint><link name="jaw"/></robot>'))
+    with pytest.raises(ParamsError, match=r"lock.jaw: must be a finite number, got nan"):
+        from_urdf(path, tip="l2", lock={"jaw": float("nan")})
+    assert from_urdf(path, tip="l2", lock={"jaw": 0.5}).n == 2
+
+
 def test_robot_files_naming_a_urdf(tmp_path):
     """A YAML robot file takes a URDF relative to itself, its tip, locks, gravity and drive
     terms; check-params accepts it and the URDF; their mistakes are one-line errors."""

@@ -417,6 +417,8 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         v.fail("tip", f"the chain from {root!r} to {tip!r} has no revolute joint")
     lock = dict(lock or {})
     for jname, value in lock.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            v.fail(f"lock.{jname}", f"must be a finite number, got {value!r}")
         if jname not in r.joints:
             v.fail(f"lock.{jname}", "names no joint of the URDF")
         if jname in chain:
