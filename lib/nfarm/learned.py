@@ -107,9 +107,9 @@ def arm_chart(robot: Robot) -> np.ndarray | None:
     F = fk_all(robot, np.zeros(robot.n))
     axis_frame = F[-2] if robot.convention == "standard" else F[-1]
     tool = F[-1] @ robot.tool
-    inv = np.linalg.inv(tool)
-    c = inv[:3, :3] @ axis_frame[:3, 3] + inv[:3, 3]            # a point on the axis, tool frame
-    u = inv[:3, :3] @ axis_frame[:3, 2]
+    Rt = tool[:3, :3].T                                          # world → tool frame
+    c = Rt @ (axis_frame[:3, 3] - tool[:3, 3])                   # a point on the axis
+    u = Rt @ axis_frame[:3, 2]
     u = u if u[2] >= 0 else -u
     w = c - np.dot(c, u) * u
     x = np.array([1.0, 0.0, 0.0]) - u[0] * u
@@ -118,7 +118,9 @@ def arm_chart(robot: Robot) -> np.ndarray | None:
     W[:3, :3], W[:3, 3] = np.column_stack([x, np.cross(u, x), u]), w
     W[np.abs(W) < 1e-12] = 0.0
     W[np.abs(W - 1) < 1e-12] = 1.0
-    B = np.linalg.inv(robot.base)
+    B = np.eye(4)                                                # base⁻¹ of a rigid transform
+    B[:3, :3] = robot.base[:3, :3].T
+    B[:3, 3] = -B[:3, :3] @ robot.base[:3, 3]
     if np.array_equal(W, np.eye(4)) and np.array_equal(robot.base, np.eye(4)):
         return None
     return np.stack([B, W])

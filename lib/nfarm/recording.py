@@ -18,6 +18,7 @@ The recording id comes from the name and the seed, so the same inputs give the s
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from pathlib import Path
@@ -62,19 +63,26 @@ def record_trajectory(robot: Robot, trajectory: Trajectory, path: str | os.PathL
         rrb.Spatial3DView(origin="/", name=f"{robot.name}: arm and tool path"),
         rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/{key}", name=titles[key]) for key in series)),
         column_shares=[3, 2]), collapse_panels=True)
-    rec = rr.RecordingStream(f"nfarm_{name}", recording_id=f"nfarm-{name}-{seed}")
-    with tempfile.TemporaryDirectory() as tmp, atomic_path(path) as out:
-        rec.save(out, default_blueprint=blueprint)
-        times = [rr.TimeColumn(TIMELINE, duration=t)]
-        _log_arm(rec, robot, q, times, Path(tmp))
+    with _recording(path, name, seed, blueprint, t) as (rec, times, tmp):
+        _log_arm(rec, robot, q, times, tmp)
         for key, values in series.items():
             for j, joint_name in enumerate(robot.joint_names):
                 rec.send_columns(f"{key}/{joint_name}", indexes=times,
                                  columns=rr.Scalars.columns(scalars=values[:, j]))
         _log_growing_path(rec, "tool_path", t, fk(robot, q)[:, :3, 3], (230, 120, 30))
+    return path
+
+
+@contextlib.contextmanager
+def _recording(path: Path, name: str, seed: int, blueprint, t: np.ndarray):
+    """A recording written to ``path`` atomically, with its blueprint, its id from ``name`` and
+    ``seed``: yields the stream, the time column of ``t`` [s] and a temporary directory."""
+    rec = rr.RecordingStream(f"nfarm_{name}", recording_id=f"nfarm-{name}-{seed}")
+    with tempfile.TemporaryDirectory() as tmp, atomic_path(path) as out:
+        rec.save(out, default_blueprint=blueprint)
+        yield rec, [rr.TimeColumn(TIMELINE, duration=t)], Path(tmp)
         rec.flush()
         rec.disconnect()
-    return path
 
 
 def _log_arm(rec, robot: Robot, q: np.ndarray, times, tmp: Path, *, prefix: str = "",
@@ -136,15 +144,12 @@ def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
         rrb.Vertical(rrb.TimeSeriesView(origin="/position_error_mm", name="tool position error [mm]"),
                      rrb.TimeSeriesView(origin="/orientation_error_deg", name="tool orientation error [deg]")),
         column_shares=[3, 2]), collapse_panels=True)
-    rec = rr.RecordingStream(f"nfarm_{name}", recording_id=f"nfarm-{name}-{seed}")
-    with tempfile.TemporaryDirectory() as tmp, atomic_path(path) as out:
-        rec.save(out, default_blueprint=blueprint)
-        times = [rr.TimeColumn(TIMELINE, duration=t)]
+    with _recording(path, name, seed, blueprint, t) as (rec, times, tmp):
         rec.log("target_path", rr.LineStrips3D([T_path[:, :3, 3]], colors=[[150, 150, 150]],
                                                radii=0.001), static=True)
         for (label, q), (link_rgb, path_rgb) in zip(solutions.items(), _ARM_COLOURS):
             q = np.asarray(q, dtype=float)
-            _log_arm(rec, robot, q, times, Path(tmp), prefix=f"{label}_", color=link_rgb)
+            _log_arm(rec, robot, q, times, tmp, prefix=f"{label}_", color=link_rgb)
             T_q = fk(robot, q)
             twist = pose_error(T_path, T_q)
             rec.send_columns(f"position_error_mm/{label}", indexes=times, columns=rr.Scalars.columns(
@@ -152,8 +157,6 @@ def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
             rec.send_columns(f"orientation_error_deg/{label}", indexes=times, columns=rr.Scalars.columns(
                 scalars=np.degrees(np.linalg.norm(twist[:, 3:], axis=1))))
             _log_growing_path(rec, f"{label}_tool_path", t, T_q[:, :3, 3], path_rgb)
-        rec.flush()
-        rec.disconnect()
     return path
 
 
@@ -187,17 +190,12 @@ def record_id_trajectory(robot: Robot, t: np.ndarray, q: np.ndarray,
         rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/tau/{joint}", name=f"{joint} torque [N·m]")
                        for joint in robot.joint_names)),
         column_shares=[3, 2]), collapse_panels=True)
-    rec = rr.RecordingStream(f"nfarm_{name}", recording_id=f"nfarm-{name}-{seed}")
-    with tempfile.TemporaryDirectory() as tmp, atomic_path(path) as out:
-        rec.save(out, default_blueprint=blueprint)
-        times = [rr.TimeColumn(TIMELINE, duration=t)]
-        _log_arm(rec, robot, q, times, Path(tmp))
+    with _recording(path, name, seed, blueprint, t) as (rec, times, tmp):
+        _log_arm(rec, robot, q, times, tmp)
         for label, tau in torques.items():
             tau = np.asarray(tau, dtype=float)
             for j, joint in enumerate(robot.joint_names):
                 rec.send_columns(f"tau/{joint}/{label}", indexes=times,
                                  columns=rr.Scalars.columns(scalars=tau[:, j]))
         _log_growing_path(rec, "tool_path", t, fk(robot, q)[:, :3, 3], (230, 120, 30))
-        rec.flush()
-        rec.disconnect()
     return path

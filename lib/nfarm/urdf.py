@@ -314,6 +314,35 @@ def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarra
     return f1, gap / distance
 
 
+def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> list[np.ndarray]:
+    """World poses of DH frames 0..n from the joint axes (point, unit direction) at q = 0 and
+    the tip's origin (:func:`from_urdf`'s docstring)."""
+    n = len(axes)
+    z_0 = axes[0][1]
+    o_0 = axes[0][0] - np.dot(axes[0][0], z_0) * z_0          # on axis 1, nearest the origin
+    frames = [None] * (n + 1)
+    o, x = o_0, np.zeros(3)
+    for i in range(1, n):
+        o, x = _common_normal(o, axes[i - 1][1], *axes[i], x)
+        if not x.any():                                        # axes 1 and 2 the same line
+            x = _perpendicular(axes[0][1])
+        frames[i] = _frame(x, axes[i][1], o)
+    # Frame n at the tip's origin, z along axis n; x along the tip's offset from the axis.
+    z_n = axes[-1][1]
+    gap = p_tip - o
+    gap -= np.dot(gap, z_n) * z_n
+    if np.linalg.norm(gap) > _NEAR:
+        x = gap / np.linalg.norm(gap)
+    elif not x.any():
+        x = _perpendicular(z_n)
+    frames[n] = _frame(x, z_n, p_tip)
+    # Frame 0 on axis 1, x_0 = x_1 (offset_1 = 0).
+    x_1 = frames[1][:3, 0]
+    frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0)
+    frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
+    return frames
+
+
 def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
@@ -386,14 +415,12 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     if len(roots) != 1:
         v.fail("<robot>", f"must have one root link, got {len(roots)}: {', '.join(roots) or 'none (a loop)'}")
     root = roots[0]
-    reached, stack = {root}, [root]
-    while stack:
-        for jname in children[stack.pop()]:
-            reached.add(r.joints[jname]["child"])
-            stack.append(r.joints[jname]["child"])
-    if len(reached) != len(r.links):
+    order = [root]                              # links, parents before children
+    for link in order:
+        order += [r.joints[jname]["child"] for jname in children[link]]
+    if len(order) != len(r.links):
         v.fail("<robot>", f"links not connected to the root {root!r} (a loop): "
-                          f"{', '.join(sorted(set(r.links) - reached))}")
+                          f"{', '.join(sorted(set(r.links) - set(order)))}")
     leaves = sorted(l for l in r.links if not children[l])
     if tip is None:
         if len(leaves) != 1:
@@ -426,7 +453,6 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
 
     # World poses at q = 0 (side joints at their lock positions) of every link.
     pose = {root: np.eye(4)}
-    order = [root]
     for link in order:
         for jname in children[link]:
             j = r.joints[jname]
@@ -439,7 +465,6 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
             elif j["type"] not in _LOCKABLE:
                 v.fail(f"joint {jname!r}", f"type {j['type']!r} cannot be locked off the chain")
             pose[j["child"]] = T
-            order.append(j["child"])
 
     # Joint axes as world lines, then the DH frames.
     axes = []
@@ -447,33 +472,7 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         T = pose[r.joints[jname]["parent"]] @ r.joints[jname]["origin"]
         axes.append((T[:3, 3], T[:3, :3] @ r.joints[jname]["axis"]))
     n = len(moving)
-    p_tip = pose[tip][:3, 3]
-    frames = [None] * (n + 1)
-    for i in range(1, n):
-        prev_o = None if i == 1 else frames[i - 1][:3, 3]
-        o0, z0 = axes[i - 1]
-        if i == 1:
-            o0 = o0 + np.dot(-o0, z0) * z0              # nearest the root's origin
-        o, x = _common_normal(o0 if prev_o is None else prev_o, z0, *axes[i],
-                              np.zeros(3) if i == 1 else frames[i - 1][:3, 0])
-        if i == 1 and np.linalg.norm(x) == 0:            # axes 1 and 2 the same line
-            x = _perpendicular(z0)
-        frames[i] = _frame(x, axes[i][1], o)
-    # Frame n at the tip's origin, z along axis n; frame 0 on axis 1, x_0 = x_1.
-    o_prev = frames[n - 1][:3, 3] if n > 1 else axes[0][0] + np.dot(-axes[0][0], axes[0][1]) * axes[0][1]
-    z_last = axes[-1][1]
-    gap = p_tip - o_prev
-    gap -= np.dot(gap, z_last) * z_last
-    if np.linalg.norm(gap) > _NEAR:
-        x_n = gap / np.linalg.norm(gap)
-    else:
-        x_n = frames[n - 1][:3, 0] if n > 1 else _perpendicular(z_last)
-    frames[n] = _frame(x_n, z_last, p_tip)
-    z_0 = axes[0][1]
-    o_0 = axes[0][0] + np.dot(-axes[0][0], z_0) * z_0
-    x_1 = frames[1][:3, 0]
-    frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0) if n > 1 else _frame(x_n, z_0, o_0)
-    frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
+    frames = _dh_frames(axes, pose[tip][:3, 3])
 
     rows = []
     for i in range(1, n + 1):
