@@ -10,7 +10,7 @@ import pytest
 from nfarm import jang
 from nfarm.anfis import ANFIS, ANFISMulti, ANFISWarning, load
 from nfarm.reading import ParamsError
-from nfarm.fuzzy import mf_gradients, mf_values
+from nfarm.fuzzy import mf_gradients, mf_rows, mf_values
 
 
 @pytest.mark.parametrize("kind, params", [
@@ -274,3 +274,23 @@ def test_clustering_is_bounded_before_the_work():
         ANFIS(partition="fcm", n_rules=2000).fit(X, X.sum(1))
     with pytest.raises(ValueError, match=r"radius 0.001 finds more than \d+ clusters"):
         ANFIS(partition="subtractive", radius=1e-3).fit(X[:1500], X[:1500].sum(1))
+
+
+def test_prediction_rows_of_bells_are_scikit_fuzzy_s_bit_for_bit():
+    from skfuzzy import gbellmf
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=500) * 3
+    P = np.column_stack([rng.random(4) + 0.01, rng.random(4) * 4, rng.normal(size=4)])
+    expected = gbellmf(x[None], P[:, 0, None], P[:, 1, None], P[:, 2, None])
+    assert np.array_equal(mf_rows("gbell", x, P), expected)
+
+
+@pytest.mark.parametrize("n_mfs", [[1, 3, 1, 2], [2, 2, 2, 1], [1, 1, 1, 1], [3, 1, 1, 1], [2, 3, 2, 2]])
+def test_fast_grid_prediction_equals_the_training_path(n_mfs):
+    rng = np.random.default_rng(6)
+    X = rng.random((400, 4))
+    y = np.sin(3 * X[:, 0]) + X[:, 1] * X[:, 3] - X[:, 2] ** 2
+    model = ANFIS(n_mfs=n_mfs, epochs=3, random_state=0).fit(X, y)
+    assert model._grid_sizes() == n_mfs
+    slow = model._predict_with(X, model.mfs_, model.rules_, model.consequents_)
+    np.testing.assert_allclose(model.predict(X), slow, rtol=0, atol=1e-13)

@@ -177,6 +177,18 @@ def test_bad_target_index_in_a_2d_batch(intelbot5):
         solve(intelbot5, T)
 
 
+
+@pytest.mark.parametrize("rule", ["nan", "last row", "not orthonormal", "reflection"])
+def test_bad_targets_beyond_the_first_check_chunk_are_named(intelbot5, rule, monkeypatch):
+    import nfarm.ik
+    monkeypatch.setattr(nfarm.ik, "_CHECK_CHUNK", 3)       # the pose sits in the second chunk
+    make, message = BAD_TARGETS[rule]
+    T = make(intelbot5)
+    bad_row = {"nan": 2, "last row": 3, "not orthonormal": 1, "reflection": 2}[rule]
+    shifted = np.concatenate([good_targets(intelbot5)[:4], T[bad_row:bad_row + 1]])
+    with pytest.raises(ValueError, match=message.replace(rf"\[{bad_row}\]", r"\[4\]")):
+        nfarm.ik.check_targets(shifted)
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(q0=np.zeros(4)), r"q0 must have shape \(5,\) or \(4, 5\)"),
     (dict(q0=np.full(5, 3.0)), r"q0: must be finite and within the joint limits"),

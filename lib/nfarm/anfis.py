@@ -383,9 +383,18 @@ class ANFIS:
     def _predict_with(self, X, mfs, rules, theta):
         return (self._layers(X, mfs, rules)[4] * self._rule_outputs(X, theta)).sum(axis=1)
 
-    def _firing(self, X):
-        """Firing strengths ``w (R, N)`` of the fitted rules for inputs ``X (N, n)``, laid out
-        rule by rule, for prediction.
+    def _grid_sizes(self) -> list[int] | None:
+        """Functions per input when the rules are the full grid in :func:`grid_rules` order
+        (the last input varying fastest), else None."""
+        sizes = [len(p) for p in self.mfs_]
+        if len(self.rules_) == math.prod(sizes) and np.array_equal(
+                self.rules_, np.indices(sizes).reshape(len(sizes), -1).T):
+            return sizes
+        return None
+
+    def _firing(self, X, sizes=None):
+        """Firing strengths ``w (R', N)`` of the fitted rules for inputs ``X (N, n)``, laid out
+        rule by rule, for prediction (``sizes``: of a grid, see below).
 
         Cheaper than the training path (:meth:`_layers`), which keeps every factor for the
         gradient: a grid partition's strengths are built as successive outer products of the
@@ -394,35 +403,57 @@ class ANFIS:
         normalisation. Rules in rows make every product run over the ``N`` samples
         (measured: 3.5× faster than samples in rows, where the innermost loops are only
         ``m`` long). Equal to the training path's to rounding (≈1e-16 relative).
+
+        With ``sizes`` given (a grid's), the grades of the grid's last input with more than
+        one function are left out as well and returned: ``w (R / m_L, N)`` and ``mu_L (m_L,
+        N)`` (``None`` if every input has a single function).
         """
-        mfs, rules = self.mfs_, self.rules_
-        sizes = [len(p) for p in mfs]
-        grid = len(rules) == math.prod(sizes) and np.array_equal(
-            rules, np.indices(sizes).reshape(len(sizes), -1).T)
-        if grid:
-            w = np.ones((1, len(X)))
-            for i, m in enumerate(sizes):
-                if m > 1:
-                    mu = mf_rows(self.mf, X[:, i], mfs[i])
-                    w = (w[:, None, :] * mu[None, :, :]).reshape(-1, len(X))
-            # Rules vary fastest in the last input: the skipped inputs' single function leaves
-            # the order of the remaining products unchanged.
-            return w
+        if sizes is not None:
+            inputs = [i for i, m in enumerate(sizes) if m > 1]
+            if not inputs:
+                return np.ones((1, len(X))), None
+            w = None
+            for i in inputs[:-1]:
+                mu = mf_rows(self.mf, X[:, i], self.mfs_[i])
+                w = mu if w is None else (w[:, None, :] * mu[None, :, :]).reshape(-1, len(X))
+            last = mf_rows(self.mf, X[:, inputs[-1]], self.mfs_[inputs[-1]])
+            return (np.ones((1, len(X))) if w is None else w), last
         w = None
         for i in range(X.shape[1]):
-            factor = mf_rows(self.mf, X[:, i], mfs[i])[rules[:, i]]
+            factor = mf_rows(self.mf, X[:, i], self.mfs_[i])[self.rules_[:, i]]
             w = factor if w is None else np.multiply(w, factor, out=w)
         return w
 
     def _predict_fast(self, X):
         """Outputs ``(N,)`` and total firing ``(N,)`` of inputs ``X (N, n)`` (validated):
         ``y = Σ_r w_r (p_r · x + p_r0) / Σ_r w_r``, the rule sum as one matrix product
-        ``(Θᵀ w) · [x, 1]``."""
-        w = self._firing(X)
-        total = w.sum(axis=0)
-        theta = self.consequents_
-        coefficients = theta.T @ w                                    # (n + 1, N)
-        y = np.einsum("kn,nk->n", coefficients[:-1], X) + coefficients[-1]
+        ``(Θᵀ w) · [x, 1]`` with the total firing as one more row of it (Θ gains a column of
+        ones).
+
+        A grid's last product is never formed: with ``w_(s,k) = w'_s μ_k`` (``k`` the last
+        input's function), ``Σ_r Θ_r w_r = Σ_k μ_k (Θ_(·,k)ᵀ w')``, one matrix product on
+        the ``R / m_L`` partial strengths and ``m_L`` scaled sums. Measured on chapter 06's
+        chosen 81-rule models: 510 → 250 ns per pose. Equal to the training path's outputs
+        to rounding (tested).
+        """
+        n = X.shape[1]
+        theta = np.column_stack([self.consequents_, np.ones(len(self.consequents_))])  # (R, n+2)
+        sizes = self._grid_sizes()
+        if sizes is None:
+            coefficients = theta.T @ self._firing(X)                           # (n + 2, N)
+        else:
+            w, mu = self._firing(X, sizes)
+            if mu is None:
+                coefficients = theta.T @ w
+            else:
+                m = len(mu)
+                A = theta.reshape(-1, m, n + 2).transpose(1, 2, 0).reshape(m * (n + 2), -1)
+                partial = (A @ w).reshape(m, n + 2, len(X))
+                coefficients = partial[0] * mu[0]
+                for k in range(1, m):
+                    coefficients += partial[k] * mu[k]
+        total = coefficients[-1]
+        y = np.einsum("kn,nk->n", coefficients[:n], X) + coefficients[n]
         return y / np.where(total > 0, total, 1.0), total
 
     def _check_fitted(self):

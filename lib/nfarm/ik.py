@@ -114,6 +114,9 @@ def _where(shape: tuple, flat_index: int) -> str:
     return f"T_target[{', '.join(map(str, np.unravel_index(flat_index, shape)))}]"
 
 
+_CHECK_CHUNK = 8192
+
+
 def check_targets(T_target, ortho_tol: float = 1e-9) -> np.ndarray:
     """``T_target`` as a float array of rigid transforms ``(..., 4, 4)``, or a ``ValueError``
     naming the first bad one (shape, NaN, last row, rotation not orthonormal to ``ortho_tol``,
@@ -126,26 +129,31 @@ def check_targets(T_target, ortho_tol: float = 1e-9) -> np.ndarray:
     if T.ndim < 2 or T.shape[-2:] != (4, 4):
         raise ValueError(f"T_target must have shape (..., 4, 4), got {T.shape}")
     batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
-    bad = ~np.isfinite(flat).all(axis=(1, 2))
-    if bad.any():
-        raise ValueError(f"{_where(batch, np.argmax(bad))}: contains NaN or inf")
-    row = np.abs(flat[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1)
-    if (row > 0).any():
-        k = int(np.argmax(row > 0))
-        raise ValueError(f"{_where(batch, k)}: last row must be [0, 0, 0, 1], got {flat[k, 3].tolist()}")
-    # Columns x, y, z of every R as rows of length N (one copy): the dot products below then
-    # run over contiguous samples (measured: 5× faster than an einsum over the 3 × 3 blocks).
-    x, y, z = flat[:, :3, :3].transpose(2, 1, 0).copy()                      # (3, N) each
-    err = np.maximum.reduce([np.abs(np.einsum("kn,kn->n", u, v) - (1.0 if u is v else 0.0))
-                             for u, v in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z))])
-    if (err > ortho_tol).any():                                               # |RᵀR − I|
-        k = int(np.argmax(err > ortho_tol))
-        raise ValueError(f"{_where(batch, k)}: rotation is not orthonormal "
-                         f"(max |RᵀR − I| = {err[k]:.3g} > {ortho_tol:g})")
-    det = np.einsum("kn,kn->n", np.cross(x, y, axis=0), z)                    # (x × y)·z
-    if (det < 0).any():
-        raise ValueError(f"{_where(batch, int(np.argmax(det < 0)))}: rotation is a reflection "
-                         f"(determinant −1)")
+    # In chunks that stay in the cache (1e6 poses: 350 → 100 ns per pose); the first bad pose
+    # is named. Columns x, y, z of every R as rows of the chunk's length (one copy): the dot
+    # products then run over contiguous samples (5× faster than an einsum over 3 × 3 blocks).
+    for start in range(0, len(flat), _CHECK_CHUNK):
+        chunk = flat[start:start + _CHECK_CHUNK]
+        finite = np.isfinite(chunk)           # whole-chunk tests first, rows only on failure
+        if not finite.all():
+            bad = ~finite.all(axis=(1, 2))
+            raise ValueError(f"{_where(batch, start + np.argmax(bad))}: contains NaN or inf")
+        last = chunk[:, 3]
+        if not ((last[:, :3] == 0.0).all() and (last[:, 3] == 1.0).all()):
+            k = int(np.argmax((last != [0.0, 0.0, 0.0, 1.0]).any(axis=1)))
+            raise ValueError(f"{_where(batch, start + k)}: last row must be [0, 0, 0, 1], got "
+                             f"{chunk[k, 3].tolist()}")
+        x, y, z = chunk[:, :3, :3].transpose(2, 1, 0).copy()                  # (3, N) each
+        err = np.maximum.reduce([np.abs(np.einsum("kn,kn->n", u, v) - (1.0 if u is v else 0.0))
+                                 for u, v in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z))])
+        if (err > ortho_tol).any():                                           # |RᵀR − I|
+            k = int(np.argmax(err > ortho_tol))
+            raise ValueError(f"{_where(batch, start + k)}: rotation is not orthonormal "
+                             f"(max |RᵀR − I| = {err[k]:.3g} > {ortho_tol:g})")
+        det = np.einsum("kn,kn->n", np.cross(x, y, axis=0), z)                # (x × y)·z
+        if (det < 0).any():
+            raise ValueError(f"{_where(batch, start + int(np.argmax(det < 0)))}: rotation is "
+                             f"a reflection (determinant −1)")
     return T
 
 
