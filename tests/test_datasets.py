@@ -292,3 +292,29 @@ def test_robot_hash_ignores_layout_but_not_values(tmp_path):
     params = robot_to_dict(robot)
     params["joints"][0]["d"] += 1e-12
     assert robot_hash(robot_from_dict(params)) != robot_hash(robot)
+
+
+def _yaw_pitch_elbow(upper: float, fore: float):
+    """Base yaw, shoulder and elbow pitch with full turns: the tool reaches every point at a
+    distance between |upper − fore| and upper + fore from the shoulder."""
+    def joint(a, alpha):
+        return {"a": a, "alpha": alpha, "d": 0.0, "offset": 0.0, "qlim": [-np.pi, np.pi],
+                "mass": 1.0, "com": [0, 0, 0], "inertia": [0.01, 0.01, 0.01, 0, 0, 0]}
+    return robot_from_dict({"name": "ype", "convention": "standard", "gravity": [0, 0, -9.81],
+                            "joints": [joint(0.0, np.pi / 2), joint(upper, 0.0), joint(fore, 0.0)]})
+
+
+@pytest.mark.parametrize("upper, fore", [(1.0, 1.0), (2.0, 1.0)])
+def test_workspace_volume_of_a_spherical_shell(upper, fore):
+    robot = _yaw_pitch_elbow(upper, fore)
+    outer, inner = upper + fore, abs(upper - fore)
+    exact = 4 / 3 * np.pi * (outer ** 3 - inner ** 3)
+    est = datasets.workspace_volume(robot, outer, n_points=1500, seed=2, restarts=8)
+    assert est.points == 1500 and est.reach == outer
+    assert abs(est.volume - exact) <= 4 * max(est.std_error, 0.01 * exact), (est, exact)
+
+
+def test_reach_is_measured_from_the_first_joint_s_origin():
+    from nfarm.workspace import reach, workspace_points
+    robot = _yaw_pitch_elbow(2.0, 1.0)
+    assert 2.99 < reach(workspace_points(robot, 20_000, 0), robot) <= 3.0 + 1e-12

@@ -287,6 +287,41 @@ def workspace_fraction(region: IKRegion, n: int = 200_000, seed: int = 0, *,
     return shared / len(cells[0])
 
 
+@dataclass(frozen=True)
+class Volume:
+    """A Monte Carlo estimate of the workspace's volume (:func:`workspace_volume`)."""
+
+    volume: float        # [m³]
+    std_error: float     # [m³], one standard error of the estimate
+    reach: float         # [m], radius of the ball the points were drawn in
+    share: float         # share of the drawn points the tool reaches
+    points: int
+
+
+def workspace_volume(robot: Robot, reach_m: float, n_points: int = 4000, seed: int = 0,
+                     **solve_options) -> Volume:
+    """Volume [m³] of the tool's position workspace: points drawn uniformly in the ball of
+    radius ``reach_m`` about the first joint's origin, each tested by position-only IK
+    (:func:`nfarm.ik.solve` with weights ``[1, 1, 1, 0, 0, 0]``, its restarts, within the joint
+    limits); ``V = (4/3)π r³ · share reached``, standard error ``(4/3)π r³ √(s(1 − s)/N)``.
+
+    Why not count the cells that sampled configurations reach: with uniform joint samples
+    that count was still growing by 10 % from 200 000 to 800 000 samples (cells reached rarely
+    hold no sample), whereas 4 000 IK points give ±2 % in 3 s.
+    """
+    rng = np.random.default_rng(seed)
+    direction = rng.normal(size=(n_points, 3))
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    radius = reach_m * rng.random(n_points) ** (1 / 3)
+    T = np.tile(np.eye(4), (n_points, 1, 1))
+    T[:, :3, 3] = robot.base[:3, 3] + direction * radius[:, None]
+    reached = solve(robot, T, weights=[1, 1, 1, 0, 0, 0], seed=seed, **solve_options).success
+    share = float(reached.mean())
+    ball = 4 / 3 * np.pi * reach_m ** 3
+    return Volume(ball * share, ball * np.sqrt(share * (1 - share) / n_points), reach_m, share,
+                  n_points)
+
+
 def smoke_study(study: Study, factor: int = 50) -> Study:
     """The same study with every size divided by ``factor`` (at least a few samples each),
     for quick runs; its data sets go to a directory of their own (``<robot>-smoke``)."""

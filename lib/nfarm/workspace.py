@@ -10,7 +10,7 @@ from scipy.stats import binned_statistic_2d
 from .kinematics import fk, manipulability
 from .robot import Robot, sample_configurations
 
-__all__ = ["Map2D", "workspace_points", "plane_map", "joint_map"]
+__all__ = ["Map2D", "workspace_points", "reach", "plane_map", "joint_map"]
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,12 @@ class Map2D:
 def workspace_points(robot: Robot, n_samples: int, seed: int) -> np.ndarray:
     """Tool positions ``(n_samples, 3)`` [m] of configurations drawn uniformly within the limits."""
     return fk(robot, sample_configurations(robot, n_samples, seed))[:, :3, 3]
+
+
+def reach(points: np.ndarray, robot: Robot) -> float:
+    """Largest distance [m] of tool positions ``points (N, 3)`` from the first joint's origin
+    (the base transform's position)."""
+    return float(np.linalg.norm(points - robot.base[:3, 3], axis=1).max())
 
 
 def plane_map(robot: Robot, n_samples: int, bins: int, seed: int, *,
