@@ -39,6 +39,19 @@ def test_committed_without_outputs_and_with_literal_parameters(notebook):
     assert all(not str(v).startswith("figures") for k, v in values.items() if k.endswith("_dir"))
 
 
+def ensure_models(directory, study_file, scratch):
+    """Chapters 05 and 06 run into ``directory`` unless their data and models are there (in
+    `make report`, and in this module's order, they ran before the chapters that need them)."""
+    for prefix, ready in (("05", directory / "data_dir" / "id_test.npz"),
+                          ("06", directory / "models_dir" / "id")):
+        if not ready.exists():
+            (nb,) = [n for n in NOTEBOOK_FILES if n.name.startswith(prefix)]
+            run_notebook(nb, scratch / nb.name, {
+                "smoke": True, "study_file": study_file, "out_dir": str(scratch / prefix),
+                **{k: str(directory / k) for k in ("data_dir", "models_dir")
+                   if k in papermill.inspect_notebook(str(nb))}})
+
+
 @pytest.fixture(scope="module")
 def shared(tmp_path_factory):
     """Data and model directories shared by the chapters of one test run, as in `make report`:
@@ -56,10 +69,13 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     for name in ("recordings_dir", "data_dir", "models_dir"):   # nothing written into the checkout
         if name in declared:
             parameters[name] = str(shared / name)
-    if notebook.name.startswith("07") and not all((shared / "models_dir" / k).is_dir() for k in ("ik", "id")):
-        # Chapter 07 tests the models chapter 06 trains (in `make report`, 06 runs first).
-        (training,) = [nb for nb in NOTEBOOK_FILES if nb.name.startswith("06")]
-        run_notebook(training, tmp_path / training.name, {**parameters, "out_dir": str(tmp_path / "06")})
+    if "study_files" in declared:       # the comparison, here of one arm (both: test below)
+        study = "params/studies/intelbot5.yaml"
+        parameters.update(study_files=[study], data_dirs=[str(shared / "data_dir")],
+                          models_dirs=[str(shared / "models_dir")])
+        ensure_models(shared, study, tmp_path)
+    elif notebook.name.startswith("07"):
+        ensure_models(shared, "params/studies/intelbot5.yaml", tmp_path)
     run_notebook(notebook, executed, parameters)
     assert str(ROOT) not in executed.read_text(), "no absolute path of the checkout"
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
@@ -120,9 +136,24 @@ def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
     for name in ("recordings_dir", "data_dir", "models_dir"):
         if name in papermill.inspect_notebook(str(notebook)):
             parameters[name] = str(so101_shared / name)
-    if notebook.name.startswith("07") and not (so101_shared / "models_dir" / "id").is_dir():
-        (training,) = [nb for nb in STUDY_CHAPTERS if nb.name.startswith("06")]
-        run_notebook(training, so101_shared / training.name, {**parameters, "out_dir": str(so101_shared / "06")})
+    if notebook.name.startswith("07"):
+        ensure_models(so101_shared, "params/studies/so101.yaml", so101_shared)
     run_notebook(notebook, so101_shared / notebook.name, parameters)
     assert "so101" in (so101_shared / notebook.name).read_text()
     assert sorted((so101_shared / f"out_{notebook.stem}").glob("*.png"))
+
+
+@pytest.mark.notebook
+def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
+    """Chapter 08 on both studies' smoke data and models (made by the tests above)."""
+    studies = {"params/studies/intelbot5.yaml": shared, "params/studies/so101.yaml": so101_shared}
+    for study, directory in studies.items():
+        ensure_models(directory, study, tmp_path)
+    (compare,) = [nb for nb in NOTEBOOK_FILES if "study_files" in papermill.inspect_notebook(str(nb))]
+    run_notebook(compare, tmp_path / compare.name, {
+        "smoke": True, "out_dir": str(tmp_path / "out"), "study_files": list(studies),
+        "data_dirs": [str(d / "data_dir") for d in studies.values()],
+        "models_dirs": [str(d / "models_dir") for d in studies.values()]})
+    table = (tmp_path / "out" / "tables" / f"{compare.name[:2]}_arms.csv").read_text()
+    assert table.splitlines()[0] == "quantity,intelbot5,so101"
+    assert "learned IK, worst joint RMSE [deg]" in table

@@ -278,3 +278,92 @@ def test_executed_notebook_json_is_plain(tmp_path):
     data = json.loads(path.read_text())
     assert "widgets" not in data["metadata"]
     assert data["metadata"]["papermill"]["input_path"] == "notebooks/x.ipynb"
+
+
+
+def make_chapter(path, parameters: str):
+    cells = [new_markdown_cell(f"# Chapter {path.stem}"),
+             new_code_cell(parameters + '\nsmoke = False\nout_dir = "build/explore/x"',
+                           metadata={"tags": ["parameters"]})]
+    nbformat.write(new_notebook(cells=cells), path)
+
+
+def fake_run(runs):
+    """Stands in for papermill: records the run and writes what the chapter was given."""
+    def run(notebook, output, parameters, **_):
+        runs.append((notebook.name, {k: v for k, v in parameters.items() if k != "out_dir"}))
+        given_ = {k: v for k, v in parameters.items() if k not in ("out_dir", "smoke")}
+        Table(["value"], [[repr(given_)]], caption="What the chapter was given").save(
+            ROOT / parameters["out_dir"] if not os.path.isabs(parameters["out_dir"])
+            else parameters["out_dir"], f"{notebook.name[:2]}_given")
+        output.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(notebook, output)
+    return run
+
+
+@pytest.fixture
+def two_arms(tmp_path, monkeypatch):
+    notebooks = tmp_path / "notebooks"
+    notebooks.mkdir()
+    make_chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"')
+    make_chapter(notebooks / "02_shared.ipynb", "seed = 0")
+    make_chapter(notebooks / "03_study.ipynb", 'study_file = "sa.yaml"')
+    make_chapter(notebooks / "04_compare.ipynb", 'study_files = ["sa.yaml"]')
+    runs = []
+    monkeypatch.setattr(report, "run_notebook", fake_run(runs))
+    arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
+    return runs, dict(notebooks_dir=notebooks, figures_dir=tmp_path / "figures",
+                      build_dir=tmp_path / "build", arms=arms)
+
+
+def given(path):
+    return path.read_text().splitlines()[-1]
+
+
+def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
+    runs, dirs = two_arms
+    figures, build = dirs["figures_dir"], dirs["build_dir"]
+    assert build_report(**dirs) == 0
+    assert [name for name, _ in runs] == ["01_robot.ipynb", "01_robot.ipynb", "02_shared.ipynb",
+                                          "03_study.ipynb", "03_study.ipynb", "04_compare.ipynb"]
+    tables = figures / "tables"
+    assert given(tables / "01_given.csv") == "{}"                       # the primary: defaults
+    assert "'robot_file': 'rb.yaml'" in given(figures / "b" / "tables" / "01_given.csv")
+    assert "'study_file': 'sb.yaml'" in given(figures / "b" / "tables" / "03_given.csv")
+    assert not (figures / "b" / "tables" / "02_given.csv").exists()     # the same for every arm
+    assert "'study_files': ['sa.yaml', 'sb.yaml']" in given(tables / "04_given.csv")
+    assert not (figures / "b" / "tables" / "04_given.csv").exists()
+    assert verify_manifest(figures) == []
+    assert "b/tables/01_given.csv" in (figures / "MANIFEST.sha256").read_text()
+    page = (build / "report" / "b" / "01_robot.html").read_text()
+    assert "../mathjax/MathJax.js" in page and "../02_shared.html" in page   # the shared 02
+    index = (build / "report" / "index.html").read_text()
+    assert index.index("04_compare.html") < index.index("Chapters for a")      # comparison first
+    assert "Chapters for b" in index and "b/tables/01_given.csv" in index
+    assert "(the same for every arm)" in index
+
+
+def test_chapters_whose_inputs_are_unchanged_are_not_run_again(two_arms, capsys):
+    runs, dirs = two_arms
+    figures = dirs["figures_dir"]
+    assert build_report(only=["01", "02"], **dirs) == 0 and len(runs) == 3
+    assert build_report(only=["01", "02"], **dirs) == 0 and len(runs) == 3   # nothing rerun
+    assert capsys.readouterr().err.count("up to date") == 3
+    (figures / "b" / "tables" / "01_given.csv").write_text("edited\n")  # a published file changed
+    nb = dirs["notebooks_dir"] / "02_shared.ipynb"
+    nb.write_text(nb.read_text().replace("seed = 0", "seed = 1"))      # a chapter changed
+    assert build_report(only=["01", "02"], **dirs) == 0
+    assert runs[3:] == [("01_robot.ipynb", {"smoke": False, "robot_file": "rb.yaml"}),
+                        ("02_shared.ipynb", {"smoke": False})]
+    assert "'robot_file': 'rb.yaml'" in given(figures / "b" / "tables" / "01_given.csv")
+    assert build_report(only=["01"], force=True, **dirs) == 0 and len(runs) == 7
+    assert build_report(only=["01"], smoke=True, **dirs) == 0 and len(runs) == 9  # other inputs
+    assert verify_manifest(figures) == []
+
+def test_editions_come_from_the_study_files():
+    arms = report.editions()
+    assert [a.name for a in arms][:1] == ["intelbot5"] and arms[0].primary
+    so101 = next(a for a in arms if a.name == "so101")
+    assert (so101.robot_file, so101.subdir) == ("params/robots/so101.yaml", "so101")
+    assert so101.parameters(["robot_file", "seed"]) == {"robot_file": "params/robots/so101.yaml"}
+    assert so101.parameters(["seed"]) is None and arms[0].parameters(["robot_file"]) == {}

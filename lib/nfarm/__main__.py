@@ -60,6 +60,8 @@ def main(argv: list[str] | None = None) -> int:
     report = sub.add_parser("report", help="run every chapter notebook and build the report")
     report.add_argument("--smoke", action="store_true", help="small parameter set (for tests)")
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
+    report.add_argument("--force", action="store_true",
+                        help="run chapters whose inputs are unchanged since their last run too")
     report.add_argument("--cell-timeout", type=float, default=1800, metavar="SECONDS",
                         help="fail a cell that runs longer (default 1800)")
     datasets = sub.add_parser("datasets", help="build a study's training and test data sets")
@@ -77,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "datasets":
         return make_datasets(args.study, args.out, args.force)
     from .report import build_report
-    return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout)
+    return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
+                        force=args.force)
 
 
 def make_datasets(study_file: str, out: str | None, force: bool) -> int:

@@ -379,9 +379,10 @@ def _sibling(figures_dir: Path, kind: str) -> Path:
     return figures_dir.with_name(f".{figures_dir.name}.{kind}")
 
 
-def _publish(stage: Path, figures_dir: Path, prefix: str) -> list[Path]:
-    """Replace chapter ``prefix``'s files in ``figures_dir`` with those in ``stage`` and
-    rewrite the manifest, as one atomic step (module docstring)."""
+def _publish(stage: Path, figures_dir: Path, prefix: str, subdir: str = "") -> list[Path]:
+    """Replace chapter ``prefix``'s files in ``figures_dir/subdir`` (an edition's directory,
+    ``""`` for the primary arm's) with those in ``stage`` and rewrite the manifest, as one
+    atomic step (module docstring)."""
     made = _outputs(stage, prefix)
     strays = sorted(set(p for p in stage.rglob("*") if p.is_file()) - set(made))
     if strays:
@@ -393,14 +394,14 @@ def _publish(stage: Path, figures_dir: Path, prefix: str) -> list[Path]:
         shutil.copytree(figures_dir, new)
     else:
         new.mkdir(parents=True)
-    for old in _outputs(new, prefix):
+    for old in _outputs(new / subdir, prefix):
         old.unlink()
     published = []
     for path in made:
-        target = new / path.relative_to(stage)
+        target = new / subdir / path.relative_to(stage)
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(path, target)
-        published.append(figures_dir / path.relative_to(stage))
+        published.append(figures_dir / subdir / path.relative_to(stage))
     write_manifest(new)
     if not figures_dir.exists():
         os.rename(new, figures_dir)
@@ -453,7 +454,7 @@ def _nav(links: dict[str, tuple[str, str] | None]) -> str:
             + "".join(parts) + "</nav>")
 
 
-def _export_html(executed: Path, target: Path, nav: str = "") -> None:
+def _export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX) -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters."""
@@ -466,7 +467,7 @@ def _export_html(executed: Path, target: Path, nav: str = "") -> None:
     config.TagRemovePreprocessor.remove_input_tags = {"remove-input"}
     config.TagRemovePreprocessor.remove_cell_tags = {"remove-cell"}
     config.TagRemovePreprocessor.enabled = True
-    exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=MATHJAX,
+    exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=mathjax,
                             require_js_url="", jquery_url="", widget_renderer_url="")
     exporter.register_preprocessor(TagRemovePreprocessor(config=config), enabled=True)
     # The lab template has no alt text for output images; nbconvert fills in a generic one
@@ -525,9 +526,146 @@ def _git(*args: str) -> str:
         return ""
 
 
-def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, str, str]],
-                 *, parameters: dict, smoke: bool) -> None:
-    """``entries``: (prefix, title, html file name) per chapter, in order."""
+# --------------------------------------------------------------------------------------------
+# Editions: the chapters once per arm
+
+
+PRIMARY_STUDY = "intelbot5"      # the dissertation's arm: its edition publishes into figures/
+
+
+@dataclass(frozen=True)
+class Edition:
+    """One arm's run of the chapters: a study file and its robot file (as the reader names
+    them). The primary edition runs every chapter with its default parameters and publishes
+    into ``figures/``; another runs the chapters that take a ``robot_file`` or ``study_file``
+    with its own and publishes into ``figures/<name>/``. A chapter that takes neither (04, on
+    Jang's benchmarks) is the same for every arm and runs once; a chapter that takes
+    ``study_files`` (08) compares the editions and runs once, after them."""
+
+    name: str
+    study_file: str
+    robot_file: str
+    primary: bool
+
+    @property
+    def subdir(self) -> str:
+        return "" if self.primary else self.name
+
+    def parameters(self, declared: Sequence[str]) -> dict | None:
+        """The parameters of this edition's run of a chapter declaring ``declared``, or None
+        when the chapter is not run for it."""
+        if self.primary:
+            return {}
+        chosen = {k: v for k, v in (("robot_file", self.robot_file),
+                                    ("study_file", self.study_file)) if k in declared}
+        return chosen or None
+
+
+def editions(params_dir: Path | None = None) -> list[Edition]:
+    """One edition per study file ``params/studies/*.yaml``, the primary (intelbot5) first;
+    a single primary edition with the chapters' defaults if there is no study file."""
+    from .datasets import load_study          # the study's robot file, validated
+    from .paths import PARAMS
+
+    files = sorted(((params_dir or PARAMS) / "studies").glob("*.yaml"))
+    found = [Edition(f.stem, shown_path(f), load_study(f).robot_file, f.stem == PRIMARY_STUDY)
+             for f in files]
+    if not any(e.primary for e in found):
+        return [Edition(PRIMARY_STUDY, "", "", True)]
+    return sorted(found, key=lambda e: (not e.primary, e.name))
+
+
+def _declared(notebook: Path) -> list[str]:
+    """The names its cell tagged ``parameters`` assigns (what papermill may override)."""
+    import ast
+
+    try:
+        cells = json.loads(notebook.read_text(encoding="utf-8"))["cells"]
+        for cell in cells:
+            if "parameters" in cell.get("metadata", {}).get("tags", []):
+                tree = ast.parse("".join(cell["source"]))
+                return [t.id for node in tree.body if isinstance(node, (ast.Assign, ast.AnnAssign))
+                        for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
+                        if isinstance(t, ast.Name)]
+        return []
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ReportError(f"{notebook.name}: not a valid notebook "
+                          f"({type(exc).__name__}: {str(exc).splitlines()[0][:200]})") from None
+    except SyntaxError as exc:
+        raise ReportError(f"{notebook.name}: cannot read its parameters cell "
+                          f"({type(exc).__name__}: {str(exc).splitlines()[0][:200]})") from None
+
+
+def _digest_tree(h, paths) -> None:
+    for path in sorted(paths):
+        h.update(path.relative_to(ROOT).as_posix().encode() if path.is_relative_to(ROOT)
+                 else path.name.encode())
+        h.update(hashlib.sha256(path.read_bytes()).digest())
+
+
+def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
+    """SHA-256 of everything a chapter's results depend on: the notebook, its parameters, the
+    library's code, every parameter file, the locked environment and the numerics settings
+    (``make report``'s pinned kernels). Data sets and models are derived from these."""
+    from .learned import NUMERICS_ENV
+    from .paths import PARAMS
+
+    h = hashlib.sha256()
+    h.update(notebook.read_bytes())
+    h.update(json.dumps({"parameters": parameters, "smoke": smoke,
+                         "env": {k: os.environ.get(k) for k in NUMERICS_ENV},
+                         "python": sys.version}, sort_keys=True, default=str).encode())
+    _digest_tree(h, (ROOT / "lib" / "nfarm").glob("*.py"))
+    _digest_tree(h, [p for p in PARAMS.rglob("*") if p.is_file()])
+    _digest_tree(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
+    return h.hexdigest()
+
+
+def _published_digests(figures_dir: Path, subdir: str, prefix: str) -> dict[str, str]:
+    return {p.relative_to(figures_dir).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in _outputs(figures_dir / subdir, prefix)}
+
+
+def _up_to_date(stamp: Path, key: str, executed: Path, figures_dir: Path, subdir: str,
+                prefix: str) -> bool:
+    """Whether the chapter ran with these inputs (``key``) and its published files and
+    executed notebook are still what that run left."""
+    try:
+        record = json.loads(stamp.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return (isinstance(record, dict) and record.get("key") == key and executed.is_file()
+            and record.get("outputs") == _published_digests(figures_dir, subdir, prefix))
+
+
+# --------------------------------------------------------------------------------------------
+# The index
+
+
+def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> list[str]:
+    parts = []
+    for path in _outputs(figures_dir / subdir, prefix):
+        if path.suffix == ".md":
+            continue
+        rel = path.relative_to(figures_dir)
+        caption = html.escape(_caption(path))
+        label = f"<span class='file'>{html.escape(rel.as_posix())}</span>"
+        if path.suffix == ".png":
+            (shown / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(path, shown / rel)
+            parts.append(f"<figure><img src='figures/{rel.as_posix()}' alt='{caption}'>"
+                         f"<figcaption>{caption} {label}</figcaption></figure>")
+        else:
+            parts.append(f"<figure><figcaption>{caption} {label}</figcaption>"
+                         f"{_csv_to_html(path)}</figure>")
+    return parts
+
+
+def _write_index(report_dir: Path, figures_dir: Path,
+                 pages: dict[str, list[tuple[str, str, str]]], arms: list[Edition],
+                 compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool) -> None:
+    """``pages``: per edition name, (prefix, title, page path) of its chapters in order;
+    ``compared``: the same for the chapters comparing the editions."""
     shown = report_dir / "figures"
     if shown.exists():
         shutil.rmtree(shown)
@@ -535,8 +673,10 @@ def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, s
     dirty = " (with uncommitted changes)" if _git("status", "--porcelain") else ""
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     kind = "smoke run (small parameters: not the published results)" if smoke else \
-        "published results (default parameters)"
-    facts = {"what": kind, "robot": "params/robots/intelbot5.yaml (chapter parameters may name others)",
+        "published results (default parameters)" if not parameters else "a run with other parameters"
+    robots = "; ".join(f"{e.name}: {e.robot_file or 'the chapters’ default'}"
+                       + ("" if e.primary else f" (figures in {e.name}/)") for e in arms)
+    facts = {"what": kind, "arms": robots,
              "parameters": ", ".join(f"{k} = {v!r}" for k, v in parameters.items()) or "defaults",
              "commit": commit + dirty, "built": when,
              "figures": shown_path(figures_dir) + " (checked by MANIFEST.sha256)"}
@@ -544,27 +684,39 @@ def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, s
              f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
              "numerical methods and ANFIS</h1><dl>"]
     parts += [f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in facts.items()]
-    parts.append("</dl><h2>Chapters</h2><ol>")
-    parts += [f"<li><a href='{page}'>{html.escape(t)}</a> · <a href='#ch{p}'>its figures and "
-              f"tables</a></li>" for p, t, page in entries]
-    parts.append("</ol>")
-    for prefix, title, page in entries:
+    parts.append("</dl>")
+    for prefix, title, page in compared:           # the arms side by side, first
         parts.append(f"<h2 id='ch{prefix}'>{html.escape(title)}</h2>"
-                     f"<p><a href='{page}'>The chapter in full (prose, code and results)</a></p>")
-        for path in _outputs(figures_dir, prefix):
-            if path.suffix == ".md":
+                     f"<p><a href='{page}'>The chapter in full</a></p>")
+        parts += _figures_html(figures_dir, "", prefix, shown)
+
+    def own(edition: Edition, page: str) -> bool:
+        return page.startswith(edition.subdir + "/") if edition.subdir else "/" not in page
+
+    def anchor(edition: Edition, entry: tuple[str, str, str]) -> str:
+        if entry in compared:
+            return f"ch{entry[0]}"
+        return f"{(edition if own(edition, entry[2]) else arms[0]).name}-ch{entry[0]}"
+
+    for edition in arms:
+        entries = pages.get(edition.name, [])
+        if entries:
+            parts.append(f"<h2 id='{edition.name}'>Chapters for {html.escape(edition.name)}"
+                         f"{' (the dissertation’s arm)' if edition.primary else ''}</h2><ol>")
+            parts += [f"<li value='{int(e[0])}'><a href='{e[2]}'>{html.escape(e[1])}</a> · <a "
+                      f"href='#{anchor(edition, e)}'>its figures and tables</a>"
+                      f"{'' if own(edition, e[2]) or e in compared else ' (the same for every arm)'}"
+                      f"</li>" for e in entries]
+            parts.append("</ol>")
+    for edition in arms:
+        for entry in pages.get(edition.name, []):
+            prefix, title, page = entry
+            if entry in compared or not own(edition, page):
                 continue
-            rel = path.relative_to(figures_dir)
-            caption = html.escape(_caption(path))
-            label = f"<span class='file'>{html.escape(rel.as_posix())}</span>"
-            if path.suffix == ".png":
-                (shown / rel).parent.mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(path, shown / rel)
-                parts.append(f"<figure><img src='figures/{rel.as_posix()}' alt='{caption}'>"
-                             f"<figcaption>{caption} {label}</figcaption></figure>")
-            else:
-                parts.append(f"<figure><figcaption>{caption} {label}</figcaption>"
-                             f"{_csv_to_html(path)}</figure>")
+            parts.append(f"<h3 id='{edition.name}-ch{prefix}'>{html.escape(edition.name)} · "
+                         f"{html.escape(title)}</h3><p><a href='{page}'>The chapter in full "
+                         f"(prose, code and results)</a></p>")
+            parts += _figures_html(figures_dir, edition.subdir, prefix, shown)
     parts.append("</body></html>\n")
     with atomic_path(report_dir / "index.html") as tmp:
         tmp.write_text("\n".join(parts), encoding="utf-8")
@@ -574,72 +726,109 @@ def _write_index(report_dir: Path, figures_dir: Path, entries: list[tuple[str, s
 # The whole report
 
 
+def _select(notebooks_dir: Path, only: Sequence[str] | None) -> tuple[list[Path], list[Path]] | str:
+    everything = chapters(notebooks_dir)
+    if only is None:
+        return everything, everything
+    wanted = set(only)
+    if not wanted:
+        return "report: --only needs chapter numbers (e.g. --only 01 03)"
+    unknown = sorted(wanted - {nb.name[:2] for nb in everything})
+    if unknown:
+        return (f"report: no chapter {', '.join(unknown)} (chapters: "
+                f"{', '.join(nb.name[:2] for nb in everything)})")
+    return everything, [nb for nb in everything if nb.name[:2] in wanted]
+
+
 def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  notebooks_dir: Path = NOTEBOOKS, figures_dir: Path = FIGURES,
                  build_dir: Path = BUILD, extra_parameters: dict | None = None,
-                 cell_timeout: float | None = 1800) -> int:
-    """Run the chapters, publish their figures and tables, export HTML and write the index.
+                 cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
+                 force: bool = False) -> int:
+    """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
+    export HTML and write the index.
 
     Only a run with the default parameters (not ``smoke``, no ``extra_parameters``)
-    publishes into ``figures_dir``; others publish into ``build_dir/<variant>/figures``.
-    Returns the process exit status (0; 1 with the failure on stderr; 130 when interrupted).
+    publishes into ``figures_dir``; others publish into ``build_dir/<variant>/figures``. A run
+    with ``extra_parameters`` is one edition (the primary's, with those parameters). A chapter
+    whose inputs (:func:`_chapter_key`) are those of its last run, and whose published files
+    are still that run's, is not run again unless ``force``.
+
+    Returns the process exit status (0; 1 with the failure on stderr; 2 for a bad choice of
+    chapters; 130 when interrupted).
     """
-    everything = chapters(notebooks_dir)
-    if only is not None:
-        wanted = set(only)
-        if not wanted:
-            print("report: --only needs chapter numbers (e.g. --only 01 03)", file=sys.stderr)
-            return 2
-        unknown = sorted(wanted - {nb.name[:2] for nb in everything})
-        if unknown:
-            print(f"report: no chapter {', '.join(unknown)} (chapters: "
-                  f"{', '.join(nb.name[:2] for nb in everything)})", file=sys.stderr)
-            return 2
-        notebooks = [nb for nb in everything if nb.name[:2] in wanted]
-    else:
-        notebooks = everything
+    selected = _select(notebooks_dir, only)
+    if isinstance(selected, str):
+        print(selected, file=sys.stderr)
+        return 2
+    everything, notebooks = selected
     if not notebooks:
         print(f"report: no chapter notebooks NN_*.ipynb in {notebooks_dir}", file=sys.stderr)
         return 1
     extra = dict(extra_parameters or {})
     variant = "smoke" if smoke else "custom" if extra else None
+    base = build_dir / variant if variant else build_dir
     if variant:
-        figures_dir = build_dir / variant / "figures"
-        report_dir = build_dir / variant / "report"
-    else:
-        report_dir = build_dir / "report"
+        figures_dir = base / "figures"
+    report_dir = base / "report"
+    try:
+        arms = list(arms) if arms is not None else editions()
+        if extra:
+            arms = [a for a in arms if a.primary]
+        declared = {nb.name: _declared(nb) for nb in everything}
+    except ReportError as exc:
+        print(f"report: {exc}", file=sys.stderr)
+        return 1
+    except ValueError as exc:                     # a bad study file (ParamsError)
+        print(f"report: {exc}", file=sys.stderr)
+        return 1
+
+    def runs(nb: Path) -> list[tuple[Edition, dict]]:
+        names = declared[nb.name]
+        if "study_files" in names:                # compares the arms: once, after them
+            if extra and "study_files" not in extra:
+                return []
+            files = {} if extra or len(arms) < 2 else \
+                {"study_files": [a.study_file for a in arms]}
+            return [(arms[0], files)]
+        return [(a, p) for a in arms if (p := a.parameters(names)) is not None]
+
     _recover(figures_dir)
     try:
         _install_mathjax(report_dir)
         for nb in notebooks:
             prefix = nb.name[:2]
-            stage = build_dir / "stage" / nb.stem
-            shutil.rmtree(stage, ignore_errors=True)
-            stage.mkdir(parents=True)
-            executed = build_dir / ("notebooks" if not variant else f"{variant}/notebooks") / nb.name
-            parameters = {"smoke": smoke, "out_dir": shown_path(stage), **extra}
-            print(f"report: {nb.name} …", file=sys.stderr, flush=True)
-            try:
-                run_notebook(nb, executed, parameters, progress=sys.stderr.isatty(),
-                             cell_timeout=cell_timeout)
-                published = _publish(stage, figures_dir, prefix)
-            except ReportError as exc:
-                print(f"report: {exc}", file=sys.stderr)
-                return 1
-            shutil.rmtree(stage, ignore_errors=True)
-            print(f"report: {nb.name}: {len(published)} figures and tables published in "
-                  f"{shown_path(figures_dir)}", file=sys.stderr)
-        pages = [(nb.name[:2], _title(nb), f"{nb.stem}.html") for nb in everything
-                 if (build_dir / ("notebooks" if not variant else f"{variant}/notebooks")
-                     / nb.name).exists()]
-        for k, (prefix, title, page) in enumerate(pages):
-            nb = notebooks_dir / page.replace(".html", ".ipynb")
-            executed = build_dir / ("notebooks" if not variant else f"{variant}/notebooks") / nb.name
-            links = {"index": ("index.html", "all chapters"),
-                     "previous": (pages[k - 1][2], pages[k - 1][1]) if k > 0 else None,
-                     "next": (pages[k + 1][2], pages[k + 1][1]) if k + 1 < len(pages) else None}
-            _export_html(executed, report_dir / page, _nav(links))
-        _write_index(report_dir, figures_dir, pages, parameters={**extra}, smoke=smoke)
+            for arm, own in runs(nb):
+                label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
+                stage = build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
+                executed = base / "notebooks" / arm.subdir / nb.name
+                stamp = base / "stamps" / arm.name / f"{nb.stem}.json"
+                parameters = {"smoke": smoke, **own, **extra}
+                key = _chapter_key(nb, parameters, smoke)
+                if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
+                    print(f"report: {label}: up to date (its inputs are unchanged)",
+                          file=sys.stderr, flush=True)
+                    continue
+                shutil.rmtree(stage, ignore_errors=True)
+                stage.mkdir(parents=True)
+                print(f"report: {label} …", file=sys.stderr, flush=True)
+                try:
+                    run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
+                                 progress=sys.stderr.isatty(), cell_timeout=cell_timeout)
+                    published = _publish(stage, figures_dir, prefix, arm.subdir)
+                except ReportError as exc:
+                    stamp.unlink(missing_ok=True)
+                    print(f"report: {exc}", file=sys.stderr)
+                    return 1
+                shutil.rmtree(stage, ignore_errors=True)
+                stamp.parent.mkdir(parents=True, exist_ok=True)
+                with atomic_path(stamp) as tmp:
+                    tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
+                        figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
+                print(f"report: {label}: {len(published)} figures and tables published in "
+                      f"{shown_path(figures_dir / arm.subdir)}", file=sys.stderr)
+        comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
+        _write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke)
     except KeyboardInterrupt:
         print(f"report: interrupted; {shown_path(figures_dir)} holds the chapters published "
               f"before (its manifest matches)", file=sys.stderr)
@@ -647,3 +836,38 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     print(f"report: {shown_path(report_dir / 'index.html')}; figures in "
           f"{shown_path(figures_dir)}", file=sys.stderr)
     return 0
+
+
+def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report_dir: Path,
+                 figures_dir: Path, extra: dict, smoke: bool) -> None:
+    """HTML pages of every executed chapter, with navigation within each arm's chapters, and
+    the index."""
+    pages: dict[str, list[tuple[str, str, str]]] = {}
+    compared = []
+    for nb in everything:
+        for arm, _ in runs(nb):
+            executed = base / "notebooks" / arm.subdir / nb.name
+            if not executed.exists():
+                continue
+            entry = (nb.name[:2], _title(nb), f"{arm.subdir}/{nb.stem}.html".lstrip("/"))
+            if arm.primary and nb.name in comparing:
+                compared.append(entry)
+            pages.setdefault(arm.name, []).append(entry)
+    primary = pages.get(arms[0].name, []) if arms else []
+    for arm in arms:
+        own = pages.get(arm.name, [])
+        if not arm.primary:                   # the shared chapters, read in the primary's pages
+            shared = [e for e in primary if e[0] not in {o[0] for o in own} and e not in compared]
+            own = sorted(own + shared)
+        pages[arm.name] = own
+        up = "../" * arm.subdir.count("/") + ("../" if arm.subdir else "")
+        for k, (prefix, title, page) in enumerate(own):
+            if arm.subdir and not page.startswith(arm.subdir + "/"):
+                continue                      # a shared page, written with the primary's
+            links = {"index": (up + "index.html", "all chapters"),
+                     "previous": (up + own[k - 1][2], own[k - 1][1]) if k > 0 else None,
+                     "next": (up + own[k + 1][2], own[k + 1][1]) if k + 1 < len(own) else None}
+            executed = base / "notebooks" / page.replace(".html", ".ipynb")
+            _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX)
+    _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
+                 compared, parameters=extra, smoke=smoke)
