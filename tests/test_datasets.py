@@ -318,3 +318,31 @@ def test_reach_is_measured_from_the_first_joint_s_origin():
     from nfarm.workspace import reach, workspace_points
     robot = _yaw_pitch_elbow(2.0, 1.0)
     assert 2.99 < reach(workspace_points(robot, 20_000, 0), robot) <= 3.0 + 1e-12
+
+
+@pytest.mark.parametrize("learned_ik, message", [
+    ({"n_mfs": 0}, r"study.yaml: learned_ik.n_mfs: must be >= 1, got 0"),
+    ({"n_mfs": [1, 4, "x"]}, r"learned_ik.n_mfs\[2\]: must be a whole number, got 'x'"),
+    ({"epochs": [30, 30]}, r"learned_ik.epochs: must be a list of 5 items, got 2"),
+    ({"epochs": 2.5}, r"learned_ik.epochs: must be a whole number, got 2.5"),
+    ({"rules": 4}, r"learned_ik.rules: unknown field \(allowed: n_mfs, epochs\)"),
+])
+def test_bad_learned_ik_sections_are_one_line_errors(tmp_path, learned_ik, message):
+    data = yaml.safe_load((PARAMS / "studies" / "intelbot5.yaml").read_text())
+    data["learned_ik"] = learned_ik
+    path = tmp_path / "study.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ParamsError, match=message):
+        load_study(path)
+
+
+def test_learned_ik_sets_the_chosen_size_and_not_the_data():
+    plain = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    data = copy.deepcopy(plain.params)
+    data["learned_ik"] = {"n_mfs": [1, 4, 4, 4, 4, 1], "epochs": [1, 2, 3, 4, 5]}
+    sized = datasets.study_from_dict(data, "x.yaml")
+    assert sized.inputs_hash == plain.inputs_hash          # the data sets are the same files
+    chosen = sized.chosen_ik({"n_mfs": 3, "epochs": 30, "joint_options": [{"n_mfs": 1}, {}, {}, {}, {}]})
+    assert chosen["n_mfs"] == [1, 4, 4, 4, 4, 1]
+    assert chosen["joint_options"] == [{"n_mfs": 1, "epochs": 1}, *({"epochs": e} for e in (2, 3, 4, 5))]
+    assert plain.chosen_ik({"n_mfs": 3}) == {"n_mfs": 3}

@@ -474,19 +474,42 @@ class Study:
     check_targets: int
     check_starts: int
     id: IDSettings
-    params: dict = field(repr=False)
+    learned_ik: dict = field(default_factory=dict)   # the chosen learned IK's size for this arm
+    params: dict = field(repr=False, default_factory=dict)
+
+    @property
+    def data_params(self) -> dict:
+        """The study parameters the data sets depend on (all but ``learned_ik``)."""
+        return {k: v for k, v in self.params.items() if k != "learned_ik"}
+
+    def chosen_ik(self, options: Mapping) -> dict:
+        """Chapter 06's chosen learned-IK ``options`` (LearnedIK keyword arguments) with this
+        study's ``learned_ik`` applied: ``n_mfs`` replaces the grid's functions per input;
+        ``epochs``, one number or one per joint, the epochs (per joint through
+        ``joint_options``, keeping each joint's other options)."""
+        chosen = dict(options)
+        if "n_mfs" in self.learned_ik:
+            chosen["n_mfs"] = self.learned_ik["n_mfs"]
+        epochs = self.learned_ik.get("epochs")
+        if isinstance(epochs, int):
+            chosen["epochs"] = epochs
+        elif epochs is not None:
+            joint = chosen.get("joint_options") or [{}] * len(epochs)
+            chosen["joint_options"] = [{**o, "epochs": e} for o, e in zip(joint, epochs)]
+        return chosen
 
     @property
     def inputs_hash(self) -> str:
         """SHA-256 of what the data depend on: the robot's parameters, the study's
         parameters and the data code's version."""
-        blob = json.dumps({"robot": robot_hash(self.robot), "study": self.params,
+        blob = json.dumps({"robot": robot_hash(self.robot), "study": self.data_params,
                            "data_version": DATA_VERSION}, sort_keys=True)
         return hashlib.sha256(blob.encode()).hexdigest()
 
 
 _TOP = {"name": True, "description": False, "robot_file": True, "seed": True, "ik": True,
-        "id": True}
+        "id": True, "learned_ik": False}
+_LEARNED_IK = {"n_mfs": False, "epochs": False}
 _IK = {"region": True, "sampler": False, "sizes": True, "check": True, "full_range": False}
 _REGION = {"joints_deg": True, "radial_m": False, "reach_m": False, "height_m": False,
            "approach": False}
@@ -615,13 +638,29 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
         measured = dataclasses.replace(robot, **drives)
         noise = _per_joint(v, m["noise_nm"], "id.measured.noise_nm", n, zero=True)
 
+    learned_ik = {}
+    if data.get("learned_ik") is not None:
+        chosen = v.mapping(data["learned_ik"], "learned_ik", _LEARNED_IK)
+        if "n_mfs" in chosen:
+            mfs = chosen["n_mfs"]
+            learned_ik["n_mfs"] = v.integer(mfs, "learned_ik.n_mfs", lo=1, hi=8) \
+                if not isinstance(mfs, list) else \
+                [v.integer(m, f"learned_ik.n_mfs[{i}]", lo=1, hi=8)
+                 for i, m in enumerate(v.sequence(mfs, "learned_ik.n_mfs", min_len=1, max_len=16))]
+        if "epochs" in chosen:
+            epochs = chosen["epochs"]
+            learned_ik["epochs"] = v.integer(epochs, "learned_ik.epochs", lo=1, hi=10_000) \
+                if not isinstance(epochs, list) else \
+                [v.integer(e, f"learned_ik.epochs[{j}]", lo=1, hi=10_000)
+                 for j, e in enumerate(v.sequence(epochs, "learned_ik.epochs", min_len=n, max_len=n))]
+
     return Study(
         source=source, name=name, robot_file=robot_file, robot=robot, seed=seed,
         ik_region=IKRegion(robot, box, radial, height, axis, angle, reach), ik_sampler=sampler,
         ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
         check_starts=check_starts,
         id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax, measured, noise),
-        params=json.loads(json.dumps(data)))
+        learned_ik=learned_ik, params=json.loads(json.dumps(data)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -707,7 +746,7 @@ def load(path: str | os.PathLike, robot: Robot, study: Study | None = None) -> D
         v.fail("robot_params_sha256", f"made for robot {show(meta.get('robot'))} with other "
                                       f"parameters than {robot.name!r} ({robot.source}): {again}")
     if study is not None and meta["inputs_hash"] != study.inputs_hash:
-        diff = _differences(meta["study"], study.params)
+        diff = _differences(meta["study"], study.data_params)
         if meta["data_version"] != DATA_VERSION:
             diff.append(f"data code version ({meta['data_version']} → {DATA_VERSION})")
         v.fail("study", f"made from other study parameters: {'; '.join(diff[:4]) or 'unknown'}; "
@@ -756,7 +795,7 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
     inputs_hash = study.inputs_hash
     base = {"robot": study.robot.name, "robot_file": study.robot_file,
             "robot_params_sha256": robot_hash(study.robot), "study_file": study.source,
-            "study": study.params, "seed": study.seed, "inputs_hash": inputs_hash,
+            "study": study.data_params, "seed": study.seed, "inputs_hash": inputs_hash,
             "nfarm_version": __version__, "data_version": DATA_VERSION,
             "command": command or f"python -m nfarm datasets {study.source}"}
     jobs = [("ik", s) for s in SPLITS] + [("id", s) for s in SPLITS]

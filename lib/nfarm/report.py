@@ -1,7 +1,11 @@
 """The report pipeline: tables, notebook execution with papermill, HTML export, the manifest.
 
 ``python -m nfarm report`` (``make report``) runs every ``notebooks/NN_*.ipynb`` in order in
-the project's Jupyter kernel, each into a staging directory under ``build/stage/``.
+the project's Jupyter kernel, each into a staging directory under ``build/stage/``, once per
+arm (:class:`Edition`, one per study file): the primary arm's results go to ``figures/``,
+another's to ``figures/<study>/``. A chapter whose inputs (:func:`_chapter_key`) and published
+files are those of its last run is not run again, so a second ``make report`` with nothing
+changed only rewrites the pages.
 
 **Explore freely, publish deliberately.** Only a run with the default parameters publishes
 into ``figures/``; a smoke run (``--smoke``) publishes into ``build/smoke/figures/`` and its
