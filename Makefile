@@ -47,8 +47,10 @@ report: $(STAMP)
 verify: $(STAMP)
 	$(PY) -m nfarm verify
 
+# Two pytest-xdist workers: the notebooks' kernels and the unit tests share the two cores;
+# tests that share a chain of chapters' data stay in one worker (--dist loadgroup).
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n 2 --dist loadgroup
 
 bench: $(STAMP)
 	@set -e; for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b; done

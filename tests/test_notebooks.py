@@ -59,8 +59,19 @@ def shared(tmp_path_factory):
     return tmp_path_factory.mktemp("shared")
 
 
+#: Tests that share the data and models of a chain of chapters (05 → 06 → 07 → 08) run in one
+#: pytest-xdist worker (`make test` runs two, `--dist loadgroup`); the module's fixtures are
+#: per worker.
+CHAIN = pytest.mark.xdist_group("study-chain")
+
+
+def _chained(notebook):
+    uses_data = {"data_dir", "models_dir", "study_files"} & set(papermill.inspect_notebook(str(notebook)))
+    return pytest.param(notebook, marks=[CHAIN] if uses_data else [], id=notebook.stem)
+
+
 @pytest.mark.notebook
-@pytest.mark.parametrize("notebook", NOTEBOOK_FILES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("notebook", [_chained(nb) for nb in NOTEBOOK_FILES])
 def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     out = tmp_path / "out"
     executed = tmp_path / notebook.name
@@ -127,6 +138,7 @@ def so101_shared(tmp_path_factory):
     return tmp_path_factory.mktemp("so101")
 
 
+@CHAIN
 @pytest.mark.notebook
 @pytest.mark.parametrize("notebook", STUDY_CHAPTERS, ids=lambda p: p.stem)
 def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
@@ -143,6 +155,7 @@ def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
     assert sorted((so101_shared / f"out_{notebook.stem}").glob("*.png"))
 
 
+@CHAIN
 @pytest.mark.notebook
 def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     """Chapter 08 on both studies' smoke data and models (made by the tests above)."""

@@ -609,8 +609,10 @@ def _digest_tree(h, paths) -> None:
 
 def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     """SHA-256 of everything a chapter's results depend on: the notebook, its parameters, the
-    library's code, every parameter file, the locked environment and the numerics settings
-    (``make report``'s pinned kernels). Data sets and models are derived from these."""
+    library's code, every parameter file (not the ``.md`` notes beside them), the locked
+    environment and the numerics settings (``make report``'s pinned kernels). Data sets and
+    models are derived from these; a conservative key, so any change to the library runs
+    every chapter again (the models themselves are reused, :func:`nfarm.learned.fit_cached`)."""
     from .learned import NUMERICS_ENV
     from .paths import PARAMS
 
@@ -620,7 +622,7 @@ def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
                          "env": {k: os.environ.get(k) for k in NUMERICS_ENV},
                          "python": sys.version}, sort_keys=True, default=str).encode())
     _digest_tree(h, (ROOT / "lib" / "nfarm").glob("*.py"))
-    _digest_tree(h, [p for p in PARAMS.rglob("*") if p.is_file()])
+    _digest_tree(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"])
     _digest_tree(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
     return h.hexdigest()
 
