@@ -271,6 +271,10 @@ def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
     for bad in (0, 1.5, True, "2"):
         with pytest.raises(ValueError, match=r"threads must be a whole number >= 1"):
             fitted.predict(T[:2], threads=bad)
+    T = T.copy()
+    T[39_000, 0, 0] += 1e-3                        # a bad pose in the last chunk, checked by a thread
+    with pytest.raises(ValueError, match=r"T_target\[39000\]: rotation is not orthonormal"):
+        fitted.predict(T, threads=2)
 
 
 # -- learned inverse dynamics ------------------------------------------------------------------
