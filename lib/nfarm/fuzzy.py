@@ -31,8 +31,8 @@ def mf_rows(kind: str, x: np.ndarray, params: np.ndarray) -> np.ndarray:
     samples contiguous, so that the products built from them run over long rows."""
     if kind == "gbell":
         # scikit-fuzzy's ``1 / (1 + |(x − c)/a|^{2b})`` with the same operations in the same
-        # order, in place: bit for bit its values, without five temporaries (measured: 2× faster
-        # on the prediction path, where these grades are most of the work).
+        # order, in place: bit for bit its values, one temporary instead of five (the time
+        # hardly changes: the power is most of it, about 7 ns per value here).
         a, b, c = params[:, 0, None], params[:, 1, None], params[:, 2, None]
         u = np.subtract(x[None, :], c)
         np.divide(u, a, out=u)
