@@ -434,22 +434,22 @@ def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label:
     return fig
 
 
-def plot_arms_compared(points: Mapping[str, np.ndarray], position_error_mm: Mapping[str, np.ndarray],
-                       *, bins: int = 60) -> Figure:
-    """Two arms side by side: left, the side view of each workspace — the share of tool
-    positions ``points[name] (N, 3)`` [m] (relative to the first joint's origin) in each cell
-    of distance from the base axis against height, drawn as each arm's outline; right, the
-    distribution of each arm's learned-IK tool position error ``position_error_mm[name] (M,)``
-    [mm] (a cumulative curve, logarithmic axis)."""
+def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mapping[str, np.ndarray],
+                       *, targets_mm: tuple[float, float] = (2.0, 10.0), bins: int = 60) -> Figure:
+    """Two arms side by side. Left, the side view of each workspace: the outline of the cells
+    (distance from the base axis, height) that tool positions ``side[name] (N, 2)`` [m] reach.
+    Right, the distribution of each arm's learned-IK tool position error
+    ``position_error_mm[name] (M,)`` [mm] (a cumulative curve, logarithmic axis) beside the
+    ``targets_mm`` for its median and its 95th percentile."""
     fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), layout="constrained")
-    extent = max(float(np.hypot(p[:, 0], p[:, 1]).max()) for p in points.values()) * 1.05
-    z = np.concatenate([p[:, 2] for p in points.values()])
+    extent = max(float(p[:, 0].max()) for p in side.values()) * 1.05
+    z = np.concatenate([p[:, 1] for p in side.values()])
     margin = 0.05 * (z.max() - z.min())
     step = extent / bins
     edges = np.linspace(0, extent, bins + 1), np.arange(z.min() - margin, z.max() + margin + step, step)
-    for k, (name, p) in enumerate(points.items()):
-        counts, _, _ = np.histogram2d(np.hypot(p[:, 0], p[:, 1]), p[:, 2], bins=edges)
-        centres = [(e[1:] + e[:-1]) / 2 for e in edges]
+    centres = [(e[1:] + e[:-1]) / 2 for e in edges]
+    for k, (name, p) in enumerate(side.items()):
+        counts, _, _ = np.histogram2d(p[:, 0], p[:, 1], bins=edges)
         left.contour(centres[0], centres[1], (counts > 0).T.astype(float), levels=[0.5],
                      colors=[f"C{k}"], linewidths=2)
         left.plot([], [], color=f"C{k}", lw=2, label=f"{name}: where its tool reaches")
@@ -462,8 +462,8 @@ def plot_arms_compared(points: Mapping[str, np.ndarray], position_error_mm: Mapp
         e = np.sort(np.asarray(e, dtype=float))
         right.plot(np.maximum(e, 1e-6), np.arange(1, len(e) + 1) / len(e), color=f"C{k}", lw=2,
                    label=f"{name}: median {np.median(e):.3g} mm")
-    right.axvline(2, color="0.4", ls="--", lw=1, label="2 mm (target for the median)")
-    right.axvline(10, color="0.4", ls=":", lw=1, label="10 mm (target for the 95th percentile)")
+    for target, style, what in zip(targets_mm, ("--", ":"), ("median", "95th percentile")):
+        right.axvline(target, color="0.4", ls=style, lw=1, label=f"{target:g} mm (target for the {what})")
     right.set(xscale="log", xlabel="learned IK: tool position error [mm]",
               ylabel="share of test poses", title="Learned IK on each arm's test poses")
     right.grid(alpha=0.3, which="both")

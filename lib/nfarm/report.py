@@ -782,10 +782,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         if extra:
             arms = [a for a in arms if a.primary]
         declared = {nb.name: _declared(nb) for nb in everything}
-    except ReportError as exc:
-        print(f"report: {exc}", file=sys.stderr)
-        return 1
-    except ValueError as exc:                     # a bad study file (ParamsError)
+    except (ReportError, ValueError) as exc:      # a bad notebook, or study file (ParamsError)
         print(f"report: {exc}", file=sys.stderr)
         return 1
 
@@ -866,7 +863,7 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
             shared = [e for e in primary if e[0] not in {o[0] for o in own} and e not in compared]
             own = sorted(own + shared)
         pages[arm.name] = own
-        up = "../" * arm.subdir.count("/") + ("../" if arm.subdir else "")
+        up = "../" if arm.subdir else ""      # an edition's pages are one directory down
         for k, (prefix, title, page) in enumerate(own):
             if arm.subdir and not page.startswith(arm.subdir + "/"):
                 continue                      # a shared page, written with the primary's
