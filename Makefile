@@ -22,7 +22,7 @@ export PYTHONHASHSEED := 0
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
-.PHONY: setup report test bench lock lab verify clean distclean
+.PHONY: setup report test bench sweep lock lab verify clean distclean
 
 setup: $(STAMP)
 
@@ -54,6 +54,12 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	@set -e; for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b; done
+
+# make sweep SWEEP=params/sweeps/smoke.yaml [SWEEP_ARGS="--scheduler tcp://host:8786"]: the
+# cells run with the report's numerics, so a chapter reuses them (README "Running sweeps").
+sweep: $(STAMP)
+	@test -n "$(SWEEP)" || { echo "make sweep: name a sweep file, e.g. make sweep SWEEP=params/sweeps/smoke.yaml" >&2; exit 2; }
+	$(REPORT_ENV) $(PY) -m nfarm sweep $(SWEEP) $(SWEEP_ARGS)
 
 lock: $(STAMP)
 	$(UV) pip compile pyproject.toml --extra test --extra tools --generate-hashes \

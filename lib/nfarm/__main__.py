@@ -1,4 +1,5 @@
-"""Command line: ``python -m nfarm check-params FILE...``, ``report`` and ``verify``."""
+"""Command line: ``python -m nfarm check-params FILE...``, ``report``, ``datasets``, ``sweep``
+and ``verify``."""
 
 from __future__ import annotations
 
@@ -69,6 +70,16 @@ def main(argv: list[str] | None = None) -> int:
     datasets.add_argument("--out", default=None, metavar="DIR",
                           help="output directory (default build/datasets/<robot>/)")
     datasets.add_argument("--force", action="store_true", help="rebuild files that are up to date")
+    sweep = sub.add_parser("sweep", help="run a sweep file's cells on Dask (local cluster by default)")
+    sweep.add_argument("file", metavar="FILE", help="params/sweeps/<name>.yaml")
+    sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
+    sweep.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="local cluster's worker processes (default: one per core; 0: run the "
+                            "cells one by one in this process)")
+    sweep.add_argument("--out", default=None, metavar="DIR",
+                       help="results directory (default build/sweeps/<name>/)")
+    sweep.add_argument("--smoke", action="store_true", help="the sweep file's smaller version")
     verify = sub.add_parser("verify", help="check figures/ against figures/MANIFEST.sha256")
     verify.add_argument("--figures", default=None, metavar="DIR")
     args = parser.parse_args(argv)
@@ -78,6 +89,8 @@ def main(argv: list[str] | None = None) -> int:
         return verify_figures(args.figures)
     if args.command == "datasets":
         return make_datasets(args.study, args.out, args.force)
+    if args.command == "sweep":
+        return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
     from .report import build_report
     return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
                         force=args.force)
@@ -97,6 +110,38 @@ def make_datasets(study_file: str, out: str | None, force: bool) -> int:
                                        command=command):
         print(f"{path}: {status}")
     return 0
+
+
+def run_sweep_file(path: str, scheduler: str | None, workers: int | None, out: str | None,
+                   smoke: bool) -> int:
+    """Run a sweep; one line per failed cell and a closing line. 0 if every cell succeeded,
+    1 if some failed, 2 for a bad sweep file or an unreachable scheduler."""
+    from .paths import BUILD, project_path, shown_path
+    from .sweep import load_sweep, run_sweep
+
+    if workers is not None and workers < 0:
+        print(f"--workers: must be >= 0, got {workers}", file=sys.stderr)
+        return 2
+    if scheduler and workers is not None:
+        print("--workers: the scheduler's cluster has its own workers; give one or the other",
+              file=sys.stderr)
+        return 2
+    try:
+        sweep = load_sweep(path, smoke=smoke)
+        directory = project_path(out) if out else BUILD / "sweeps" / sweep.name
+        results = run_sweep(sweep, directory, scheduler=scheduler, workers=workers,
+                            progress=sys.stderr.isatty())
+    except ParamsError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    failed = [r for r in results if not r.ok]
+    reused = sum(r.reused for r in results)
+    print(f"{shown_path(directory)}: {len(results)} cells, {len(results) - reused - len(failed)} "
+          f"run, {reused} already done, {len(failed)} failed; results.csv, summary.md, summary.png")
+    for r in failed:
+        print(f"  failed {r.cell.key} {dict(r.cell.params)}: {r.error.strip().splitlines()[-1]}",
+              file=sys.stderr)
+    return 1 if failed else 0
 
 
 def verify_figures(figures: str | None) -> int:

@@ -24,7 +24,7 @@ __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_
            "plot_region", "plot_histograms", "plot_id_trajectories", "plot_torque_distributions",
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
            "plot_motion", "plot_learning_curves", "plot_joint_curves", "plot_size_curve",
-           "plot_predicted_vs_true", "plot_error_map", "plot_error_against", "DPI"]
+           "plot_predicted_vs_true", "plot_sweep", "plot_error_map", "plot_error_against", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -368,6 +368,35 @@ def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg"
     ax.minorticks_off()
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_sweep(labels, metrics: Mapping[str, list], *, title: str = "", max_cells: int = 60
+               ) -> Figure:
+    """A sweep's scalar metrics, one horizontal bar per cell (``labels``) and one panel per
+    metric (its name, which carries its unit, on the axis); a failed cell (NaN) is marked
+    "failed". At most ``max_cells`` cells are drawn, and the title says so."""
+    names = list(metrics)
+    shown_cells = min(len(labels), max_cells)
+    fig, axes = plt.subplots(1, len(names), figsize=(3.2 * len(names) + 2.5, 0.28 * shown_cells + 1.4),
+                             layout="constrained", squeeze=False, sharey=True)
+    y = np.arange(shown_cells)
+    for ax, name in zip(axes[0], names):
+        values = np.asarray(metrics[name][:shown_cells], dtype=float)
+        ax.barh(y, values, color="C0")       # a failed cell (NaN) draws no bar
+        for k in np.flatnonzero(np.isnan(values)):
+            ax.text(0.01, k, "failed", va="center", fontsize=7, color="C3",
+                    transform=ax.get_yaxis_transform())
+        finite = values[np.isfinite(values)]
+        if finite.size and finite.min() > 0 and finite.max() > 100 * finite.min():
+            ax.set_xscale("log")        # errors spanning decades: each cell's bar readable
+        ax.set_xlabel(name + (" (log scale)" if ax.get_xscale() == "log" else ""), fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3, axis="x")
+    axes[0, 0].set_yticks(y, labels[:shown_cells], fontsize=7)
+    axes[0, 0].invert_yaxis()
+    cut = f" (first {shown_cells} of {len(labels)} cells)" if shown_cells < len(labels) else ""
+    fig.suptitle(title + cut, fontsize=9)
     return fig
 
 

@@ -579,7 +579,7 @@ def editions(params_dir: Path | None = None) -> list[Edition]:
     return sorted(found, key=lambda e: (not e.primary, e.name))
 
 
-def _declared(notebook: Path) -> list[str]:
+def declared_parameters(notebook: Path) -> list[str]:
     """The names its cell tagged ``parameters`` assigns (what papermill may override)."""
     import ast
 
@@ -600,7 +600,8 @@ def _declared(notebook: Path) -> list[str]:
                           f"({type(exc).__name__}: {str(exc).splitlines()[0][:200]})") from None
 
 
-def _digest_tree(h, paths) -> None:
+def digest_files(h, paths) -> None:
+    """Feed each file's project-relative name and SHA-256 to the hash ``h`` (sorted)."""
     for path in sorted(paths):
         h.update(path.relative_to(ROOT).as_posix().encode() if path.is_relative_to(ROOT)
                  else path.name.encode())
@@ -621,9 +622,9 @@ def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     h.update(json.dumps({"parameters": parameters, "smoke": smoke,
                          "env": {k: os.environ.get(k) for k in NUMERICS_ENV},
                          "python": sys.version}, sort_keys=True, default=str).encode())
-    _digest_tree(h, (ROOT / "lib" / "nfarm").glob("*.py"))
-    _digest_tree(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"])
-    _digest_tree(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
+    digest_files(h, (ROOT / "lib" / "nfarm").glob("*.py"))
+    digest_files(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"])
+    digest_files(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
     return h.hexdigest()
 
 
@@ -781,7 +782,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         arms = list(arms) if arms is not None else editions()
         if extra:
             arms = [a for a in arms if a.primary]
-        declared = {nb.name: _declared(nb) for nb in everything}
+        declared = {nb.name: declared_parameters(nb) for nb in everything}
     except (ReportError, ValueError) as exc:      # a bad notebook, or study file (ParamsError)
         print(f"report: {exc}", file=sys.stderr)
         return 1

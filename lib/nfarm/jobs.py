@@ -1,0 +1,217 @@
+"""Library jobs a parameter sweep runs (:mod:`nfarm.sweep`): each takes one cell's parameters
+and returns its metrics, a flat mapping of numbers, strings or lists of numbers.
+
+* ``anfis_benchmark`` — one ANFIS on one of Jang's benchmarks (chapter 4): ``sinc`` (121
+  training pairs; checked on a 41 × 41 grid of the same square), ``three_input`` (216 / 125) or
+  ``mackey_glass`` (500 / 500). Seconds per fit: what a smoke grid needs.
+* ``learned_ik`` — a study's learned inverse kinematics (chapter 6): one ANFIS per joint on the
+  first ``fraction`` (at most ``samples``) of the study's training poses, judged by each joint's
+  validation RMSE at its best epoch.
+* ``learned_id`` — a study's learned inverse dynamics (chapter 6): every ``stride``-th training
+  state, each joint's validation NRMSE (RMSE over the standard deviation of its torque).
+* ``idle`` — sleeps ``seconds`` and returns its parameters: the sweep machinery's own cost
+  (``benchmarks/bench_sweep.py``).
+
+A job declares every parameter with its default (:data:`REQUIRED`: none), so a sweep file that
+names an unknown parameter is refused before anything runs, and a cell's identity is taken over
+its complete parameters: a value left to its default and the same value written out are the
+same cell. Path parameters are stored relative to the repository root, so the cells of
+``params/studies/x.yaml`` and of its absolute path are one.
+
+The learned jobs reuse data sets and models (:func:`nfarm.datasets.build_datasets`,
+:func:`nfarm.learned.fit_cached`, models under ``<models_dir>/ik/sweep/<options hash>/``): a
+cell run again after a change to the code retrains nothing whose inputs are unchanged.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import datasets, jang
+from .anfis import ANFIS
+from .learned import LearnedID, LearnedIK, fit_cached
+from .paths import BUILD, project_path, shown_path
+from .reading import ParamsError
+
+__all__ = ["Job", "JOBS", "REQUIRED"]
+
+REQUIRED = object()
+"""Default of a parameter every cell must give."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """A named library function of one cell's parameters; ``params`` maps every parameter to
+    its default, ``metrics`` names what the function returns, ``paths`` the parameters that are
+    file or directory paths (stored relative to the repository root)."""
+
+    function: Callable[[dict], dict]
+    params: Mapping[str, Any]
+    metrics: tuple[str, ...]
+    paths: tuple[str, ...] = ()
+    doc: str = field(default="", compare=False)
+
+    def complete(self, given: Mapping[str, Any]) -> dict:
+        """``given`` with every default filled in and paths made project-relative; the names
+        of missing required parameters raise ``KeyError``."""
+        params = {k: given.get(k, default) for k, default in self.params.items()}
+        missing = [k for k, v in params.items() if v is REQUIRED]
+        if missing:
+            raise KeyError(", ".join(missing))
+        for key in self.paths:
+            if isinstance(params[key], str):
+                params[key] = shown_path(project_path(params[key]))
+        return params
+
+
+# --------------------------------------------------------------------------------------------
+# Jang's benchmarks
+
+
+def _benchmark_data(problem: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    if problem == "sinc":
+        X, y = jang.sinc_data()
+        X_check, y_check = jang.sinc_data(points=41)
+        return X, y, X_check, y_check
+    if problem == "three_input":
+        return jang.three_input_data()
+    if problem == "mackey_glass":
+        return jang.mackey_glass_data()
+    raise ValueError(f"problem must be one of sinc, three_input, mackey_glass, got {problem!r}")
+
+
+def anfis_benchmark(p: dict) -> dict:
+    X, y, X_check, y_check = _benchmark_data(p["problem"])
+    options = {k: p[k] for k in ("n_mfs", "mf", "partition", "n_rules", "radius", "epochs",
+                                 "step_size")}
+    model = ANFIS(**options, random_state=p["seed"]).fit(X, y)
+    return {"train_rmse": float(model.loss_curve_[-1]),
+            "check_rmse": jang.rmse(y_check, model.predict(X_check)),
+            "rules": int(model.rules_.shape[0])}
+
+
+# --------------------------------------------------------------------------------------------
+# Learned IK and ID on a study's data
+
+
+def _study_data(p: dict) -> tuple[datasets.Study, Path, Path]:
+    """The cell's study (its smoke version with ``smoke``), its data sets (built or reused) and
+    its models directory."""
+    study = datasets.load_study(p["study_file"])
+    if p["smoke"]:
+        study = datasets.smoke_study(study)
+    datasets.build_datasets(study, p["data_dir"])
+    directory = datasets.dataset_dir(study, p["data_dir"])
+    models = project_path(p["models_dir"]) if p["models_dir"] else BUILD / "models" / directory.name
+    return study, directory, models
+
+
+def _options_dir(models: Path, kind: str, options: Mapping) -> Path:
+    digest = hashlib.sha256(json.dumps(options, sort_keys=True).encode()).hexdigest()[:16]
+    return models / kind / "sweep" / digest
+
+
+def _first(data: Mapping, keys: tuple[str, ...], fraction: float, samples: int | None,
+           stride: int = 1) -> dict:
+    n = len(data[keys[0]])
+    count = max(1, int(round(fraction * n)))
+    if samples is not None:
+        count = min(count, samples)
+    return {k: data[k][:count][::stride] for k in keys}
+
+
+def _n_parameters(model) -> int:
+    return int(sum(sum(mf.size for mf in m.mfs_) + m.consequents_.size for m in model.models_))
+
+
+_ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint_options")
+
+
+def learned_ik(p: dict) -> dict:
+    study, directory, models = _study_data(p)
+    robot = study.robot
+    train = datasets.load(directory / "ik_train.npz", robot, study)
+    val = datasets.load(directory / "ik_val.npz", robot, study)
+    options = {k: p[k] for k in ("encoding", *_ANFIS_KEYS) if p[k] is not None}
+    if p["study_sizes"]:
+        options = study.chosen_ik(options)
+    if options["encoding"] == "arm_plane" and p["max_out_of_plane_deg"] is not None:
+        options["max_out_of_plane"] = math.radians(p["max_out_of_plane_deg"])
+    subset = _first(train, ("T", "q"), p["fraction"], p["samples"])
+    model = LearnedIK(**options, random_state=p["seed"])
+    where = _options_dir(models, "ik", {**model.get_params(), "fraction": p["fraction"],
+                                        "samples": p["samples"]})
+    model, _ = fit_cached(model, robot, subset, val, where)
+    rmse = np.degrees([m.val_loss_curve_[m.best_epoch_] for m in model.models_])
+    return {"val_rmse_deg": rmse.tolist(), "worst_deg": float(rmse.max()),
+            "rules": [int(m.rules_.shape[0]) for m in model.models_],
+            "parameters": _n_parameters(model), "train_samples": int(len(subset["q"]))}
+
+
+def learned_id(p: dict) -> dict:
+    study, directory, models = _study_data(p)
+    robot = study.robot
+    torque = {"rigid": "tau", "measured": "tau_measured"}[p["torques"]]
+    states = ("q", "qd", "qdd")
+    data = {}
+    for split in ("train", "val"):
+        loaded = datasets.load(directory / f"id_{split}.npz", robot, study)
+        if torque not in loaded:
+            raise ParamsError(f"{p['study_file']}: torques: the study has no measured torques "
+                              f"(id.measured)")
+        data[split] = {**{k: loaded[k] for k in states}, "tau": loaded[torque]}
+    train = _first(data["train"], (*states, "tau"), p["fraction"], None, p["stride"])
+    options = {k: p[k] for k in ("inputs", "residual", *_ANFIS_KEYS) if p[k] is not None}
+    model = LearnedID(**options, random_state=p["seed"])
+    where = _options_dir(models, "id", {**model.get_params(), "fraction": p["fraction"],
+                                        "stride": p["stride"], "torques": p["torques"]})
+    model, _ = fit_cached(model, robot, train, data["val"], where)
+    rmse = np.array([m.val_loss_curve_[m.best_epoch_] for m in model.models_])
+    nrmse = rmse / data["val"]["tau"].std(axis=0)
+    return {"val_rmse": rmse.tolist(), "val_nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
+            "rules": [int(m.rules_.shape[0]) for m in model.models_],
+            "parameters": _n_parameters(model), "train_samples": int(len(train["q"]))}
+
+
+def idle(p: dict) -> dict:
+    time.sleep(p["seconds"])
+    return {"seconds": p["seconds"], "value": p["value"]}
+
+
+_STUDY = {"study_file": REQUIRED, "smoke": False, "data_dir": None, "models_dir": None,
+          "seed": 0, "fraction": 1.0}
+_ANFIS = {"partition": "grid", "n_mfs": None, "n_rules": None, "radius": None, "mf": None,
+          "epochs": 10, "joint_options": None}
+
+JOBS: dict[str, Job] = {
+    "anfis_benchmark": Job(
+        anfis_benchmark,
+        {"problem": "sinc", "n_mfs": 2, "mf": "gbell", "partition": "grid", "n_rules": None,
+         "radius": 0.5, "epochs": 10, "step_size": 0.01, "seed": 0},
+        ("train_rmse", "check_rmse", "rules"),
+        doc="one ANFIS on a Jang benchmark"),
+    "learned_ik": Job(
+        learned_ik,
+        {**_STUDY, "samples": None, "encoding": "quat_xyz", **_ANFIS, "study_sizes": False,
+         "max_out_of_plane_deg": None},
+        ("val_rmse_deg", "worst_deg", "rules", "parameters", "train_samples"),
+        paths=("study_file", "data_dir", "models_dir"),
+        doc="a study's learned IK, one ANFIS per joint"),
+    "learned_id": Job(
+        learned_id,
+        {**_STUDY, "stride": 1, "torques": "rigid", "inputs": "own", "residual": False, **_ANFIS},
+        ("val_rmse", "val_nrmse", "worst_nrmse", "rules", "parameters", "train_samples"),
+        paths=("study_file", "data_dir", "models_dir"),
+        doc="a study's learned ID, one ANFIS per joint"),
+    "idle": Job(idle, {"seconds": 0.0, "value": 0}, ("seconds", "value"),
+                doc="sleeps; the sweep machinery's own cost"),
+}

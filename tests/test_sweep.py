@@ -1,0 +1,266 @@
+"""Parameter sweeps (nfarm.sweep, nfarm.jobs): sweep files, cells, resuming, failures, and the
+same results in this process, on a local Dask cluster and on a scheduler with two workers
+started as separate processes on 127.0.0.1."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from nfarm.__main__ import main
+from nfarm.paths import ROOT
+from nfarm.reading import ParamsError
+from nfarm.sweep import SWEEPS, load_sweep, run_sweep, sweep_from_dict
+
+SMOKE = SWEEPS / "smoke.yaml"
+NOTEBOOK = "tests/data/sweep_notebook.ipynb"
+
+#: Tests that start Dask clusters share the two cores with nothing else of theirs.
+DASK = pytest.mark.xdist_group("dask")
+
+
+def write(tmp_path: Path, data: dict, name: str = "sweep.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def small(**changes) -> dict:
+    base = {"name": "t", "job": "anfis_benchmark", "fixed": {"problem": "sinc", "epochs": 3},
+            "grid": {"n_mfs": [2, 3]}, "seeds": [0, 1], "metrics": ["check_rmse", "rules"]}
+    return {**base, **changes}
+
+
+def metrics(results) -> list:
+    return [(r.cell.key, r.status, dict(r.metrics)) for r in results]
+
+
+# --------------------------------------------------------------------------------------------
+# Sweep files
+
+
+def test_shipped_sweep_files_are_valid():
+    files = sorted(SWEEPS.glob("*.yaml"))
+    assert SMOKE in files
+    for path in files:
+        for smoke in (False, True):
+            assert load_sweep(path, smoke=smoke).cells
+
+
+def test_cells_are_the_product_of_grid_cells_and_seeds():
+    sweep = sweep_from_dict(small(cells=[{"mf": "gbell"}, {"mf": "gauss"}]))
+    assert len(sweep.cells) == 2 * 2 * 2
+    assert sweep.varying == ["n_mfs", "mf", "seed"]
+    assert {(c.params["mf"], c.params["n_mfs"], c.params["seed"]) for c in sweep.cells} == \
+        {(m, n, s) for m in ("gbell", "gauss") for n in (2, 3) for s in (0, 1)}
+    assert all(c.params["problem"] == "sinc" and c.params["epochs"] == 3 for c in sweep.cells)
+
+
+def test_a_default_written_out_is_the_same_cell():
+    implicit = sweep_from_dict(small())
+    explicit = sweep_from_dict(small(fixed={"problem": "sinc", "epochs": 3, "mf": "gbell"}))
+    assert [c.key for c in implicit.cells] == [c.key for c in explicit.cells]
+    other = sweep_from_dict(small(fixed={"problem": "sinc", "epochs": 4}))
+    assert not {c.key for c in implicit.cells} & {c.key for c in other.cells}
+
+
+def test_restrict_sets_a_parameter_and_merges_equal_cells():
+    sweep = sweep_from_dict(small())
+    one = sweep.restrict(seed=1)
+    assert len(one.cells) == 2 and all(c.params["seed"] == 1 for c in one.cells)
+    assert {c.key for c in one.cells} < {c.key for c in sweep.cells}
+
+
+def test_paths_are_project_relative():
+    data = {"name": "t", "job": "learned_ik", "metrics": ["worst_deg"]}
+    a = sweep_from_dict({**data, "fixed": {"study_file": "params/studies/intelbot5.yaml"}})
+    b = sweep_from_dict({**data, "fixed": {"study_file": str(ROOT / "params/studies/intelbot5.yaml")}})
+    assert a.cells[0].key == b.cells[0].key
+    assert a.cells[0].params["study_file"] == "params/studies/intelbot5.yaml"
+
+
+def test_the_smoke_section_replaces_its_fields():
+    data = small(smoke={"grid": {"n_mfs": [2]}, "seeds": [0]})
+    assert len(sweep_from_dict(data).cells) == 4
+    assert len(sweep_from_dict(data, smoke=True).cells) == 1
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"colour": 1}, "colour: unknown field"),
+    ({"notebook": NOTEBOOK}, "must name either a job or a notebook"),
+    ({"job": "train_everything"}, "job: must be one of anfis_benchmark"),
+    ({"grid": {"n_mf": [2]}}, "grid.n_mf: unknown parameter of job anfis_benchmark"),
+    ({"grid": {"epochs": [2]}}, "grid.epochs: is also in fixed"),
+    ({"grid": {"n_mfs": []}}, "grid.n_mfs: must be a list of at least 1 items"),
+    ({"grid": {"n_mfs": 2}}, "grid.n_mfs: must be a list"),
+    ({"grid": {"seed": [1]}}, "seeds: the grid sets seed too"),
+    ({"cells": [{"n_mfs": 2}]}, "cells[0].n_mfs: is also a grid parameter"),
+    ({"cells": [{"epoch": 2}]}, "cells[0].epoch: unknown parameter"),
+    ({"cells": ["gauss"]}, "cells[0]: must be a mapping of parameters"),
+    ({"fixed": [1, 2]}, "fixed: must be a mapping of parameters"),
+    ({"fixed": {"epoch": 2}}, "fixed.epoch: unknown parameter"),
+    ({"fixed": {"epochs": float("nan")}}, "fixed.epochs: must be a finite number"),
+    ({"seeds": [-1]}, "seeds[0]: must be >= 0"),
+    ({"metrics": ["accuracy"]}, "metrics[0]: job anfis_benchmark returns no metric 'accuracy'"),
+    ({"metrics": []}, "metrics: must be a list of at least 1 items"),
+    ({"name": "../elsewhere"}, "name: must be letters, digits"),
+    ({"grid": {"n_mfs": list(range(400)), "epochs": list(range(300))}, "fixed": {}},
+     "makes 240,000 cells; at most 100,000"),
+    ({"smoke": {"grid": {"n_mf": [2]}}}, "smoke.grid.n_mf: unknown parameter"),
+    ({"smoke": {"metrics": ["rules"]}}, "smoke.metrics: unknown field"),
+])
+def test_a_bad_sweep_file_gets_one_line(tmp_path, changes, message, capsys):
+    path = write(tmp_path, small(**changes))
+    with pytest.raises(ParamsError) as caught:
+        load_sweep(path)
+    text = str(caught.value)
+    assert "\n" not in text and text.startswith(str(path)) and message in text, text
+    assert main(["sweep", str(path), "--workers", "0", "--out", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err.strip() == text
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_notebook_sweep_names_only_the_notebooks_parameters(tmp_path):
+    data = {"name": "nb", "notebook": NOTEBOOK, "grid": {"y": [1]}, "metrics": ["square"]}
+    with pytest.raises(ParamsError, match=r"grid.y: unknown parameter of notebook .*allowed: x, seed, fail\)"):
+        sweep_from_dict(data, "f.yaml")
+    with pytest.raises(ParamsError, match=r"grid.out_dir: is set by the sweep runner"):
+        sweep_from_dict({**data, "grid": {"out_dir": ["x"]}}, "f.yaml")
+    with pytest.raises(ParamsError, match=r"notebook: must be an existing .ipynb file"):
+        sweep_from_dict({**data, "notebook": "notebooks/99_none.ipynb"}, "f.yaml")
+
+
+# --------------------------------------------------------------------------------------------
+# Running in this process
+
+
+def test_resume_skips_finished_cells_and_reruns_failed_ones(tmp_path):
+    sweep = sweep_from_dict(small(cells=[{}, {"partition": "fcm", "n_rules": 0}]), "t.yaml")
+    first = run_sweep(sweep, tmp_path, workers=0)
+    assert [r.status for r in first] == ["ok"] * 4 + ["failed"] * 4
+    failed = first[-1]
+    cell = json.loads((tmp_path / failed.cell.key / "cell.json").read_text())
+    assert cell["status"] == "failed" and cell["params"]["n_rules"] == 0
+    assert "n_rules" in cell["error"] and "Traceback" in (tmp_path / failed.cell.key / "error.txt").read_text()
+    again = run_sweep(sweep, tmp_path, workers=0)
+    assert [r.reused for r in again] == [True] * 4 + [False] * 4
+    assert metrics(again) == metrics(first)
+    rows = list(csv.DictReader((tmp_path / "results.csv").open()))
+    assert [r["cell"] for r in rows] == [c.key for c in sweep.cells]
+    assert rows[-1]["status"] == "failed" and rows[-1]["n_rules"] == "0" and rows[-1]["error"]
+    assert rows[0]["status"] == "ok" and float(rows[0]["check_rmse"]) == first[0].metrics["check_rmse"]
+    assert (tmp_path / "summary.md").read_text().count("| failed |") == 4
+    assert (tmp_path / "summary.png").stat().st_size > 0
+
+
+def test_a_change_of_code_runs_the_cells_again(tmp_path, monkeypatch):
+    sweep = sweep_from_dict(small(), "t.yaml")
+    run_sweep(sweep, tmp_path, workers=0)
+    import nfarm.sweep
+
+    monkeypatch.setattr(nfarm.sweep, "code_key", lambda sweep: "another")
+    assert not any(r.reused for r in run_sweep(sweep, tmp_path, workers=0))
+
+
+def test_a_widened_grid_runs_only_its_new_cells(tmp_path):
+    run_sweep(sweep_from_dict(small(), "t.yaml"), tmp_path, workers=0)
+    wider = run_sweep(sweep_from_dict(small(grid={"n_mfs": [2, 3, 4]}), "t.yaml"), tmp_path, workers=0)
+    assert sum(r.reused for r in wider) == 4 and len(wider) == 6
+
+
+def test_a_notebook_cell_keeps_its_notebook_files_and_metrics(tmp_path):
+    sweep = sweep_from_dict({"name": "nb", "notebook": NOTEBOOK, "grid": {"x": [3.0], "fail": [False, True]},
+                             "metrics": ["square", "pair"]}, "nb.yaml")
+    ok, failed = run_sweep(sweep, tmp_path, workers=0)
+    assert ok.ok and ok.metrics == {"square": 9.0, "pair": [3.0, -3.0]}
+    cell = tmp_path / ok.cell.key
+    assert (cell / "files" / "square.txt").read_text() == "9.0\n"
+    assert json.loads((cell / "notebook.ipynb").read_text())["cells"]
+    assert not failed.ok and "asked to fail" in failed.error
+    header = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
+    assert header[-7:] == ["square", "pair[1]", "pair[2]", "status", "seconds", "worker", "error"]
+
+
+def test_a_missing_metric_fails_the_cell(tmp_path):
+    sweep = sweep_from_dict({"name": "nb", "notebook": NOTEBOOK, "metrics": ["cube"]}, "nb.yaml")
+    (result,) = run_sweep(sweep, tmp_path, workers=0)
+    assert not result.ok and "gave no metric 'cube'" in result.error
+
+
+def test_the_command_line_runs_a_sweep_and_says_what_failed(tmp_path, capsys):
+    path = write(tmp_path, small(cells=[{}, {"n_mfs": 0}], grid={}, seeds=[0]))
+    assert main(["sweep", str(path), "--workers", "0", "--out", str(tmp_path / "out")]) == 1
+    captured = capsys.readouterr()
+    assert "2 cells, 1 run, 0 already done, 1 failed" in captured.out
+    assert "'n_mfs': 0" in captured.err
+    assert main(["sweep", str(path), "--workers", "-1"]) == 2
+    assert main(["sweep", str(path), "--workers", "1", "--scheduler", "tcp://127.0.0.1:1"]) == 2
+
+
+# --------------------------------------------------------------------------------------------
+# Dask: a local cluster and a loopback scheduler with two workers
+
+
+@DASK
+def test_a_local_cluster_of_two_processes_gives_the_same_results(tmp_path):
+    sweep = load_sweep(SMOKE).restrict(epochs=20)
+    here = run_sweep(sweep, tmp_path / "here", workers=0)
+    local = run_sweep(sweep, tmp_path / "local", workers=2)
+    assert all(r.ok for r in local)
+    assert metrics(local) == metrics(here)
+    assert {r.worker for r in local} <= {"0", "1"}
+    assert json.loads((tmp_path / "local" / local[0].cell.key / "cell.json").read_text())["worker"] in ("0", "1")
+
+
+@pytest.fixture
+def loopback(tmp_path):
+    """A ``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1; its address."""
+    dask = str(Path(sys.executable).parent / "dask")
+    file = tmp_path / "scheduler.json"
+    env = {**os.environ, "PYTHONHASHSEED": "0"}
+    procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", str(file)], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not file.is_file() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        address = json.loads(file.read_text())["address"]
+        for name in ("w1", "w2"):
+            procs.append(subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--name", name,
+                                           "--no-dashboard", "--local-directory", str(tmp_path / name)],
+                                          env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        from distributed import Client
+
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+@DASK
+def test_a_scheduler_and_two_workers_started_apart_give_the_same_results(tmp_path, loopback):
+    sweep = load_sweep(SMOKE).restrict(epochs=20)
+    cells = sweep_from_dict(small(cells=[{}, {"n_mfs": 0}], grid={}, seeds=[0]), "t.yaml")
+    remote = run_sweep(sweep, tmp_path / "remote", scheduler=loopback)
+    here = run_sweep(sweep, tmp_path / "here", workers=0)
+    assert metrics(remote) == metrics(here)
+    assert {r.worker for r in remote} <= {"w1", "w2"}
+    ok, failed = run_sweep(cells, tmp_path / "failing", scheduler=loopback)
+    assert ok.ok and not failed.ok and "n_mfs" in failed.error and failed.cell.params["n_mfs"] == 0
+    assert all(r.reused for r in run_sweep(sweep, tmp_path / "remote", scheduler=loopback))
