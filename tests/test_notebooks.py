@@ -48,7 +48,7 @@ def ensure_models(directory, study_file, scratch):
             (nb,) = [n for n in NOTEBOOK_FILES if n.name.startswith(prefix)]
             run_notebook(nb, scratch / nb.name, {
                 "smoke": True, "study_file": study_file, "out_dir": str(scratch / prefix),
-                **{k: str(directory / k) for k in ("data_dir", "models_dir")
+                **{k: str(directory / k) for k in ("data_dir", "models_dir", "sweeps_dir")
                    if k in papermill.inspect_notebook(str(nb))}})
 
 
@@ -77,7 +77,7 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     executed = tmp_path / notebook.name
     parameters = {"smoke": True, "out_dir": str(out)}
     declared = papermill.inspect_notebook(str(notebook))
-    for name in ("recordings_dir", "data_dir", "models_dir"):   # nothing written into the checkout
+    for name in ("recordings_dir", "data_dir", "models_dir", "sweeps_dir"):   # nothing written into the checkout
         if name in declared:
             parameters[name] = str(shared / name)
     if "study_files" in declared:       # the comparison, here of one arm (both: test below)
@@ -121,7 +121,7 @@ def test_runs_for_another_shipped_robot_without_touching_figures(notebook, robot
     before = {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")}
     parameters = {"smoke": True, "out_dir": str(tmp_path / "out"),
                   "robot_file": f"params/robots/{robot}.yaml"}
-    for name in ("recordings_dir", "data_dir", "models_dir"):
+    for name in ("recordings_dir", "data_dir", "models_dir", "sweeps_dir"):
         if name in papermill.inspect_notebook(str(notebook)):
             parameters[name] = str(tmp_path / name)
     run_notebook(notebook, tmp_path / notebook.name, parameters)
@@ -145,7 +145,7 @@ def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
     """Chapters 05–07 in order on the SO-101's study: its data, its models, their tests."""
     parameters = {"smoke": True, "out_dir": str(so101_shared / f"out_{notebook.stem}"),
                   "study_file": "params/studies/so101.yaml"}
-    for name in ("recordings_dir", "data_dir", "models_dir"):
+    for name in ("recordings_dir", "data_dir", "models_dir", "sweeps_dir"):
         if name in papermill.inspect_notebook(str(notebook)):
             parameters[name] = str(so101_shared / name)
     if notebook.name.startswith("07"):

@@ -71,7 +71,8 @@ from .jobs import JOBS
 from .paths import BUILD, NOTEBOOKS, PARAMS, ROOT, atomic_path, project_path, shown_path
 from .reading import ParamsError, Validator, json_ready, load_yaml, show
 
-__all__ = ["Sweep", "Cell", "CellResult", "load_sweep", "sweep_from_dict", "run_sweep",
+__all__ = ["Sweep", "Cell", "CellResult", "SweepError", "load_sweep", "sweep_from_dict",
+           "run_sweep", "sweep_results",
            "code_key", "record_metrics", "write_summary", "METRICS_MIME", "SWEEPS"]
 
 SWEEPS = PARAMS / "sweeps"
@@ -84,6 +85,10 @@ _TOP = {"name": True, "description": False, "job": False, "notebook": False, "fi
         "grid": False, "cells": False, "seeds": False, "metrics": True, "smoke": False}
 _SMOKE = {"fixed": False, "grid": False, "cells": False, "seeds": False}
 _RUNNER_SET = ("out_dir",)      # a notebook's parameters the runner sets itself
+
+
+class SweepError(RuntimeError):
+    """A cell a chapter needs failed; the message names it, its parameters and the error."""
 
 
 @dataclass(frozen=True)
@@ -632,6 +637,25 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
     if summary and len(ordered) == len(sweep.cells):
         write_summary(out, sweep, ordered)
     return ordered
+
+
+def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
+                  workers: int | None = None) -> list[CellResult]:
+    """The results of every cell of ``sweep`` for a chapter: read from
+    ``<sweeps_dir>/<name>/`` (default ``build/sweeps/``) where finished, the others run now on
+    a local cluster of ``workers`` processes (``0``: in this process).
+
+    Raises:
+        SweepError: a cell failed (its record is kept in its directory).
+    """
+    base = project_path(sweeps_dir) if sweeps_dir is not None else BUILD / "sweeps"
+    results = run_sweep(sweep, base / sweep.name, workers=workers, summary=False)
+    for r in results:
+        if not r.ok:
+            raise SweepError(f"sweep {sweep.name}: cell {r.cell.key} {dict(r.cell.params)} "
+                             f"failed: {_first_line(r.error)} (see "
+                             f"{shown_path(base / sweep.name / r.cell.key / 'error.txt')})")
+    return results
 
 
 def _prepare_studies(cells: Sequence[Cell]) -> None:
