@@ -28,12 +28,17 @@ TRIM_THRESHOLD = 512 << 20
 state = "not run"
 
 
-def tune() -> str:
-    """Set the two thresholds once (see the module docstring); returns :data:`state`."""
+def tune(*, worker: bool = False) -> str:
+    """Set the two thresholds once (see the module docstring); returns :data:`state`.
+
+    ``worker``: the process is a Dask worker running a sweep's cell (``nfarm.sweep``). Dask's
+    nanny sets ``MALLOC_TRIM_THRESHOLD_`` for every worker it starts (to hand memory back
+    between tasks), which is not the user's choice: a cell of ANFIS training ran 1.5× slower
+    with it (``benchmarks/bench_sweep.py``), so only ``NFARM_MALLOPT=0`` is respected then."""
     global state
-    if state != "not run":
+    if state == "set" or (state != "not run" and not worker):
         return state
-    if os.environ.get("NFARM_MALLOPT", "1") == "0" or any(
+    if os.environ.get("NFARM_MALLOPT", "1") == "0" or not worker and any(
             k in os.environ for k in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_")):
         state = "left to the environment"
         return state

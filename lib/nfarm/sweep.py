@@ -403,13 +403,18 @@ def _cell_threads():
 
 
 def _worker_name() -> str:
+    """The Dask worker's name (tuning its allocator as nfarm does: :mod:`nfarm._allocator`),
+    or ``"in-process"``."""
     try:
         from distributed import get_worker
 
         worker = get_worker()
-        return str(worker.name if worker.name is not None else worker.address)
     except (ImportError, ValueError):
         return "in-process"
+    from ._allocator import tune
+
+    tune(worker=True)
+    return str(worker.name if worker.name is not None else worker.address)
 
 
 def execute_cell(job: str | None, notebook: str | None, params: dict, metrics: Sequence[str],
