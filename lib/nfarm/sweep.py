@@ -579,7 +579,9 @@ def _client(scheduler: str | None, workers: int | None):
             raise ParamsError(f"cannot reach the Dask scheduler at {scheduler}: "
                               f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, dashboard_address=None, silence_logs=40)
+                           processes=True, silence_logs=40,
+                           # no fixed port (its HTTP server starts anyway; clusters side by side)
+                           dashboard_address="127.0.0.1:0")
     return Client(cluster)
 
 
