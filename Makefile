@@ -22,7 +22,7 @@ export PYTHONHASHSEED := 0
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
-.PHONY: setup report test bench sweep lock lab verify clean distclean
+.PHONY: setup report test bench sweep course lock lab verify clean distclean
 
 setup: $(STAMP)
 
@@ -54,6 +54,12 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	@set -e; for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b; done
+
+# The course (docs/teaching.md): build/course/student/ (no solutions, no outputs),
+# build/course/teacher/ (executed with the worked solutions, HTML) and build/course/index.html.
+# The teacher's notebooks reuse the data sets and models `make report` made.
+course: $(STAMP)
+	$(REPORT_ENV) $(PY) -m nfarm course
 
 # make sweep SWEEP=params/sweeps/smoke.yaml [SWEEP_ARGS="--scheduler tcp://host:8786"]: the
 # cells run with the report's numerics, so a chapter reuses them (README "Running sweeps").

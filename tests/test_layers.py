@@ -13,7 +13,8 @@ LAYERS = {
     "model": ["reading", "paths", "robot", "rotations", "linalg", "kinematics", "dynamics",
               "fuzzy", "trajectory", "workspace"],
     "solvers": ["ik", "anfis", "jang", "datasets", "learned"],
-    "io": ["urdf", "recording", "plotting", "report", "pinocchio_ref", "jobs", "sweep", "__main__"],
+    "io": ["urdf", "recording", "plotting", "report", "pinocchio_ref", "jobs", "sweep", "course", "answers",
+           "__main__"],
 }
 RANK = {module: rank for rank, names in enumerate(LAYERS.values()) for module in names}
 

@@ -1,5 +1,5 @@
-"""Command line: ``python -m nfarm check-params FILE...``, ``report``, ``datasets``, ``sweep``
-and ``verify``."""
+"""Command line: ``python -m nfarm check-params FILE...``, ``report``, ``datasets``, ``sweep``,
+``course`` and ``verify``."""
 
 from __future__ import annotations
 
@@ -80,6 +80,12 @@ def main(argv: list[str] | None = None) -> int:
     sweep.add_argument("--out", default=None, metavar="DIR",
                        help="results directory (default build/sweeps/<name>/)")
     sweep.add_argument("--smoke", action="store_true", help="the sweep file's smaller version")
+    course = sub.add_parser("course", help="build the course: student and teacher notebooks")
+    course.add_argument("--out", default=None, metavar="DIR", help="default build/course/")
+    course.add_argument("--smoke", action="store_true", help="teacher's notebooks with small parameters")
+    course.add_argument("--only", nargs="*", metavar="NN", help="only these chapters")
+    course.add_argument("--no-teacher", action="store_true",
+                        help="the student build and the index only (nothing executed)")
     verify = sub.add_parser("verify", help="check figures/ against figures/MANIFEST.sha256")
     verify.add_argument("--figures", default=None, metavar="DIR")
     args = parser.parse_args(argv)
@@ -89,6 +95,9 @@ def main(argv: list[str] | None = None) -> int:
         return verify_figures(args.figures)
     if args.command == "datasets":
         return make_datasets(args.study, args.out, args.force)
+    if args.command == "course":
+        from .course import main as course_main
+        return course_main(args.out, args.smoke, args.only, not args.no_teacher)
     if args.command == "sweep":
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
     from .report import build_report

@@ -218,9 +218,10 @@ def _running_cell(executed: Path) -> tuple[int, str] | None:
     return k - injected, lines[0] if lines else ""
 
 
-def _clean_executed(executed: Path) -> None:
+def _clean_executed(executed: Path, source: Path) -> None:
     """Remove what must not be published from an executed notebook: widget state (a progress
-    bar frozen at 0 %) and the checkout's absolute paths in papermill's metadata."""
+    bar frozen at 0 %) and the checkout's absolute paths in papermill's metadata (the input is
+    the chapter's notebook, also when a copy without some cells ran)."""
     import nbformat
 
     nb = nbformat.read(executed, 4)
@@ -228,7 +229,7 @@ def _clean_executed(executed: Path) -> None:
     meta = nb.metadata.get("papermill", {})
     for key in ("input_path", "output_path"):
         if key in meta:
-            meta[key] = shown_path(Path(meta[key]))
+            meta[key] = shown_path(source if key == "input_path" else Path(meta[key]))
     for cell in nb.cells:
         for output in cell.get("outputs", []):
             output.get("data", {}).pop("application/vnd.jupyter.widget-view+json", None)
@@ -237,10 +238,13 @@ def _clean_executed(executed: Path) -> None:
 
 
 def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, parameters: dict,
-                 *, progress: bool = False, cell_timeout: float | None = 1800) -> None:
+                 *, progress: bool = False, cell_timeout: float | None = 1800,
+                 remove_tags: Sequence[str] = ()) -> None:
     """Execute ``notebook`` with papermill in the project kernel, writing ``output``.
 
     ``cell_timeout``: seconds a cell may run before the run fails (``None``: no limit).
+    ``remove_tags``: cells with any of these tags are left out (nbconvert's
+    ``TagRemovePreprocessor``; the report leaves out the exercises, :mod:`nfarm.course`).
 
     Raises:
         ReportError: the notebook is not valid, a cell failed, timed out or killed the
@@ -262,12 +266,21 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise ReportError(f"{notebook.name}: not a valid notebook: {first[:200]}") from None
     output.parent.mkdir(parents=True, exist_ok=True)
+    to_run = notebook
+    if remove_tags:
+        from nbconvert.preprocessors import TagRemovePreprocessor
+
+        nb, _ = TagRemovePreprocessor(remove_cell_tags=set(remove_tags), enabled=True).preprocess(
+            nbformat.read(notebook, 4), {})
+        to_run = output.with_name(f".{output.stem}.source.ipynb")
+        with atomic_path(to_run) as tmp:
+            nbformat.write(nb, tmp)
     quiet = _DropMessage("Kernel died")      # reported below, in one line
     logging.getLogger("papermill").addFilter(quiet)
     with tempfile.TemporaryDirectory(prefix="nfarm-kernel-") as sockets:
         try:
             papermill.execute_notebook(
-                str(notebook), str(output), parameters=parameters, kernel_name=KERNEL_NAME,
+                str(to_run), str(output), parameters=parameters, kernel_name=KERNEL_NAME,
                 language="python", cwd=str(notebook.parent), progress_bar=progress,
                 log_output=False, execution_timeout=cell_timeout,
                 kernel_manager_class=_ipc_kernel_manager(sockets))
@@ -291,7 +304,9 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
                               f"{output}") from None
         finally:
             logging.getLogger("papermill").removeFilter(quiet)
-    _clean_executed(output)
+            if to_run != notebook:
+                to_run.unlink(missing_ok=True)
+    _clean_executed(output, notebook)
 
 
 # --------------------------------------------------------------------------------------------
@@ -432,6 +447,9 @@ def _title(notebook: Path) -> str:
                     return line[2:].strip()
     return notebook.stem
 
+
+#: Cells of the course edition (:mod:`nfarm.course`), left out of the report.
+COURSE_TAGS = ("exercise", "solution", "check")
 
 MATHJAX = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
 
@@ -818,7 +836,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                 print(f"report: {label} …", file=sys.stderr, flush=True)
                 try:
                     run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
-                                 progress=sys.stderr.isatty(), cell_timeout=cell_timeout)
+                                 progress=sys.stderr.isatty(), cell_timeout=cell_timeout,
+                                 remove_tags=COURSE_TAGS)
                     published = _publish(stage, figures_dir, prefix, arm.subdir)
                 except ReportError as exc:
                     stamp.unlink(missing_ok=True)

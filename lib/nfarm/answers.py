@@ -1,0 +1,166 @@
+"""Reference answers of the chapters' exercises (:mod:`nfarm.course`), computed for any robot.
+
+The check cells call these, so a student reads the question and the check, not the answer
+beside it; each is computed by a route other than the worked solution where one exists (a
+one-joint robot's forward kinematics for the DH transform, a two-link arm's Newton–Euler torques
+for the torques by hand). Angles in radians unless a name says otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .anfis import ANFIS
+from .dynamics import gravity_torques, rnea
+from .ik import solve
+from .jang import rmse, sinc_data
+from .kinematics import fk, jacobian, min_singular_value
+from .robot import Robot, robot_from_dict, robot_to_dict, sample_configurations
+
+__all__ = ["tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
+           "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
+           "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
+           "sinc_fit", "best_sinc_mf"]
+
+
+# -- chapter 1 ---------------------------------------------------------------------------------
+
+
+def tool_shift(robot: Robot, joint: int = 1, extra_m: float = 0.05) -> float:
+    """How far the tool centre moves at q = 0 when joint ``joint``'s ``a`` grows by ``extra_m``."""
+    longer = robot_to_dict(robot)
+    longer["joints"][joint]["a"] += extra_m
+    q = np.zeros(robot.n)
+    return float(np.linalg.norm(fk(robot_from_dict(longer), q)[:3, 3] - fk(robot, q)[:3, 3]))
+
+
+def _one_joint(d: float, a: float, alpha: float) -> Robot:
+    return robot_from_dict({"name": "one", "convention": "standard", "gravity": [0, 0, -9.81],
+                            "joints": [{"a": a, "alpha": alpha, "d": d, "offset": 0.0,
+                                        "qlim": [-6.0, 6.0], "mass": 1.0, "com": [0, 0, 0],
+                                        "inertia": [1e-3, 1e-3, 1e-3, 0, 0, 0]}]})
+
+
+def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
+    """The standard DH transform, as the forward kinematics of a one-joint robot."""
+    return fk(_one_joint(d, a, alpha), [theta])
+
+
+def dh_cases(seed: int, count: int = 6) -> list[tuple[float, float, float, float]]:
+    rng = np.random.default_rng(seed)
+    return [(float(rng.uniform(-3, 3)), float(rng.uniform(-0.3, 0.3)), float(rng.uniform(-0.3, 0.3)),
+             float(rng.uniform(-3, 3))) for _ in range(count)]
+
+
+def singular_elbows_deg(robot: Robot, points: int = 20001, rel: float = 1e-3) -> list[float]:
+    """The elbow angles (joint 3, the others at 0) within its limits where the position
+    Jacobian's smallest singular value has a local minimum below ``rel`` of its largest [deg]."""
+    q3 = np.linspace(robot.qlim[2, 0], robot.qlim[2, 1], points)
+    q = np.zeros((points, robot.n))
+    q[:, 2] = q3
+    s = min_singular_value(robot, q, "position")
+    found = [i for i in range(1, points - 1)
+             if s[i] <= s[i - 1] and s[i] <= s[i + 1] and s[i] < rel * s.max()]
+    return [round(math.degrees(q3[i]), 1) for i in found]
+
+
+def one_more_joint(robot: Robot) -> Robot:
+    """``robot`` with one more joint: its last joint's ``alpha`` set to 90° (so the new axis is
+    perpendicular to it) and a copy of that joint appended with ``a = alpha = 0``, ``d`` = 5 cm."""
+    data = robot_to_dict(robot)
+    data["joints"][-1]["alpha"] = math.pi / 2
+    data["joints"].append(dict(data["joints"][-1], name="extra_wrist", a=0.0, alpha=0.0, d=0.05))
+    return robot_from_dict(data)
+
+
+def one_more_joint_answers(robot: Robot, seed: int) -> tuple[int, float]:
+    """The arm with one more joint (:func:`one_more_joint`): its Jacobian's rank at a seeded
+    random configuration, and the smallest singular value of its Jacobian at q = 0."""
+    six = one_more_joint(robot)
+    q = sample_configurations(six, 1, seed)[0]
+    rank = int(np.linalg.matrix_rank(jacobian(six, q), tol=1e-9))
+    return rank, float(np.linalg.svd(jacobian(six, np.zeros(six.n)), compute_uv=False)[-1])
+
+
+# -- chapter 2 ---------------------------------------------------------------------------------
+
+
+def _target(robot: Robot, seed: int) -> np.ndarray:
+    return fk(robot, sample_configurations(robot, 1, seed)[0])
+
+
+def tolerance_iterations(robot: Robot, seed: int) -> int:
+    """LM iterations from q = 0 to a seeded random reachable target at tolerance 1e-12, less
+    those at 1e-3."""
+    T = _target(robot, seed)
+    steps = [int(solve(robot, T, np.zeros(robot.n), tol_pos=tol, tol_rot=tol, restarts=0).iterations)
+             for tol in (1e-12, 1e-3)]
+    return steps[0] - steps[1]
+
+
+def jt_step(J: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Buss's Jacobian-transpose step: ``α Jᵀe`` with ``α = ⟨e, J Jᵀe⟩ / ‖J Jᵀe‖²``."""
+    g = J.T @ e
+    Jg = J @ g
+    return float(e @ Jg) / float(Jg @ Jg) * g
+
+
+def jt_cases(seed: int, n: int, count: int = 5) -> list[tuple[np.ndarray, np.ndarray]]:
+    rng = np.random.default_rng(seed)
+    return [(rng.normal(size=(6, n)), rng.normal(size=6)) for _ in range(count)]
+
+
+def jt_success(robot: Robot, targets: int, seed: int) -> float:
+    """Share of ``targets`` seeded random reachable targets the Jacobian transpose solves."""
+    T = fk(robot, sample_configurations(robot, targets, seed))
+    return solve(robot, T, method="jt", seed=seed).success_rate
+
+
+# -- chapter 3 ---------------------------------------------------------------------------------
+
+
+def two_link_torques(l1: float, l2: float, m1: float, m2: float, q_deg) -> np.ndarray:
+    """Static torques of a planar two-link arm with point masses at the links' ends, in a
+    vertical plane (gravity 9.81 m/s² along −y), by Newton–Euler."""
+    point = {"offset": 0.0, "alpha": 0.0, "d": 0.0, "qlim": [-4.0, 4.0], "com": [0, 0, 0],
+             "inertia": [0, 0, 0, 0, 0, 0]}
+    arm = robot_from_dict({"name": "two_link", "convention": "standard", "gravity": [0, -9.81, 0],
+                           "joints": [{**point, "a": l1, "mass": m1}, {**point, "a": l2, "mass": m2}]})
+    q = np.radians(q_deg)
+    return rnea(arm, q, np.zeros(2), np.zeros(2))
+
+
+def payload_torque_change(robot: Robot, extra_kg: float = 0.5, joint: int = 1) -> float:
+    """Change of the static torque at ``joint`` at q = 0 when the last link gains ``extra_kg``."""
+    heavier = robot_to_dict(robot)
+    heavier["joints"][-1]["mass"] += extra_kg
+    q = np.zeros(robot.n)
+    return float(gravity_torques(robot_from_dict(heavier), q)[joint] - gravity_torques(robot, q)[joint])
+
+
+def peak_gravity_shoulder_deg(robot: Robot, points: int = 3601) -> float:
+    """The shoulder angle (joint 2, the others at 0) within its limits where the gravity
+    torque at the shoulder is largest in magnitude [deg]."""
+    q2 = np.linspace(robot.qlim[1, 0], robot.qlim[1, 1], points)
+    q = np.zeros((points, robot.n))
+    q[:, 1] = q2
+    return math.degrees(q2[int(np.argmax(np.abs(gravity_torques(robot, q)[:, 1])))])
+
+
+# -- chapter 4 ---------------------------------------------------------------------------------
+
+
+def sinc_fit(n_mfs: int, mf: str, epochs: int) -> tuple[float, float]:
+    """Jang's sinc with ``n_mfs`` functions ``mf`` per input: training RMSE (last epoch) and
+    RMSE on a 41 × 41 check grid of the same square."""
+    X, y = sinc_data()
+    model = ANFIS(n_mfs=n_mfs, mf=mf, epochs=epochs).fit(X, y)
+    Xc, yc = sinc_data(points=41)
+    return float(model.loss_curve_[-1]), rmse(yc, model.predict(Xc))
+
+
+def best_sinc_mf(epochs: int) -> str:
+    """The function type (4 per input) with the lower check RMSE on sinc."""
+    return min(("gbell", "gauss"), key=lambda mf: sinc_fit(4, mf, epochs)[1])
