@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from .anfis import ANFIS
+from .datasets import IKRegion, Study, check_single_valued
 from .dynamics import gravity_torques, rnea
 from .ik import solve
 from .jang import rmse, sinc_data
@@ -22,7 +23,8 @@ from .robot import Robot, robot_from_dict, robot_to_dict, sample_configurations
 __all__ = ["tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
            "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
-           "sinc_fit", "best_sinc_mf"]
+           "sinc_fit", "best_sinc_mf", "second_share_full_elbow", "other_branch_verdict",
+           "mean_solutions_full"]
 
 
 # -- chapter 1 ---------------------------------------------------------------------------------
@@ -164,3 +166,45 @@ def sinc_fit(n_mfs: int, mf: str, epochs: int) -> tuple[float, float]:
 def best_sinc_mf(epochs: int) -> str:
     """The function type (4 per input) with the lower check RMSE on sinc."""
     return min(("gbell", "gauss"), key=lambda mf: sinc_fit(4, mf, epochs)[1])
+
+
+# -- chapter 5 ---------------------------------------------------------------------------------
+
+
+def second_share_full_elbow(study: Study, targets: int, seed: int) -> float:
+    """Share of targets with a second solution when the study's region lets the elbow (joint
+    3) use its whole range."""
+    region = study.ik_region
+    box = region.box.copy()
+    box[2] = study.robot.qlim[2]
+    wide = IKRegion(region.robot, box, region.radial, region.height, region.approach_axis,
+                    region.approach_angle, region.reach)
+    return check_single_valued(wide, targets, seed=seed).fraction
+
+
+def other_branch_verdict(study: Study, region, targets: int, seed: int) -> tuple[bool | None, str]:
+    """Whether ``region`` (an :class:`IKRegion`) holds the other elbow branch — its elbow
+    range does not meet the study's — and is single-valued on ``targets`` targets; and what is
+    wrong if not."""
+    if region is None:
+        return None, ""
+    if not isinstance(region, IKRegion):
+        return False, f"expected an IKRegion, got {type(region).__name__}"
+    lo, hi = region.box[2]
+    s_lo, s_hi = study.ik_region.box[2]
+    if hi >= s_lo and lo <= s_hi:
+        return False, (f"its elbow range [{math.degrees(lo):.0f}°, {math.degrees(hi):.0f}°] meets "
+                       f"the study's [{math.degrees(s_lo):.0f}°, {math.degrees(s_hi):.0f}°]")
+    try:
+        result = check_single_valued(region, targets, seed=seed)
+    except ValueError as exc:
+        return False, f"no targets can be drawn in it ({exc})"
+    if result.fraction > 0:
+        return False, f"{result.fraction:.0%} of its targets have a second solution inside it"
+    return True, ""
+
+
+def mean_solutions_full(robot: Robot, targets: int, seed: int) -> float:
+    """Mean number of distinct solutions within the joint limits that 24 starts find for
+    targets drawn over the full joint ranges."""
+    return float(check_single_valued(IKRegion.full(robot), targets, seed=seed).solutions.mean())
