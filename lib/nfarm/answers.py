@@ -18,13 +18,15 @@ from .dynamics import gravity_torques, rnea
 from .ik import solve
 from .jang import rmse, sinc_data
 from .kinematics import fk, jacobian, min_singular_value
+from .learned import LearnedID, LearnedIK
 from .robot import Robot, robot_from_dict, robot_to_dict, sample_configurations
 
 __all__ = ["tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
            "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
            "sinc_fit", "best_sinc_mf", "second_share_full_elbow", "other_branch_verdict",
-           "mean_solutions_full"]
+           "mean_solutions_full", "learned_ik_worst", "learned_id_worst", "beats",
+           "median_tool_error_mm", "warm_start_iterations", "nearest_by_position"]
 
 
 # -- chapter 1 ---------------------------------------------------------------------------------
@@ -208,3 +210,72 @@ def mean_solutions_full(robot: Robot, targets: int, seed: int) -> float:
     """Mean number of distinct solutions within the joint limits that 24 starts find for
     targets drawn over the full joint ranges."""
     return float(check_single_valued(IKRegion.full(robot), targets, seed=seed).solutions.mean())
+
+
+# -- chapters 6 and 7 --------------------------------------------------------------------------
+
+
+def _fit_ik(robot: Robot, train, val, options: dict, samples: int, seed: int) -> LearnedIK:
+    subset = {k: train[k][:samples] for k in ("T", "q")}
+    return LearnedIK(**options, random_state=seed).fit(robot, subset, val)
+
+
+def learned_ik_worst(robot: Robot, train, val, options: dict, samples: int, seed: int) -> float:
+    """Worst joint validation RMSE [deg] of a LearnedIK with ``options`` trained on the first
+    ``samples`` training poses."""
+    model = _fit_ik(robot, train, val, options, samples, seed)
+    return float(np.degrees(max(m.val_loss_curve_[m.best_epoch_] for m in model.models_)))
+
+
+def beats(robot: Robot, train, val, options, to_beat: float, samples: int, epochs: int,
+          seed: int) -> tuple[bool | None, str]:
+    """Whether LearnedIK ``options`` (a mapping; ``epochs`` is the budget's) beat ``to_beat``
+    [deg] on the budget, and why not."""
+    if options is None:
+        return None, ""
+    if not isinstance(options, dict):
+        return False, f"expected a dict of LearnedIK options, got {type(options).__name__}"
+    if "epochs" in options:
+        return False, "the budget fixes the epochs: leave them out of your options"
+    try:
+        worst = learned_ik_worst(robot, train, val, {**options, "epochs": epochs}, samples, seed)
+    except (TypeError, ValueError) as exc:
+        return False, f"LearnedIK refused the options: {exc}"
+    if worst >= to_beat:
+        return False, f"worst joint {worst:.3g}° is not below {to_beat:.3g}°"
+    return True, ""
+
+
+def learned_id_worst(robot: Robot, train, val, options: dict, stride: int, seed: int) -> float:
+    """Worst joint validation NRMSE [%] of a LearnedID trained on every ``stride``-th state."""
+    keys = ("q", "qd", "qdd", "tau")
+    model = LearnedID(**options, random_state=seed).fit(
+        robot, {k: train[k][::stride] for k in keys}, {k: val[k] for k in keys})
+    rmse = np.array([m.val_loss_curve_[m.best_epoch_] for m in model.models_])
+    return float(100 * np.max(rmse / np.asarray(val["tau"]).std(axis=0)))
+
+
+def median_tool_error_mm(robot: Robot, train, val, test, options: dict, samples: int, seed: int,
+                         count: int) -> float:
+    """Median tool position error [mm] of the model's predictions on the first ``count``
+    test poses."""
+    model = _fit_ik(robot, train, val, options, samples, seed)
+    T = test["T"][:count]
+    return float(1000 * np.median(np.linalg.norm(fk(robot, model.predict(T))[:, :3, 3] - T[:, :3, 3], axis=-1)))
+
+
+def warm_start_iterations(robot: Robot, train, val, test, options: dict, samples: int, seed: int,
+                          count: int) -> float:
+    """Mean LM iterations (no restarts) on the first ``count`` test poses from the model's
+    predictions, clipped into the joint limits."""
+    model = _fit_ik(robot, train, val, options, samples, seed)
+    T = test["T"][:count]
+    q0 = np.clip(model.predict(T), robot.qlim[:, 0], robot.qlim[:, 1])
+    return float(np.mean(solve(robot, T, q0, restarts=0).iterations))
+
+
+def nearest_by_position(train_T: np.ndarray, train_q: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """For each pose of ``T``, the joint angles of the training sample whose tool position is
+    nearest (brute force over all pairs)."""
+    d = np.linalg.norm(T[:, None, :3, 3] - train_T[None, :, :3, 3], axis=-1)
+    return train_q[np.argmin(d, axis=1)]
