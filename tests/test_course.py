@@ -8,6 +8,7 @@ import json
 
 import nbformat
 import numpy as np
+import papermill
 import pytest
 
 from nfarm.course import (TAGS, build_course, check, check_function, check_results, check_that,
@@ -24,8 +25,8 @@ def tags(cell) -> set[str]:
     return set(cell.get("metadata", {}).get("tags", []))
 
 
-def test_chapters_01_to_04_have_three_to_five_exercises_each():
-    assert {nb.name[:2] for nb in WITH_EXERCISES} >= {"01", "02", "03", "04"}
+def test_chapters_01_to_07_have_three_to_five_exercises_each():
+    assert {nb.name[:2] for nb in WITH_EXERCISES} >= {"01", "02", "03", "04", "05", "06", "07"}
     for nb in WITH_EXERCISES:
         cells = json.loads(nb.read_text())["cells"]
         solutions = [c for c in cells if "solution" in tags(c)]
@@ -46,7 +47,11 @@ def test_every_check_passes_on_its_solution_and_fails_on_a_wrong_answer(notebook
     source = tmp_path / notebook.name
     nbformat.write(exercise_notebook(notebook, wrong=wrong), source)
     executed = tmp_path / "executed.ipynb"
-    run_notebook(source, executed, {"smoke": True, "out_dir": str(tmp_path / "out")})
+    parameters = {"smoke": True, "out_dir": str(tmp_path / "out")}
+    declared = papermill.inspect_notebook(str(notebook))
+    parameters.update({k: str(tmp_path / k) for k in ("data_dir", "models_dir", "recordings_dir", "sweeps_dir")
+                       if k in declared})       # nothing written into the checkout
+    run_notebook(source, executed, parameters)
     verdicts = check_results(executed)
     solutions = sum("solution" in tags(c) for c in json.loads(notebook.read_text())["cells"])
     assert len(verdicts) >= solutions
@@ -127,3 +132,15 @@ def test_a_students_function_that_raises_is_reported(capsys):
     assert check_that("9.9", None, fail="x") is False
     assert check_that("9.9", False, fail="the step is not along Jᵀe") is False
     assert "not yet: the step is not along Jᵀe" in capsys.readouterr().out
+
+
+def test_the_teachers_guide_has_every_chapters_goals_and_exercises():
+    guide = (NOTEBOOKS.parent / "docs" / "teaching.md").read_text()
+    for nb in WITH_EXERCISES:
+        data = json.loads(nb.read_text())
+        for goal in data["metadata"]["nfarm"]["course"]["goals"]:
+            assert f"- {goal}\n" in guide, (nb.name, goal)
+        numbers = {line.split()[2] for c in data["cells"] if c["cell_type"] == "markdown"
+                   for line in "".join(c["source"]).splitlines() if line.startswith("### Exercise ")}
+        for number in numbers:
+            assert f"**{number}**" in guide, (nb.name, number)

@@ -11,13 +11,19 @@ from .robot import ParamsError, ParamsWarning, load_robot
 
 
 def _check_one(path: str) -> str:
-    """Validate one robot or study file (told apart by their required fields); the summary."""
+    """Validate one robot, study or sweep file (told apart by their required fields); the
+    summary."""
     from .reading import load_yaml
 
     if path.lower().endswith(".urdf"):
         robot = load_robot(path)
         return f"{robot.name}, {robot.n} joints converted from the URDF to {robot.convention} DH"
     data = load_yaml(path)
+    if isinstance(data, dict) and "metrics" in data and ("job" in data or "notebook" in data):
+        from .sweep import sweep_from_dict
+
+        sweep = sweep_from_dict(data, source=path)
+        return f"sweep {sweep.name!r}: {len(sweep.cells)} cells of {sweep.target}"
     if isinstance(data, dict) and "robot_file" in data and "joints" not in data:
         from .datasets import study_from_dict
 
@@ -56,7 +62,7 @@ def check_params(files: list[str]) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nfarm", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
-    check = sub.add_parser("check-params", help="validate robot and study parameter files")
+    check = sub.add_parser("check-params", help="validate robot, study and sweep parameter files")
     check.add_argument("files", nargs="+", metavar="FILE")
     report = sub.add_parser("report", help="run every chapter notebook and build the report")
     report.add_argument("--smoke", action="store_true", help="small parameter set (for tests)")
