@@ -25,8 +25,8 @@ def tags(cell) -> set[str]:
     return set(cell.get("metadata", {}).get("tags", []))
 
 
-def test_chapters_01_to_07_have_three_to_five_exercises_each():
-    assert {nb.name[:2] for nb in WITH_EXERCISES} >= {"01", "02", "03", "04", "05", "06", "07"}
+def test_every_chapter_has_three_to_five_exercises():
+    assert [nb.name for nb in WITH_EXERCISES] == [nb.name for nb in chapters(NOTEBOOKS)]
     for nb in WITH_EXERCISES:
         cells = json.loads(nb.read_text())["cells"]
         solutions = [c for c in cells if "solution" in tags(c)]
@@ -40,12 +40,26 @@ def test_chapters_01_to_07_have_three_to_five_exercises_each():
         assert all(tags(c) & set(TAGS) for c in cells[first:]), nb.name
 
 
+def _with_unanswered_checks(nb):
+    """Each check cell also run before its exercise's solution: a student who runs the
+    notebook without answering sees "not answered yet", not a traceback."""
+    cells = []
+    for k, cell in enumerate(nb.cells):
+        if "solution" in tags(cell):
+            following = next(c for c in nb.cells[k + 1:] if "check" in tags(c))
+            cells.append(nbformat.v4.new_code_cell(following.source, metadata={"tags": ["check"]}))
+        cells.append(cell)
+    nb.cells = cells
+    return nb
+
+
 @pytest.mark.notebook
-@pytest.mark.parametrize("wrong", [False, True], ids=["worked solutions", "wrong answers"])
+@pytest.mark.parametrize("wrong", [False, True], ids=["worked solutions", "unanswered, then wrong"])
 @pytest.mark.parametrize("notebook", WITH_EXERCISES, ids=lambda p: p.stem)
 def test_every_check_passes_on_its_solution_and_fails_on_a_wrong_answer(notebook, wrong, tmp_path):
     source = tmp_path / notebook.name
-    nbformat.write(exercise_notebook(notebook, wrong=wrong), source)
+    nb = exercise_notebook(notebook, wrong=wrong)
+    nbformat.write(_with_unanswered_checks(nb) if wrong else nb, source)
     executed = tmp_path / "executed.ipynb"
     parameters = {"smoke": True, "out_dir": str(tmp_path / "out")}
     declared = papermill.inspect_notebook(str(notebook))
@@ -53,13 +67,16 @@ def test_every_check_passes_on_its_solution_and_fails_on_a_wrong_answer(notebook
                        if k in declared})       # nothing written into the checkout
     run_notebook(source, executed, parameters)
     verdicts = check_results(executed)
+    exercises = {v["exercise"].split()[0] for v in verdicts}
     solutions = sum("solution" in tags(c) for c in json.loads(notebook.read_text())["cells"])
-    assert len(verdicts) >= solutions
+    assert len(exercises) == solutions
     if wrong:
-        failed = [v for v in verdicts if not v["passed"]]
+        unanswered = [v for v in verdicts if v["message"].startswith("not answered yet")]
+        failed = [v for v in verdicts if v["message"].startswith("not yet: ")]
+        assert {v["exercise"].split()[0] for v in unanswered} == exercises
         # Every exercise fails at least one of its checks, with a message saying what is wrong.
-        assert {v["exercise"].split()[0] for v in failed} == {v["exercise"].split()[0] for v in verdicts}
-        assert all(v["message"].startswith("not yet: ") for v in failed)
+        assert {v["exercise"].split()[0] for v in failed} == exercises
+        assert not any(v["passed"] for v in unanswered)
     else:
         assert all(v["passed"] for v in verdicts), [v for v in verdicts if not v["passed"]]
 
@@ -129,6 +146,8 @@ def test_a_students_function_that_raises_is_reported(capsys):
     assert check_function("9.9", broken, lambda x: x, [(1.0,)]) is False
     assert "on case 1 your function raised ZeroDivisionError: division by zero" in capsys.readouterr().out
     assert check_function("9.9", lambda x: 2 * x, lambda x: 2.0 * x, [(1.0,), (np.arange(3),)])
+    assert check_function("9.9", lambda x: None, lambda x: x, [(1.0,)]) is False
+    assert "not answered yet: your function returns None" in capsys.readouterr().out
     assert check_that("9.9", None, fail="x") is False
     assert check_that("9.9", False, fail="the step is not along Jᵀe") is False
     assert "not yet: the step is not along Jᵀe" in capsys.readouterr().out

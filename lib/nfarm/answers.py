@@ -13,20 +13,22 @@ import math
 import numpy as np
 
 from .anfis import ANFIS
-from .datasets import IKRegion, Study, check_single_valued
+from .datasets import IKRegion, Study, check_single_valued, workspace_volume
 from .dynamics import gravity_torques, rnea
 from .ik import solve
 from .jang import rmse, sinc_data
 from .kinematics import fk, jacobian, min_singular_value
 from .learned import LearnedID, LearnedIK
 from .robot import Robot, robot_from_dict, robot_to_dict, sample_configurations
+from .workspace import reach, workspace_points
 
 __all__ = ["tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
            "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
            "sinc_fit", "best_sinc_mf", "second_share_full_elbow", "other_branch_verdict",
            "mean_solutions_full", "learned_ik_worst", "learned_id_worst", "beats",
-           "median_tool_error_mm", "warm_start_iterations", "nearest_by_position"]
+           "median_tool_error_mm", "warm_start_iterations", "nearest_by_position", "reaches",
+           "volume_error_ratio", "annulus_area", "area_verdict"]
 
 
 # -- chapter 1 ---------------------------------------------------------------------------------
@@ -279,3 +281,43 @@ def nearest_by_position(train_T: np.ndarray, train_q: np.ndarray, T: np.ndarray)
     nearest (brute force over all pairs)."""
     d = np.linalg.norm(T[:, None, :3, 3] - train_T[None, :, :3, 3], axis=-1)
     return train_q[np.argmin(d, axis=1)]
+
+
+# -- chapter 8 ---------------------------------------------------------------------------------
+
+
+def reaches(robots, samples: int, seed: int) -> list[float]:
+    """Each arm's reach [m] from ``samples`` random configurations (chapter 8's estimate)."""
+    return [reach(workspace_points(robot, samples, seed), robot) for robot in robots]
+
+
+def volume_error_ratio(robot: Robot, reach_m: float, points: int, seed: int) -> float:
+    """Standard error of the Monte Carlo workspace volume with ``points`` points over that with
+    four times as many."""
+    small = workspace_volume(robot, reach_m, points, seed)
+    large = workspace_volume(robot, reach_m, 4 * points, seed)
+    return small.std_error / large.std_error
+
+
+def annulus_area(l1: float, l2: float) -> float:
+    """Area [m²] a planar two-link arm's tool point reaches (joints turning freely)."""
+    return math.pi * ((l1 + l2) ** 2 - (l1 - l2) ** 2)
+
+
+def area_verdict(my_area, seed: int, points: int = 100_000) -> tuple[bool | None, str]:
+    """Whether a student's ``my_area(l1, l2, n, seed)`` lands within four standard errors of
+    the exact annulus on three arms, and where it does not (an exception is reported)."""
+    if my_area is None:
+        return None, ""
+    problems = []
+    for l1, l2 in ((0.3, 0.2), (0.25, 0.25), (0.4, 0.1)):
+        exact = annulus_area(l1, l2)
+        square = (2 * (l1 + l2)) ** 2
+        se = square * math.sqrt(exact / square * (1 - exact / square) / points)
+        try:
+            got = float(my_area(l1, l2, points, seed))
+        except Exception as exc:  # noqa: BLE001 — the student's code: report, never raise
+            return False, f"my_area({l1}, {l2}, ...) raised {type(exc).__name__}: {exc}"
+        if not abs(got - exact) <= 4 * se:
+            problems.append(f"l1 = {l1}, l2 = {l2}: {got:.4g} m² against {exact:.4g} m² (± {se:.1g})")
+    return not problems, "; ".join(problems)

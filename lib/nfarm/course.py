@@ -117,6 +117,9 @@ def check_function(exercise: str, function: Callable | None, reference: Callable
         except Exception as exc:  # noqa: BLE001 — the student's code: report, never raise
             return _show(exercise, False, f"not yet: on case {k + 1} your function raised "
                                           f"{type(exc).__name__}: {exc}" + (f". Hint: {hint}" if hint else ""))
+        if got is None:
+            return _show(exercise, False, "not answered yet: your function returns None"
+                         + (f" — {hint}" if hint else ""))
         problem = _compare(got, reference(*args), rtol, atol, "")
         if problem:
             return _show(exercise, False, f"not yet: on case {k + 1}, {problem}"
@@ -218,7 +221,8 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
     """Write the student and teacher builds and the index (module docstring) into ``out``
     (default ``build/course/``); ``only``: chapter numbers (``"01"``…); ``teacher=False``
     skips executing the teacher's notebooks. The teacher's notebooks run with ``smoke`` and
-    write their figures under ``out/teacher/files/``, never into ``figures/``.
+    write their figures and recordings under ``out/teacher/files/``, never into ``figures/``;
+    they reuse the data sets, models and sweep results of ``build/`` (``make report``'s).
 
     Raises:
         ValueError: a chapter lacks its course facts, or a check failed on a worked solution
@@ -227,7 +231,8 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
     """
     import nbformat
 
-    from .report import _export_html, _install_mathjax, _title, chapters, run_notebook
+    from .report import (_export_html, _install_mathjax, _title, chapters, declared_parameters,
+                         run_notebook)
 
     out = Path(out) if out is not None else BUILD / "course"
     say = progress or (lambda text: None)
@@ -244,9 +249,11 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
         if teacher:
             say(f"course: {notebook.name} (teacher) …")
             target = out / "teacher" / notebook.name
-            run_notebook(notebook, target, {"smoke": smoke,
-                                            "out_dir": str(out / "teacher" / "files" / notebook.stem)},
-                         cell_timeout=cell_timeout)
+            files = out / "teacher" / "files" / notebook.stem
+            parameters = {"smoke": smoke, "out_dir": str(files)}
+            if "recordings_dir" in declared_parameters(notebook):   # not the report's recordings
+                parameters["recordings_dir"] = str(files / "recordings")
+            run_notebook(notebook, target, parameters, cell_timeout=cell_timeout)
             failed = [v for v in check_results(target) if not v["passed"]]
             if failed:
                 raise ValueError(f"{notebook.name}: exercise {failed[0]['exercise']}'s check fails on "
