@@ -9,9 +9,17 @@ import papermill
 import pytest
 
 from nfarm.paths import FIGURES, NOTEBOOKS, ROOT
-from nfarm.report import chapters, run_notebook
+from nfarm.report import COURSE_TAGS, chapters, run_notebook
 
 NOTEBOOK_FILES = chapters(NOTEBOOKS)
+
+
+def run_chapter(notebook, output, parameters):
+    """Run a chapter as ``make report`` does: without the course's exercises (their cells are
+    tested in test_course.py)."""
+    run_notebook(notebook, output, parameters, remove_tags=COURSE_TAGS)
+
+
 REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
 
 
@@ -46,7 +54,7 @@ def ensure_models(directory, study_file, scratch):
                           ("06", directory / "models_dir" / "id")):
         if not ready.exists():
             (nb,) = [n for n in NOTEBOOK_FILES if n.name.startswith(prefix)]
-            run_notebook(nb, scratch / nb.name, {
+            run_chapter(nb, scratch / nb.name, {
                 "smoke": True, "study_file": study_file, "out_dir": str(scratch / prefix),
                 **{k: str(directory / k) for k in ("data_dir", "models_dir", "sweeps_dir")
                    if k in papermill.inspect_notebook(str(nb))}})
@@ -87,7 +95,7 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
         ensure_models(shared, study, tmp_path)
     elif notebook.name.startswith("07"):
         ensure_models(shared, "params/studies/intelbot5.yaml", tmp_path)
-    run_notebook(notebook, executed, parameters)
+    run_chapter(notebook, executed, parameters)
     assert str(ROOT) not in executed.read_text(), "no absolute path of the checkout"
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
     assert any("image/png" in o.get("data", {}) for o in outputs), "figures show in the chapter"
@@ -124,7 +132,7 @@ def test_runs_for_another_shipped_robot_without_touching_figures(notebook, robot
     for name in ("recordings_dir", "data_dir", "models_dir", "sweeps_dir"):
         if name in papermill.inspect_notebook(str(notebook)):
             parameters[name] = str(tmp_path / name)
-    run_notebook(notebook, tmp_path / notebook.name, parameters)
+    run_chapter(notebook, tmp_path / notebook.name, parameters)
     assert robot in (tmp_path / notebook.name).read_text()
     assert {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")} == before
 
@@ -150,7 +158,7 @@ def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
             parameters[name] = str(so101_shared / name)
     if notebook.name.startswith("07"):
         ensure_models(so101_shared, "params/studies/so101.yaml", so101_shared)
-    run_notebook(notebook, so101_shared / notebook.name, parameters)
+    run_chapter(notebook, so101_shared / notebook.name, parameters)
     assert "so101" in (so101_shared / notebook.name).read_text()
     assert sorted((so101_shared / f"out_{notebook.stem}").glob("*.png"))
 
@@ -163,7 +171,7 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     for study, directory in studies.items():
         ensure_models(directory, study, tmp_path)
     (compare,) = [nb for nb in NOTEBOOK_FILES if "study_files" in papermill.inspect_notebook(str(nb))]
-    run_notebook(compare, tmp_path / compare.name, {
+    run_chapter(compare, tmp_path / compare.name, {
         "smoke": True, "out_dir": str(tmp_path / "out"), "study_files": list(studies),
         "data_dirs": [str(d / "data_dir") for d in studies.values()],
         "models_dirs": [str(d / "models_dir") for d in studies.values()]})
