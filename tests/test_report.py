@@ -274,7 +274,7 @@ def test_executed_notebook_json_is_plain(tmp_path):
                                 "output_path": str(ROOT / "build" / "x.ipynb")}
     path = tmp_path / "x.ipynb"
     nbformat.write(nb, path)
-    report._clean_executed(path)
+    report._clean_executed(path, ROOT / "notebooks" / "x.ipynb")
     data = json.loads(path.read_text())
     assert "widgets" not in data["metadata"]
     assert data["metadata"]["papermill"]["input_path"] == "notebooks/x.ipynb"
