@@ -105,6 +105,17 @@ def test_the_teacher_build_runs_with_every_check_passing(tmp_path):
     assert "with solutions" in (out / "index.html").read_text()
 
 
+def test_the_command_line_refuses_an_unknown_chapter(tmp_path, capsys):
+    from nfarm.__main__ import main
+
+    assert main(["course", "--out", str(tmp_path), "--only", "99", "--no-teacher"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("course: no chapter 99 (chapters: 01, ") and "\n" not in err
+    assert not (tmp_path / "index.html").exists()
+    assert main(["course", "--out", str(tmp_path), "--only", "01", "--no-teacher"]) == 0
+    assert [p.name for p in (tmp_path / "student").iterdir()] == ["01_dh_model.ipynb"]
+
+
 def test_the_report_leaves_the_exercises_out(tmp_path):
     (notebook,) = [nb for nb in WITH_EXERCISES if nb.name.startswith("04")]
     source = tmp_path / notebook.name

@@ -236,7 +236,13 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
 
     out = Path(out) if out is not None else BUILD / "course"
     say = progress or (lambda text: None)
-    selected = [nb for nb in chapters(notebooks_dir) if not only or nb.name[:2] in only]
+    everything = chapters(notebooks_dir)
+    unknown = sorted(set(only or ()) - {nb.name[:2] for nb in everything})
+    if unknown or (only is not None and not only):
+        raise ValueError(f"no chapter {', '.join(unknown)} (chapters: "
+                         f"{', '.join(nb.name[:2] for nb in everything)})" if unknown else
+                         "--only names no chapter")
+    selected = [nb for nb in everything if not only or nb.name[:2] in only]
     found = []
     for notebook in selected:
         nb = nbformat.read(notebook, 4)

@@ -164,7 +164,7 @@ def _canonical(value: Any) -> str:
 
 
 def _plain(v: Validator, value: Any, at: str) -> Any:
-    """A parameter value: JSON types (finite numbers), nested at most two levels."""
+    """A parameter value: JSON types (numbers finite; mapping keys texts)."""
     try:
         value = json_ready(value)
     except ValueError:
