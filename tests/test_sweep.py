@@ -218,6 +218,13 @@ def test_a_local_cluster_of_two_processes_gives_the_same_results(tmp_path):
     assert metrics(local) == metrics(here)
     assert {r.worker for r in local} <= {"0", "1"}
     assert json.loads((tmp_path / "local" / local[0].cell.key / "cell.json").read_text())["worker"] in ("0", "1")
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0") as cluster, \
+            Client(cluster) as client:
+        given = run_sweep(sweep, tmp_path / "given", client=client)
+        assert metrics(given) == metrics(here)
+        assert client.status == "running"          # a client of the caller's is left open
 
 
 @pytest.fixture

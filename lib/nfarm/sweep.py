@@ -586,8 +586,9 @@ def _client(scheduler: str | None, workers: int | None):
 
 
 def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: str | None = None,
-              workers: int | None = None, progress: bool = False, summary: bool = True,
-              timeout: float | None = 1800, prepare: bool = True) -> list[CellResult]:
+              workers: int | None = None, client=None, progress: bool = False,
+              summary: bool = True, timeout: float | None = 1800,
+              prepare: bool = True) -> list[CellResult]:
     """Run every cell of ``sweep`` not finished in ``out`` (default ``build/sweeps/<name>/``),
     and return every cell's result in the sweep's order.
 
@@ -595,6 +596,8 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
         scheduler: address of a running Dask scheduler; ``None`` starts a local cluster of
             ``workers`` processes (default: one per core); ``workers=0`` runs the cells one by
             one in this process, without Dask.
+        client: a ``distributed.Client`` of your own (a ``SLURMCluster``'s, say), used as it
+            is and left open; instead of ``scheduler`` and ``workers``.
         progress: a progress bar of finished cells on standard error.
         summary: write ``results.csv``, ``summary.md`` and ``summary.png`` (a chapter that runs
             part of a sweep skips them: the files describe the whole sweep's run).
@@ -632,12 +635,12 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
     try:
         if pending and prepare and sweep.job in ("learned_ik", "learned_id"):
             _prepare_studies(pending)
-        if pending and workers == 0 and not scheduler:
+        if pending and workers == 0 and not scheduler and client is None:
             for cell in pending:
                 finish(cell, execute_cell(sweep.job, sweep.notebook, dict(cell.params),
                                           sweep.metrics, timeout))
         elif pending:
-            _run_on_dask(sweep, pending, scheduler, workers, timeout, finish)
+            _run_on_dask(sweep, pending, scheduler, workers, client, timeout, finish)
     finally:
         bar.close()
     ordered = [results[c.key] for c in sweep.cells if c.key in results]
@@ -683,11 +686,11 @@ def _prepare_studies(cells: Sequence[Cell]) -> None:
 
 
 def _run_on_dask(sweep: Sweep, pending: Sequence[Cell], scheduler: str | None,
-                 workers: int | None, timeout: float | None,
+                 workers: int | None, given, timeout: float | None,
                  finish: Callable[[Cell, dict], None]) -> None:
     from distributed import as_completed
 
-    client = _client(scheduler, workers)
+    client = given if given is not None else _client(scheduler, workers)
     try:
         futures = {}
         for cell in pending:
@@ -705,7 +708,8 @@ def _run_on_dask(sweep: Sweep, pending: Sequence[Cell], scheduler: str | None,
                           "error": f"{type(exc).__name__}: the cell's worker failed ({exc})"}
             finish(cell, record)
     finally:
-        cluster = getattr(client, "cluster", None)
-        client.close()
-        if cluster is not None and not scheduler:
-            cluster.close()
+        if given is None:
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None and not scheduler:
+                cluster.close()
