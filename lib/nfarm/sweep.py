@@ -453,7 +453,8 @@ def execute_cell(job: str | None, notebook: str | None, params: dict, metrics: S
 # Results on disk
 
 
-def _first_line(error: str) -> str:
+def _error_line(error: str) -> str:
+    """The line of a traceback that names the exception (its last), at most 300 characters."""
     lines = [line for line in error.strip().splitlines() if line.strip()]
     return lines[-1].strip()[:300] if lines else ""
 
@@ -467,7 +468,7 @@ def _write_cell(out: Path, sweep: Sweep, cell: Cell, record: dict, code: str) ->
                                            {"notebook": sweep.notebook}),
                    "params": dict(cell.params), "status": record["status"],
                    "metrics": record["metrics"], "seconds": round(record["seconds"], 3),
-                   "worker": record["worker"], "error": _first_line(record.get("error", "")),
+                   "worker": record["worker"], "error": _error_line(record.get("error", "")),
                    "code": code,
                    "finished": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
         (tmp / "log.txt").write_text(record.get("log", ""), encoding="utf-8")
@@ -534,7 +535,7 @@ def write_summary(out: Path, sweep: Sweep, results: Sequence[CellResult]) -> lis
                           else value if i is None else None)
         writer.writerow([r.cell.key, *(_csv_value(r.cell.params.get(k)) for k in names),
                          *map(_csv_value, values), r.status, f"{r.seconds:.3f}", r.worker,
-                         _first_line(r.error)])
+                         _error_line(r.error)])
     written = []
     with atomic_path(out / "results.csv") as tmp:
         tmp.write_text(buffer.getvalue(), encoding="utf-8")
@@ -629,7 +630,7 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
                                        record["seconds"], record["worker"], record.get("error", ""))
         bar.update()
         if record["status"] != "ok":
-            bar.write(f"{sweep.name}: cell {cell.key} failed: {_first_line(record['error'])}",
+            bar.write(f"{sweep.name}: cell {cell.key} failed: {_error_line(record['error'])}",
                       file=sys.stderr)
 
     try:
@@ -663,7 +664,7 @@ def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
     for r in results:
         if not r.ok:
             raise SweepError(f"sweep {sweep.name}: cell {r.cell.key} {dict(r.cell.params)} "
-                             f"failed: {_first_line(r.error)} (see "
+                             f"failed: {_error_line(r.error)} (see "
                              f"{shown_path(base / sweep.name / r.cell.key / 'error.txt')})")
     return results
 
