@@ -22,7 +22,7 @@ from .learned import LearnedID, LearnedIK
 from .robot import Robot, robot_from_dict, robot_to_dict, sample_configurations
 from .workspace import reach, workspace_points
 
-__all__ = ["tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
+__all__ = ["scan", "tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
            "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
            "sinc_fit", "best_sinc_mf", "second_share_full_elbow", "other_branch_verdict",
@@ -60,31 +60,38 @@ def dh_cases(seed: int, count: int = 6) -> list[tuple[float, float, float, float
              float(rng.uniform(-3, 3))) for _ in range(count)]
 
 
-def singular_elbows_deg(robot: Robot, points: int = 20001, rel: float = 1e-3) -> list[float]:
-    """The elbow angles (joint 3, the others at 0) within its limits where the position
-    Jacobian's smallest singular value has a local minimum below ``rel`` of its largest [deg]."""
-    q3 = np.linspace(robot.qlim[2, 0], robot.qlim[2, 1], points)
-    q = np.zeros((points, robot.n))
+def scan(lo: float, hi: float, step_deg: float) -> np.ndarray:
+    """Angles from ``lo`` to ``hi`` [rad] in steps of at most ``step_deg``."""
+    return np.linspace(lo, hi, int(math.ceil(math.degrees(hi - lo) / step_deg)) + 1)
+
+
+def singular_elbows_deg(robot: Robot, step_deg: float, round_deg: float, rel: float) -> list[float]:
+    """The elbow angles (joint 3, the others at 0), scanned over its limits in steps of at
+    most ``step_deg``, where the position Jacobian's smallest singular value has a local
+    minimum below ``rel`` of its largest [deg, rounded to ``round_deg``]."""
+    q3 = scan(*robot.qlim[2], step_deg)
+    q = np.zeros((q3.size, robot.n))
     q[:, 2] = q3
     s = min_singular_value(robot, q, "position")
-    found = [i for i in range(1, points - 1)
-             if s[i] <= s[i - 1] and s[i] <= s[i + 1] and s[i] < rel * s.max()]
-    return [round(math.degrees(q3[i]), 1) for i in found]
+    inner = s[1:-1]
+    found = np.flatnonzero((inner <= s[:-2]) & (inner <= s[2:]) & (inner < rel * s.max())) + 1
+    return [round(round(math.degrees(q3[i]) / round_deg) * round_deg, 6) for i in found]
 
 
-def one_more_joint(robot: Robot) -> Robot:
-    """``robot`` with one more joint: its last joint's ``alpha`` set to 90° (so the new axis is
-    perpendicular to it) and a copy of that joint appended with ``a = alpha = 0``, ``d`` = 5 cm."""
+def one_more_joint(robot: Robot, alpha: float, d: float) -> Robot:
+    """``robot`` with one more joint: its last joint's ``alpha`` set to ``alpha`` [rad] (the
+    new axis turned away from it) and a copy of that joint appended with ``a = alpha = 0`` and
+    ``d`` [m]."""
     data = robot_to_dict(robot)
-    data["joints"][-1]["alpha"] = math.pi / 2
-    data["joints"].append(dict(data["joints"][-1], name="extra_wrist", a=0.0, alpha=0.0, d=0.05))
+    data["joints"][-1]["alpha"] = alpha
+    data["joints"].append(dict(data["joints"][-1], name="extra_wrist", a=0.0, alpha=0.0, d=d))
     return robot_from_dict(data)
 
 
-def one_more_joint_answers(robot: Robot, seed: int) -> tuple[int, float]:
+def one_more_joint_answers(robot: Robot, seed: int, alpha: float, d: float) -> tuple[int, float]:
     """The arm with one more joint (:func:`one_more_joint`): its Jacobian's rank at a seeded
     random configuration, and the smallest singular value of its Jacobian at q = 0."""
-    six = one_more_joint(robot)
+    six = one_more_joint(robot, alpha, d)
     q = sample_configurations(six, 1, seed)[0]
     rank = int(np.linalg.matrix_rank(jacobian(six, q), tol=1e-9))
     return rank, float(np.linalg.svd(jacobian(six, np.zeros(six.n)), compute_uv=False)[-1])
@@ -97,12 +104,12 @@ def _target(robot: Robot, seed: int) -> np.ndarray:
     return fk(robot, sample_configurations(robot, 1, seed)[0])
 
 
-def tolerance_iterations(robot: Robot, seed: int) -> int:
-    """LM iterations from q = 0 to a seeded random reachable target at tolerance 1e-12, less
-    those at 1e-3."""
+def tolerance_iterations(robot: Robot, seed: int, loose: float, tight: float) -> int:
+    """LM iterations from q = 0 to a seeded random reachable target at tolerance ``tight``,
+    less those at ``loose``."""
     T = _target(robot, seed)
     steps = [int(solve(robot, T, np.zeros(robot.n), tol_pos=tol, tol_rot=tol, restarts=0).iterations)
-             for tol in (1e-12, 1e-3)]
+             for tol in (tight, loose)]
     return steps[0] - steps[1]
 
 
@@ -127,18 +134,19 @@ def jt_success(robot: Robot, targets: int, seed: int) -> float:
 # -- chapter 3 ---------------------------------------------------------------------------------
 
 
-def two_link_torques(l1: float, l2: float, m1: float, m2: float, q_deg) -> np.ndarray:
+def two_link_torques(l1_m: float, l2_m: float, m1_kg: float, m2_kg: float, q_deg, g: float
+                     ) -> np.ndarray:
     """Static torques of a planar two-link arm with point masses at the links' ends, in a
-    vertical plane (gravity 9.81 m/s² along −y), by Newton–Euler."""
+    vertical plane (gravity ``g`` [m/s²] along −y), by Newton–Euler."""
     point = {"offset": 0.0, "alpha": 0.0, "d": 0.0, "qlim": [-4.0, 4.0], "com": [0, 0, 0],
              "inertia": [0, 0, 0, 0, 0, 0]}
-    arm = robot_from_dict({"name": "two_link", "convention": "standard", "gravity": [0, -9.81, 0],
-                           "joints": [{**point, "a": l1, "mass": m1}, {**point, "a": l2, "mass": m2}]})
+    arm = robot_from_dict({"name": "two_link", "convention": "standard", "gravity": [0, -g, 0],
+                           "joints": [{**point, "a": l1_m, "mass": m1_kg}, {**point, "a": l2_m, "mass": m2_kg}]})
     q = np.radians(q_deg)
     return rnea(arm, q, np.zeros(2), np.zeros(2))
 
 
-def payload_torque_change(robot: Robot, extra_kg: float = 0.5, joint: int = 1) -> float:
+def payload_torque_change(robot: Robot, extra_kg: float, joint: int = 1) -> float:
     """Change of the static torque at ``joint`` at q = 0 when the last link gains ``extra_kg``."""
     heavier = robot_to_dict(robot)
     heavier["joints"][-1]["mass"] += extra_kg
@@ -146,11 +154,11 @@ def payload_torque_change(robot: Robot, extra_kg: float = 0.5, joint: int = 1) -
     return float(gravity_torques(robot_from_dict(heavier), q)[joint] - gravity_torques(robot, q)[joint])
 
 
-def peak_gravity_shoulder_deg(robot: Robot, points: int = 3601) -> float:
-    """The shoulder angle (joint 2, the others at 0) within its limits where the gravity
-    torque at the shoulder is largest in magnitude [deg]."""
-    q2 = np.linspace(robot.qlim[1, 0], robot.qlim[1, 1], points)
-    q = np.zeros((points, robot.n))
+def peak_gravity_shoulder_deg(robot: Robot, step_deg: float) -> float:
+    """The shoulder angle (joint 2, the others at 0), scanned over its limits in steps of at
+    most ``step_deg``, where the gravity torque at the shoulder is largest in magnitude [deg]."""
+    q2 = scan(*robot.qlim[1], step_deg)
+    q = np.zeros((q2.size, robot.n))
     q[:, 1] = q2
     return math.degrees(q2[int(np.argmax(np.abs(gravity_torques(robot, q)[:, 1])))])
 
@@ -291,11 +299,11 @@ def reaches(robots, samples: int, seed: int) -> list[float]:
     return [reach(workspace_points(robot, samples, seed), robot) for robot in robots]
 
 
-def volume_error_ratio(robot: Robot, reach_m: float, points: int, seed: int) -> float:
+def volume_error_ratio(robot: Robot, reach_m: float, points: int, seed: int, factor: int) -> float:
     """Standard error of the Monte Carlo workspace volume with ``points`` points over that with
-    four times as many."""
+    ``factor`` times as many."""
     small = workspace_volume(robot, reach_m, points, seed)
-    large = workspace_volume(robot, reach_m, 4 * points, seed)
+    large = workspace_volume(robot, reach_m, factor * points, seed)
     return small.std_error / large.std_error
 
 
@@ -304,13 +312,15 @@ def annulus_area(l1: float, l2: float) -> float:
     return math.pi * ((l1 + l2) ** 2 - (l1 - l2) ** 2)
 
 
-def area_verdict(my_area, seed: int, points: int = 100_000) -> tuple[bool | None, str]:
-    """Whether a student's ``my_area(l1, l2, n, seed)`` lands within four standard errors of
-    the exact annulus on three arms, and where it does not (an exception is reported)."""
+def area_verdict(my_area, seed: int, points: int, sigmas: float,
+                 arms=((0.3, 0.2), (0.25, 0.25), (0.4, 0.1))) -> tuple[bool | None, str]:
+    """Whether a student's ``my_area(l1, l2, n, seed)`` with ``points`` points lands within
+    ``sigmas`` standard errors of the exact annulus for each arm ``(l1, l2)`` [m], and where
+    it does not (an exception is reported)."""
     if my_area is None:
         return None, ""
     problems = []
-    for l1, l2 in ((0.3, 0.2), (0.25, 0.25), (0.4, 0.1)):
+    for l1, l2 in arms:
         exact = annulus_area(l1, l2)
         square = (2 * (l1 + l2)) ** 2
         se = square * math.sqrt(exact / square * (1 - exact / square) / points)
@@ -318,6 +328,6 @@ def area_verdict(my_area, seed: int, points: int = 100_000) -> tuple[bool | None
             got = float(my_area(l1, l2, points, seed))
         except Exception as exc:  # noqa: BLE001 — the student's code: report, never raise
             return False, f"my_area({l1}, {l2}, ...) raised {type(exc).__name__}: {exc}"
-        if not abs(got - exact) <= 4 * se:
+        if not abs(got - exact) <= sigmas * se:
             problems.append(f"l1 = {l1}, l2 = {l2}: {got:.4g} m² against {exact:.4g} m² (± {se:.1g})")
     return not problems, "; ".join(problems)

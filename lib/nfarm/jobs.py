@@ -38,7 +38,7 @@ import numpy as np
 
 from . import datasets, jang
 from .anfis import ANFIS
-from .learned import LearnedID, LearnedIK, fit_cached
+from .learned import LearnedID, LearnedIK, fit_cached, n_parameters
 from .paths import BUILD, project_path, shown_path
 from .reading import ParamsError
 
@@ -59,6 +59,10 @@ class Job:
     metrics: tuple[str, ...]
     paths: tuple[str, ...] = ()
     doc: str = field(default="", compare=False)
+    #: Work the cells share, done once per distinct value of ``shared`` before they run
+    #: (their data sets: workers would otherwise build the same files side by side).
+    prepare: Callable[[dict], None] | None = None
+    shared: tuple[str, ...] = ()
 
     def complete(self, given: Mapping[str, Any]) -> dict:
         """``given`` with every default filled in and paths made project-relative; the names
@@ -103,12 +107,19 @@ def anfis_benchmark(p: dict) -> dict:
 # Learned IK and ID on a study's data
 
 
-def _study_data(p: dict) -> tuple[datasets.Study, Path, Path]:
-    """The cell's study (its smoke version with ``smoke``), its data sets (built or reused) and
-    its models directory."""
+def _study(p: dict) -> datasets.Study:
+    """The cell's study (its smoke version with ``smoke``)."""
     study = datasets.load_study(p["study_file"])
-    if p["smoke"]:
-        study = datasets.smoke_study(study)
+    return datasets.smoke_study(study) if p["smoke"] else study
+
+
+def _build_data(p: dict) -> None:
+    datasets.build_datasets(_study(p), p["data_dir"])
+
+
+def _study_data(p: dict) -> tuple[datasets.Study, Path, Path]:
+    """The cell's study, its data sets (built or reused) and its models directory."""
+    study = _study(p)
     datasets.build_datasets(study, p["data_dir"])
     directory = datasets.dataset_dir(study, p["data_dir"])
     models = project_path(p["models_dir"]) if p["models_dir"] else BUILD / "models" / directory.name
@@ -127,10 +138,6 @@ def _first(data: Mapping, keys: tuple[str, ...], fraction: float, samples: int |
     if samples is not None:
         count = min(count, samples)
     return {k: data[k][:count][::stride] for k in keys}
-
-
-def _n_parameters(model) -> int:
-    return int(sum(sum(mf.size for mf in m.mfs_) + m.consequents_.size for m in model.models_))
 
 
 _ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint_options")
@@ -154,7 +161,7 @@ def learned_ik(p: dict) -> dict:
     rmse = np.degrees([m.val_loss_curve_[m.best_epoch_] for m in model.models_])
     return {"val_rmse_deg": rmse.tolist(), "worst_deg": float(rmse.max()),
             "rules": [int(m.rules_.shape[0]) for m in model.models_],
-            "parameters": _n_parameters(model), "train_samples": int(len(subset["q"]))}
+            "parameters": n_parameters(model), "train_samples": int(len(subset["q"]))}
 
 
 def learned_id(p: dict) -> dict:
@@ -179,7 +186,7 @@ def learned_id(p: dict) -> dict:
     nrmse = rmse / data["val"]["tau"].std(axis=0)
     return {"val_rmse": rmse.tolist(), "val_nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
             "rules": [int(m.rules_.shape[0]) for m in model.models_],
-            "parameters": _n_parameters(model), "train_samples": int(len(train["q"]))}
+            "parameters": n_parameters(model), "train_samples": int(len(train["q"]))}
 
 
 def idle(p: dict) -> dict:
@@ -205,13 +212,15 @@ JOBS: dict[str, Job] = {
          "max_out_of_plane_deg": None},
         ("val_rmse_deg", "worst_deg", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
-        doc="a study's learned IK, one ANFIS per joint"),
+        doc="a study's learned IK, one ANFIS per joint",
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
     "learned_id": Job(
         learned_id,
         {**_STUDY, "stride": 1, "torques": "rigid", "inputs": "own", "residual": False, **_ANFIS},
         ("val_rmse", "val_nrmse", "worst_nrmse", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
-        doc="a study's learned ID, one ANFIS per joint"),
+        doc="a study's learned ID, one ANFIS per joint",
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
     "idle": Job(idle, {"seconds": 0.0, "value": 0}, ("seconds", "value"),
                 doc="sleeps; the sweep machinery's own cost"),
 }

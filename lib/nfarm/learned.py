@@ -83,7 +83,8 @@ from .robot import Robot, joint_array, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
 __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
-           "encode", "arm_chart", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "ENCODINGS",
+           "encode", "arm_chart", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "n_parameters",
+           "ENCODINGS",
            "ANGULAR", "FILE_NAME", "ID_FILE_NAME", "BASELINES"]
 
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
@@ -843,6 +844,12 @@ class Baseline:
         else:
             q = np.column_stack([X, np.ones(len(X))]) @ self.coef_
         return q.reshape(*batch, self.n_joints_)
+
+
+def n_parameters(model) -> int:
+    """Adjustable parameters of a fitted :class:`LearnedIK` or :class:`LearnedID`, summed over
+    its joint models: premise (membership functions) and consequent."""
+    return int(sum(sum(mf.size for mf in m.mfs_) + m.consequents_.size for m in model.models_))
 
 
 def fingerprint(*arrays: np.ndarray) -> str:

@@ -603,8 +603,8 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
         summary: write ``results.csv``, ``summary.md`` and ``summary.png`` (a chapter that runs
             part of a sweep skips them: the files describe the whole sweep's run).
         timeout: seconds a notebook cell may run (per notebook cell).
-        prepare: build the data sets the cells need once, here, before the workers start
-            (they would otherwise build the same files side by side).
+        prepare: do the job's shared work once, here, before the workers start
+            (:attr:`nfarm.jobs.Job.prepare`: the data sets of the learned jobs).
     """
     from tqdm.auto import tqdm
 
@@ -634,8 +634,8 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
                       file=sys.stderr)
 
     try:
-        if pending and prepare and sweep.job in ("learned_ik", "learned_id"):
-            _prepare_studies(pending)
+        if pending and prepare and sweep.job and JOBS[sweep.job].prepare:
+            _prepare(JOBS[sweep.job], pending)
         if pending and workers == 0 and not scheduler and client is None:
             for cell in pending:
                 finish(cell, execute_cell(sweep.job, sweep.notebook, dict(cell.params),
@@ -669,21 +669,16 @@ def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
     return results
 
 
-def _prepare_studies(cells: Sequence[Cell]) -> None:
-    from .datasets import build_datasets, load_study, smoke_study
-
+def _prepare(job, cells: Sequence[Cell]) -> None:
+    """The job's shared work, once per distinct value of its ``shared`` parameters; a cell whose
+    parameters it refuses fails later with that error, recorded with its parameters."""
     seen = set()
     for cell in cells:
-        p = cell.params
-        what = (p["study_file"], p["smoke"], p["data_dir"])
-        if what in seen:
-            continue
-        seen.add(what)
-        try:
-            study = load_study(p["study_file"])
-        except ParamsError:
-            continue        # the cell fails with this error, recorded with its parameters
-        build_datasets(smoke_study(study) if p["smoke"] else study, p["data_dir"])
+        key = _canonical([cell.params[k] for k in job.shared])
+        if key not in seen:
+            seen.add(key)
+            with contextlib.suppress(ParamsError):
+                job.prepare(dict(cell.params))
 
 
 def _run_on_dask(sweep: Sweep, pending: Sequence[Cell], scheduler: str | None,
