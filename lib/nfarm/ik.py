@@ -1,5 +1,11 @@
 """Inverse kinematics: joint angles for target tool poses, batched over targets.
 
+Two kinds of solver. :func:`closed_form` (module :mod:`nfarm.geometric_ik`) gives every
+solution of every pose in closed form for the arms it covers (a base yaw, three parallel
+pitch joints and a roll: both arms of the study); it is the exact reference. :func:`solve`
+iterates from a starting guess for any chain, as the dissertation does; its result says which
+closed-form branch it converged to where the robot has one.
+
 All targets are solved together: every iteration evaluates the pose and the Jacobian of the
 still-unsolved targets as one batch (component layout, samples last), and a target leaves
 the batch as soon as it converges. Four update rules (``e`` the pose error of
@@ -38,6 +44,7 @@ reached, but only outside the limits), ``unreachable`` (a residual no step reduc
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,6 +79,8 @@ class IKResult:
         reason: ``(...)`` one of :data:`REASONS`.
         history: ``(..., K, 2)`` position and orientation error before each step (NaN after
             the target stopped), or ``None`` unless ``record_history=True``.
+        branch: ``(...)`` the index in :data:`BRANCHES` of the branch ``q`` lies on, for a
+            robot of the closed form's class (:func:`closed_form`); ``None`` for others.
     """
 
     q: np.ndarray
@@ -82,10 +91,16 @@ class IKResult:
     rot_error: np.ndarray
     reason: np.ndarray
     history: np.ndarray | None = None
+    branch: np.ndarray | None = None
 
     @property
     def success_rate(self) -> float:
         return float(np.mean(self.success))
+
+    @property
+    def branch_name(self) -> np.ndarray | None:
+        """``(...)`` the names of :attr:`branch` (:data:`BRANCHES`), or ``None``."""
+        return None if self.branch is None else np.array(BRANCHES)[self.branch]
 
     def summary(self) -> dict:
         """Success rate, iterations (median, 95th percentile), restarts per target, and the
@@ -378,7 +393,8 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
                              dtype={"success": bool, "iterations": int, "restarts": int,
                                     "reason": np.array(REASONS).dtype}.get(f, float))
                  for f in _FIELDS}
-        return IKResult(**empty, history=np.zeros((*batch, 0, 2)) if record_history else None)
+        return _with_branch(robot, IKResult(
+            **empty, history=np.zeros((*batch, 0, 2)) if record_history else None))
     results = []
     for start in range(0, T.shape[0], chunk):
         part = slice(start, start + chunk)
@@ -389,7 +405,14 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
                    respect_limits, seeds, first_rank, options, stall_rtol, stall_iters,
                    tol_pos, tol_rot, record_history)
         results.append(run.result((q_part.shape[0],)))
-    return _concatenate(results, batch, robot.n)
+    return _with_branch(robot, _concatenate(results, batch, robot.n))
+
+
+def _with_branch(robot: Robot, result: IKResult) -> IKResult:
+    """The result with the branch of each configuration, for a robot of the closed form's class."""
+    if not in_class(robot):
+        return result
+    return dataclasses.replace(result, branch=branch_of(robot, result.q))
 
 
 def _check_number(name, value, lo, hi, open_lo):
@@ -627,4 +650,13 @@ def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
         result = solve(robot, T, q, **options)
         results.append(result)
         q = result.q
-    return IKResult(**{f: np.stack([getattr(r, f) for r in results]) for f in _FIELDS})
+    return _with_branch(robot, IKResult(**{f: np.stack([getattr(r, f) for r in results])
+                                           for f in _FIELDS}))
+
+
+# The closed form lives in its own module and uses this one's checks and LM: imported last,
+# when they exist.
+from .geometric_ik import (BRANCHES, ClosedFormResult, branch_of, closed_form,  # noqa: E402
+                           in_class)
+
+__all__ += ["closed_form", "ClosedFormResult", "BRANCHES", "branch_of", "in_class"]

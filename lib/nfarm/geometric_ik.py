@@ -1,0 +1,538 @@
+"""Geometric inverse kinematics: every solution of every pose in closed form, batched.
+
+Use it as :func:`nfarm.ik.closed_form`. It is the exact reference of the study: where LM finds
+one solution from one start, the closed form gives all of them, with nothing to converge.
+
+**The class.** Five revolute joints: a base joint ("yaw"), three joints about parallel axes
+("pitch": joints 2, 3, 4) and a last joint ("roll") not parallel to them. In standard DH terms
+(a modified-DH table is first rewritten as the standard chain it equals)::
+
+    sin α2 = sin α3 = 0 (within axis_tol),   sin α1 ≠ 0,   sin β ≠ 0 with β = α2 + α3 + α4,
+    a2 ≠ 0, a3 ≠ 0 (two links between the three pitch axes).
+
+Every other number is free and enters the formulas as it is: a1 and d1 (the SO-101's shoulder
+offset), the lateral offsets d2, d3, d4, a4, a roll axis not exactly perpendicular to the
+pitch axes (the SO-101's α4 is −1.5708, 3.7e-6 rad off −π/2), a5 and d5 (a tool point off the
+roll axis: the SO-101's 7.9 mm), the joint offsets, the base and the tool. Any other robot is
+refused in one line saying which condition it breaks (:func:`check_class`).
+
+**Derivation** (θ̄ = q + offset; u(φ) = (cos φ, sin φ); σ2 = cos α2, σ = cos α2 cos α3, both
+±1; ``Rx(π) Rz(θ) = Rz(−θ) Rx(π)``). The three pitch joints act in the plane of frame 1::
+
+    R_14 = Rz(Φ) Rx(β),   Φ = θ̄2 + γ + σ θ̄4,   γ = σ2 θ̄3,
+    o_4 in frame 1 = (a2 u(θ̄2) + a3 u(θ̄2 + γ) + a4 u(Φ),  w),   w = d2 + σ2 d3 + σ d4.
+
+1. *Wrist point and roll axis*, from the target alone: with ``T_05 = base⁻¹ T tool⁻¹ = (R, p)``
+   and ``M = R Rx(−α5)``, the wrist point is ``p4 = p − M (a5, 0, d5)`` and the roll axis
+   ``z4 = M e_z`` (joint 5 turns about z4 and moves neither).
+2. *Base*: the pitch axis ``z1(θ̄1)`` must lie at the lateral offset w from the wrist point and at
+   the angle β from the roll axis::
+
+       z1 · (p4 − o1) = w,     z1 · z4 = cos β,
+
+   each of the form ``A sin θ̄1 − B cos θ̄1 = C``, solved by
+   ``θ̄1 = atan2(B, A) + atan2(C, ±√(A² + B² − C²))``. The two roots of the first are the base
+   branches, *front* and *back* (the wrist point ahead of the base axis along x1, or behind
+   it). A target in the arm's pose set satisfies both; where the first is ill-conditioned
+   (its square root small: the wrist point near the base axis) the root of the second nearest
+   to it is taken instead. With w ≠ 0 the back branch reaches a target only when the roll
+   axis is parallel to the base axis; the SO-101 (w = −0.18 mm) has two solutions per pose
+   elsewhere, intelbot5 (w = 0) four.
+3. *Wrist angles*: ``G = R_1ᵀ M = Rz(Φ) Rx(β) Rz(θ̄5)``, a ZXZ decomposition whose middle angle
+   is fixed: ``Φ = atan2(s G02, −s G12)``, ``θ̄5 = atan2(s G20, s G21)``, s = sign(sin β).
+4. *Planar two-link*: ``(X, Y, Z) = R_1ᵀ (p4 − o1)``, ``Q = (X, Y) − a4 u(Φ)``; with
+   k = sign(a2 a3), the elbow ``γ = ±2 atan2(√(k((a2 + a3)² − |Q|²)), √(k(|Q|² − (a2 − a3)²)))``
+   (the half-angle form: accurate where acos of the cosine law loses half the digits, at the
+   stretched and folded arm), ``θ̄2 = atan2(Qy, Qx) − atan2(a3 sin γ, a2 + a3 cos γ)`` and
+   ``θ̄4 = σ (Φ − θ̄2 − γ)``.
+
+The branches: front and back, each with the elbow up and down (:data:`BRANCHES`). "Up" is the
+elbow above the line from shoulder to wrist, up meaning against gravity (the base's z axis
+when gravity is zero), for a wrist ahead of the shoulder; the back branch mirrors it.
+
+**Errors in closed form.** Nothing here calls forward kinematics: the reached pose differs from
+the target only where a sub-problem had no exact solution, and each difference is computed
+from the sub-problems: the orientation error is the angle of ``G'ᵀ G`` (G' the decomposition's
+rotation), ``|β' − β|`` with ``cos β' = G22``; the position error is
+``|(Q − Q', Z − w) + (G − G') v|`` (Q' the point the two links reach, v the tool point from the
+wrist point, ``(a5, 0, d5) + Rx(α5) p_tool``). The tests check both against :func:`nfarm.kinematics.fk` and Pinocchio.
+
+**Numerics.** The arguments of the square roots are clipped at 0. A clip by rounding (a target
+on the boundary of the workspace, a stretched or folded arm) leaves an error at rounding level;
+a larger one means the sub-problem had no solution, and the branch holds the nearest point of
+that sub-problem, its error in ``pos_error`` and the branch invalid. Where an angle is
+undetermined (the wrist point on the base axis with the roll axis along it; the wrist point on
+the shoulder axis of a two-link with a2 = ±a3) the family of solutions is represented by one
+member. No NaN is produced for finite targets.
+
+**Targets outside the pose set.** A 5-DOF arm reaches a 5-dimensional set of poses. For a target
+that no branch reaches (to ``tol_pos`` and ``tol_rot``), each branch is refined by
+Levenberg–Marquardt (:func:`nfarm.ik.solve`, joint limits ignored) from its closed-form point
+to the nearest pose in the weighted least-squares sense LM minimises, ``½ Σ w_i e_i²`` over the
+pose error ``e`` of :func:`nfarm.rotations.pose_error`; ``pos_error`` and ``rot_error`` are then
+the residual of each branch, by :func:`nfarm.kinematics.fk`, and ``refined`` is set.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import fk, snap_right_angles
+from .robot import Robot, joint_array
+from .rotations import pose_error
+
+__all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "branch_of"]
+
+#: The branches, in the order of the result's branch axis.
+BRANCHES = ("front, elbow up", "front, elbow down", "back, elbow up", "back, elbow down")
+_CHUNK = 32768
+
+
+@dataclass(frozen=True)
+class _Arm:
+    """The constants of a robot of the class, in standard DH (see the module docstring)."""
+
+    n: int
+    RbT: np.ndarray | None       # base rotation transposed (None: identity base and tool part)
+    pb: np.ndarray               # base origin
+    C: np.ndarray | None         # tool⁻¹ rotation times Rx(−α5)
+    c0: np.ndarray               # R c0 = offset from the target point to the wrist point
+    sa1: float
+    ca1: float
+    sb: float
+    cb: float
+    s: float                     # sign(sin β)
+    sigma2: float
+    sigma: float
+    w: float
+    a1: float
+    d1: float
+    a2: float
+    a3: float
+    a4: float
+    v: tuple                     # the tool point from the wrist point, in G's frame
+    offset: np.ndarray           # (5,) joint offsets of the standard chain
+    up: float                    # +1 / −1: the sign of "elbow up" (module docstring)
+    reach: float                 # a length scale [m]: |a| + |d| summed
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+def _Rx(t: float) -> np.ndarray:
+    c, s = math.cos(t), math.sin(t)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _snap(x: float) -> float:
+    """cos or sin of a right angle exactly 0 or ±1 (as :func:`nfarm.kinematics.fk` takes them)."""
+    return float(snap_right_angles(np.array(x)))
+
+
+def _standard_chain(robot: Robot):
+    """``(base, a, alpha, d, offset, tool)`` of the standard-DH chain equal to the robot's:
+    a modified-DH chain ``Rx(α1) Tx(a1) [Rz(θ1) Tz(d1) Rx(α2) Tx(a2)] ··· Rz(θn) Tz(dn)`` is the
+    base ``Rx(α1) Tx(a1)`` followed by standard links ``(d_i, a_{i+1}, α_{i+1})``."""
+    if robot.convention == "standard":
+        return robot.base, robot.a, robot.alpha, robot.d, robot.offset, robot.tool
+    first = np.eye(4)
+    first[:3, :3] = _Rx(robot.alpha[0])
+    first[0, 3] = robot.a[0]
+    a = np.append(robot.a[1:], 0.0)
+    alpha = np.append(robot.alpha[1:], 0.0)
+    return robot.base @ first, a, alpha, robot.d, robot.offset, robot.tool
+
+
+def _reason(robot: Robot, axis_tol: float):
+    """``(arm, None)`` for a robot of the class, else ``(None, reason)``."""
+    if robot.n != 5:
+        return None, f"it has {robot.n} joints (the class has 5)"
+    base, a, alpha, d, offset, tool = _standard_chain(robot)
+    deg = np.degrees
+    for i in (1, 2):
+        if abs(math.sin(alpha[i])) > axis_tol:
+            return None, (f"joints {i + 1} and {i + 2} are not parallel (standard-DH alpha{i + 1} = "
+                          f"{deg(alpha[i]):.6g}°; the class needs 0° or 180°)")
+    if abs(math.sin(alpha[0])) < 1e-6:
+        return None, (f"joint 1 is parallel to joints 2-4 (standard-DH alpha1 = "
+                      f"{deg(alpha[0]):.6g}°): no base joint")
+    beta = alpha[1] + alpha[2] + alpha[3]
+    if abs(math.sin(beta)) < 1e-6:
+        return None, (f"joint 5 is parallel to joints 2-4 (alpha2 + alpha3 + alpha4 = "
+                      f"{deg(beta):.6g}°): no roll joint")
+    scale = float(np.abs(a).sum() + np.abs(d).sum())
+    for i in (1, 2):
+        if abs(a[i]) <= 1e-9 * max(scale, 1e-300):
+            return None, (f"a{i + 1} = {a[i]:g} m: joints 2-4 need two links between their axes "
+                          f"(a2 and a3 non-zero)")
+    sigma2 = math.copysign(1.0, math.cos(alpha[1]))
+    sigma = sigma2 * math.copysign(1.0, math.cos(alpha[2]))
+    Rb, Re = base[:3, :3], tool[:3, :3]
+    C = Re.T @ _Rx(-alpha[4])
+    c0 = Re.T @ tool[:3, 3] + C @ np.array([a[4], 0.0, d[4]])
+    plain = np.array_equal(Rb, np.eye(3)) and np.array_equal(C, np.eye(3))
+    g = robot.gravity
+    up_world = -g / np.linalg.norm(g) if np.any(g) else Rb[:, 2]
+    up = math.copysign(1.0, math.sin(alpha[0]) * float(Rb[:, 2] @ up_world) or 1.0)
+    return _Arm(
+        n=5, RbT=None if plain else Rb.T.copy(), pb=base[:3, 3].copy(), C=None if plain else C,
+        c0=c0, sa1=_snap(math.sin(alpha[0])), ca1=_snap(math.cos(alpha[0])),
+        sb=_snap(math.sin(beta)), cb=_snap(math.cos(beta)), s=math.copysign(1.0, math.sin(beta)), sigma2=sigma2, sigma=sigma,
+        w=float(d[1] + sigma2 * d[2] + sigma * d[3]), a1=float(a[0]), d1=float(d[0]),
+        a2=float(a[1]), a3=float(a[2]), a4=float(a[3]),
+        v=tuple(float(x) for x in np.array([a[4], 0.0, d[4]]) + _Rx(alpha[4]) @ tool[:3, 3]),
+        offset=np.asarray(offset, dtype=float), up=up, reach=max(scale, 1e-3),
+        lo=robot.qlim[:, 0], hi=robot.qlim[:, 1]), None
+
+
+def check_class(robot: Robot, axis_tol: float = 1e-10) -> _Arm:
+    """The robot's constants for :func:`closed_form`, or a one-line ``ValueError`` naming the
+    condition of the class (module docstring) it breaks.
+
+    ``axis_tol`` [rad]: how far α2 and α3 may be from 0 or π and still count as parallel
+    axes; the closed form then treats them as exactly parallel, which moves the tool by at
+    most ``axis_tol`` times the arm's length (1e-10 rad: < 1e-10 m on the shipped arms).
+    """
+    if not isinstance(robot, Robot):
+        raise ValueError(f"closed_form needs a Robot, got {type(robot).__name__}")
+    arm, reason = _reason(robot, axis_tol)
+    if arm is None:
+        raise ValueError(f"{robot.name} has no closed-form IK here: {reason}; the closed form "
+                         f"covers yaw-pitch-pitch-pitch-roll arms")
+    return arm
+
+
+def in_class(robot: Robot, axis_tol: float = 1e-10) -> bool:
+    """Whether :func:`closed_form` solves this robot."""
+    return isinstance(robot, Robot) and _reason(robot, axis_tol)[0] is not None
+
+
+@dataclass(frozen=True)
+class ClosedFormResult:
+    """Result of :func:`closed_form` for targets of batch shape ``(...)``; ``k = 4`` branches
+    in the order of :data:`BRANCHES`.
+
+    Attributes:
+        q: ``(..., k, n)`` joint angles [rad] of every branch, each angle moved by a multiple
+            of 2π into ``[mid − π, mid + π)`` of its range.
+        valid: ``(..., k)`` the branch reaches the target (``reaches``) within the joint
+            limits (``within_limits``).
+        reaches: ``(..., k)`` position and orientation errors within ``tol_pos``, ``tol_rot``.
+        within_limits: ``(..., k)`` every angle within its limits.
+        pos_error: ``(..., k)`` ``‖p_target − p(q)‖`` [m].
+        rot_error: ``(..., k)`` the angle between the target's and the reached orientation
+            [rad].
+        refined: ``(...)`` the target is outside the pose set, and every branch was refined to
+            its nearest pose (module docstring).
+        branches: the names of the branches.
+    """
+
+    q: np.ndarray
+    valid: np.ndarray
+    reaches: np.ndarray
+    within_limits: np.ndarray
+    pos_error: np.ndarray
+    rot_error: np.ndarray
+    refined: np.ndarray
+    branches: tuple[str, ...] = BRANCHES
+
+    @property
+    def in_pose_set(self) -> np.ndarray:
+        """``(...)`` some branch reaches the target (joint limits aside)."""
+        return self.reaches.any(axis=-1)
+
+    def count(self, distinct: float = 1e-6) -> np.ndarray:
+        """``(...)`` the number of distinct valid solutions: valid branches whose angles differ
+        from every earlier valid branch's by more than ``distinct`` [rad] in some joint (2π
+        apart is the same angle). Branches coincide at singular poses (a stretched elbow)."""
+        diff = self.q[..., :, None, :] - self.q[..., None, :, :]          # (..., k, k, n)
+        apart = (np.abs(np.remainder(diff + np.pi, 2 * np.pi) - np.pi) > distinct).any(-1)
+        k = self.q.shape[-2]
+        earlier = np.tril(np.ones((k, k), bool), -1)                      # j < i
+        repeat = (~apart & earlier & self.valid[..., None, :]).any(-1)
+        return (self.valid & ~repeat).sum(-1)
+
+    def best(self, weights=None) -> np.ndarray:
+        """``(...)`` the index of the branch to take: a valid one if any (the first in
+        :data:`BRANCHES` order), else the one with the least ``½ Σ w e²`` (``weights`` as in
+        :func:`nfarm.ik.solve`; errors as position and rotation norms)."""
+        from . import ik as _ik     # ik imports this module at its end
+        w = _ik._check_weights(weights)
+        cost = w[:3].mean() * self.pos_error ** 2 + w[3:].mean() * self.rot_error ** 2
+        cost = np.where(self.valid, -1.0, cost)
+        return np.argmin(cost, axis=-1)
+
+
+# --------------------------------------------------------------------------------------------
+# The closed form on a chunk of targets (component layout, samples last)
+
+
+def _solve_chunk(g: _Arm, T: np.ndarray):
+    """``T (m, 4, 4)`` → the joint angles ``q1, q5 (2, m)`` (base branch, target) and
+    ``q2, q3, q4 (2, 2, m)`` (base branch, elbow column, target), and per base branch the
+    errors ``(2, m)`` [m], [rad]."""
+    R, p = T[:, :3, :3], T[:, :3, 3]
+    Rc0 = np.einsum("mij,j->mi", R, g.c0)
+    if g.RbT is None:
+        M, p4 = R, p - Rc0 - g.pb
+    else:
+        M = g.RbT @ (R @ g.C)
+        p4 = (p - g.pb - Rc0) @ g.RbT.T                               # Rbᵀ (…) as rows
+    m = np.ascontiguousarray(M.transpose(1, 2, 0))                 # (3, 3, m)
+    px, py, pz = np.ascontiguousarray(p4.T)
+    sa, ca = g.sa1, g.ca1
+
+    # 2. The base: both roots of the position condition; the orientation's where better.
+    pz1 = pz - g.d1
+    Ap, Bp, Cp = sa * px, sa * py, g.w - ca * pz1
+    hp = np.sqrt(np.maximum(Ap * Ap + Bp * Bp - Cp * Cp, 0.0))
+    front = math.copysign(1.0, sa)
+    root = np.stack([front * hp, -front * hp])                             # ±√ of each root
+    # cos, sin of θ̄1 = φ + ψ by the angle sum (cos φ = A/ρ, cos ψ = ±h/ρ, sin ψ = C/ρ).
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inv = 1.0 / np.sqrt((Ap * Ap + Bp * Bp) * (hp * hp + Cp * Cp))   # 1/ρ² unless clipped
+        c1, s1 = (Ap * root - Bp * Cp) * inv, (Bp * root + Ap * Cp) * inv   # NaN where ρ = 0
+    t1 = np.arctan2(s1, c1)
+    bad = np.flatnonzero(~np.isfinite(inv))                 # ρ = 0: the wrist point on the axis
+    if bad.size:
+        t1[:, bad] = np.arctan2(Bp[bad], Ap[bad]) + np.arctan2(Cp[bad], root[:, bad])
+    z4x, z4y, z4z = m[0, 2], m[1, 2], m[2, 2]
+    Ao, Bo, Co = sa * z4x, sa * z4y, g.cb - ca * z4z
+    ho = np.sqrt(np.maximum(Ao * Ao + Bo * Bo - Co * Co, 0.0))
+    # The position root's error grows as reach/hp, the orientation root's as 1/ho: switch only
+    # where the position root is a hundred times the worse (its θ̄1 error is then ~1e-14 rad).
+    weak = np.flatnonzero(hp < 1e-2 * g.reach * ho)
+    if weak.size:
+        phio = np.arctan2(Bo[weak], Ao[weak])
+        roots = np.stack([phio + np.arctan2(Co[weak], ho[weak]),
+                          phio + np.arctan2(Co[weak], -ho[weak])])           # (2, k)
+        # The closest pair of an orientation root and a position root is matched (for a target
+        # in the pose set they coincide), the other orientation root goes to the other branch.
+        gap = lambda x, y: np.abs(np.remainder(x - y + np.pi, 2 * np.pi) - np.pi)  # noqa: E731
+        keep = (np.minimum(gap(roots[0], t1[0, weak]), gap(roots[1], t1[1, weak]))
+                <= np.minimum(gap(roots[1], t1[0, weak]), gap(roots[0], t1[1, weak])))
+        t1[0, weak], t1[1, weak] = np.where(keep, roots[0], roots[1]), np.where(keep, roots[1], roots[0])
+    if weak.size or bad.size:
+        redo = np.union1d(weak, bad)
+        c1[:, redo], s1[:, redo] = np.cos(t1[:, redo]), np.sin(t1[:, redo])
+
+    # 3. The wrist: G = R_1ᵀ M (rows x1ᵀM, y1ᵀM, z1ᵀM; the entries used).
+    def G_entry(i, j):
+        mx, my, mz = m[0, j], m[1, j], m[2, j]
+        if i == 0:
+            return c1 * mx + s1 * my
+        if i == 1:
+            return ca * (c1 * my - s1 * mx) + sa * mz if ca else sa * mz
+        return sa * (s1 * mx - c1 * my) + ca * mz if ca else sa * (s1 * mx - c1 * my)
+
+    G00, G10, G20, G21 = G_entry(0, 0), G_entry(1, 0), G_entry(2, 0), G_entry(2, 1)
+    G02, G12, G22 = G_entry(0, 2), G_entry(1, 2), G_entry(2, 2)
+    s = g.s
+    Phi = np.arctan2(s * G02, -s * G12)
+    t5 = np.arctan2(s * G20, s * G21)
+    cP, sP, n = _cos_sin(Phi, -s * G12, s * G02)
+    c5, s5, _ = _cos_sin(t5, s * G21, s * G20)
+
+    # 4. The planar two-link.
+    X = c1 * px + s1 * py - g.a1
+    Y = ca * (c1 * py - s1 * px) + sa * pz1
+    Z = sa * (s1 * px - c1 * py) + ca * pz1
+    Qx, Qy = X - g.a4 * cP, Y - g.a4 * sP
+    r2 = Qx * Qx + Qy * Qy
+    a2, a3 = g.a2, g.a3
+    k = math.copysign(1.0, a2 * a3)
+    far = np.sqrt(np.maximum(k * ((a2 + a3) ** 2 - r2), 0.0))
+    near = np.sqrt(np.maximum(k * (r2 - (a2 - a3) ** 2), 0.0))
+    with np.errstate(divide="ignore"):
+        gamma = 2.0 * np.arctan(far / near)     # = 2 atan2(far, near) ≥ 0, far/near = inf → π
+    inv = 1.0 / (far * far + near * near)      # > 0: far and near are not both clipped
+    cg, sg = (near * near - far * far) * inv, 2.0 * far * near * inv
+    psi = np.arctan2(Qy, Qx)
+    delta = np.arctan2(a3 * sg, a2 + a3 * cg)
+
+    # Errors (module docstring): the points the links reach, and G' = Rz(Φ) Rx(β) Rz(θ̄5).
+    rQ = np.sqrt(r2)
+    reached = np.sqrt(np.maximum(a2 * a2 + a3 * a3 + 2 * a2 * a3 * cg, 0.0))
+    short = rQ - reached
+    ux, uy, _ = _cos_sin(psi, Qx, Qy)                      # the direction of Q (u(ψ) at Q = 0)
+    sb, cb = g.sb, g.cb
+    ex, ey, ez = short * ux, short * uy, Z - g.w
+    if g.v[0]:                                  # (G − G')[:, j] v_j, G' column by column
+        ex = ex + g.v[0] * (G00 - (cP * c5 - sP * cb * s5))
+        ey = ey + g.v[0] * (G10 - (sP * c5 + cP * cb * s5))
+        ez = ez + g.v[0] * (G20 - sb * s5)
+    if g.v[1]:
+        ex = ex + g.v[1] * (G_entry(0, 1) + cP * s5 + sP * cb * c5)
+        ey = ey + g.v[1] * (G_entry(1, 1) + sP * s5 - cP * cb * c5)
+        ez = ez + g.v[1] * (G21 - sb * c5)
+    if g.v[2]:
+        ex = ex + g.v[2] * (G02 - sb * sP)
+        ey = ey + g.v[2] * (G12 + sb * cP)
+        ez = ez + g.v[2] * (G22 - cb)
+    pos_error = np.sqrt(ex * ex + ey * ey + ez * ez)
+    # G = Rz(Φ) Rx(β') Rz(θ̄5) with cos β' = G22, sin β' = s·n: G'ᵀG = Rz(−θ̄5) Rx(β' − β) Rz(θ̄5),
+    # an angle of |β' − β|.
+    rot_error = np.abs(np.arcsin(np.clip(n * cb - G22 * abs(sb), -1.0, 1.0)))
+    behind = G22 * cb + n * abs(sb) < 0                     # |β' − β| > π/2 (rare)
+    if behind.any():
+        rot_error[behind] = np.pi - rot_error[behind]
+
+    # The angles, offsets taken out: elbow column 0 is "up" (module docstring), 1 "down".
+    e_up = np.array([-g.up, g.up])[:, None, None] * np.array([1.0, -1.0])[:, None]  # (2, 2, 1)
+    gam = e_up * gamma[:, None, :]
+    q2 = psi[:, None, :] - e_up * delta[:, None, :]
+    q4 = g.sigma * (Phi[:, None, :] - q2 - gam)
+    o = g.offset
+    angles = (t1 - o[0], q2 - o[1], g.sigma2 * gam - o[2], q4 - o[3], t5 - o[4])
+    return angles, pos_error, rot_error
+
+
+def _cos_sin(angle: np.ndarray, x: np.ndarray, y: np.ndarray):
+    """cos and sin of ``angle = atan2(y, x)`` as ``x/r, y/r`` (no trigonometry), and by
+    ``np.cos``/``np.sin`` where ``r = 0``; and ``r``."""
+    r = np.sqrt(x * x + y * y)
+    zero = r == 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c, s = x / r, y / r
+    if zero.any():
+        c[zero], s[zero] = np.cos(angle[zero]), np.sin(angle[zero])
+    return c, s, r
+
+
+def _wrap_joint(x: np.ndarray, lo: float, hi: float, limit_tol: float) -> np.ndarray:
+    """Angles ``x`` of one joint moved by multiples of 2π into ``[mid − π, mid + π]`` of its
+    range, those within ``limit_tol`` outside a limit onto it (in place); returns whether each
+    lies within."""
+    mid = 0.5 * (lo + hi)
+    x -= (2 * np.pi) * np.rint((x - mid) * (0.5 / np.pi))
+    inside = (x >= lo - limit_tol) & (x <= hi + limit_tol)
+    np.copyto(x, lo, where=inside & (x < lo))
+    np.copyto(x, hi, where=inside & (x > hi))
+    return inside
+
+
+def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float = 1e-9,
+                weights=None, nearest: bool = True, nearest_iter: int = 200,
+                axis_tol: float = 1e-10, limit_tol: float = 1e-12, ortho_tol: float = 1e-9,
+                threads: int | None = None) -> ClosedFormResult:
+    """Every inverse-kinematics solution of every target, in closed form (module docstring).
+
+    Args:
+        T_target: ``(..., 4, 4)`` target tool poses (world frame).
+        tol_pos, tol_rot: a branch reaches its target when its position error [m] and
+            orientation error [rad] are within these.
+        weights: 6 weights on the squared errors (as :func:`nfarm.ik.solve`): the sense of
+            "nearest pose" for targets outside the pose set.
+        nearest: refine every branch of a target outside the pose set to its nearest pose
+            (LM); without it such a target keeps the closed form's projection.
+        nearest_iter: LM steps for that refinement.
+        axis_tol: see :func:`check_class`.
+        limit_tol: an angle this close [rad] outside its limit counts as within and is moved
+            onto it (rounding of an angle sampled at its limit).
+        ortho_tol: largest accepted ``|RᵀR − I|`` of a target rotation.
+        threads: chunks of 8192 targets solved side by side (default: the CPUs this process
+            may use, at most 8); NumPy releases the GIL in its loops. The result does not
+            depend on it.
+
+    Returns:
+        :class:`ClosedFormResult`, ``q`` of shape ``(..., 4, 5)``.
+
+    Raises:
+        ValueError: the robot is not of the class, a bad target (shape, NaN, last row,
+            rotation) or a bad option; one line naming it.
+    """
+    from . import ik as _ik         # ik imports this module at its end
+    arm = check_class(robot, axis_tol)
+    for name, value in (("tol_pos", tol_pos), ("tol_rot", tol_rot), ("axis_tol", axis_tol),
+                        ("ortho_tol", ortho_tol)):
+        _ik._check_number(name, value, 0, None, open_lo=True)
+    _ik._check_number("limit_tol", limit_tol, 0, None, open_lo=False)
+    _ik._check_integer("nearest_iter", nearest_iter, 1)
+    if not isinstance(nearest, (bool, np.bool_)):
+        raise ValueError(f"nearest must be True or False, got {nearest!r}")
+    w = _ik._check_weights(weights)
+    if threads is None:
+        threads = min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                      else os.cpu_count() or 1, 8)
+    _ik._check_integer("threads", threads, 1)
+    size = np.size(T_target) // 16 if isinstance(T_target, np.ndarray) else 0
+    pool = None
+    if threads > 1 and size > _CHUNK:
+        from concurrent.futures import ThreadPoolExecutor
+        pool = ThreadPoolExecutor(min(threads, -(-size // _CHUNK)))
+    try:
+        return _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest,
+                            nearest_iter, limit_tol, ortho_tol)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+
+
+def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest, nearest_iter,
+                 limit_tol, ortho_tol) -> ClosedFormResult:
+    from . import ik as _ik
+    map_chunks = map if pool is None else pool.map
+    T = _ik.check_targets(T_target, ortho_tol, map_chunks=map_chunks)   # every pose first
+    batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
+    N = flat.shape[0]
+    q = np.empty((N, 4, 5))
+    pos_error, rot_error = np.empty((N, 4)), np.empty((N, 4))
+    inside = np.empty((N, 4), bool)
+
+    def chunk(start: int) -> None:
+        part = slice(start, start + _CHUNK)
+        angles, pe, re = _solve_chunk(arm, flat[part])
+        q_part, within = q[part], np.ones((2, 2, pe.shape[1]), bool)
+        for j, x in enumerate(angles):                    # (2, m) or (2, 2, m)
+            ok = _wrap_joint(x, arm.lo[j], arm.hi[j], limit_tol)
+            within &= ok[:, None] if x.ndim == 2 else ok
+            for k in range(4):
+                q_part[:, k, j] = x[k // 2] if x.ndim == 2 else x[k // 2, k % 2]
+        for k in range(4):                                # the elbow branches share the errors
+            pos_error[part, k], rot_error[part, k] = pe[k // 2], re[k // 2]
+        inside[part] = within.reshape(4, -1).T
+
+    for _ in map_chunks(chunk, range(0, N, _CHUNK)):
+        pass
+    reaches = (pos_error <= tol_pos) & (rot_error <= tol_rot)
+    refined = ~reaches.any(axis=1)
+    if nearest and refined.any():
+        out = np.flatnonzero(refined)
+        result = _ik.solve(robot, np.repeat(flat[out], 4, axis=0), q[out].reshape(-1, 5),
+                           weights=w, tol_pos=tol_pos, tol_rot=tol_rot, max_iter=nearest_iter,
+                           restarts=0, respect_limits=False,
+                           stall_rtol=1e-12, stall_iters=4, ortho_tol=ortho_tol)
+        q_near = result.q.reshape(-1, 4, 5).copy()
+        within = np.ones(q_near.shape[:2], bool)
+        for j in range(5):
+            within &= _wrap_joint(q_near[..., j], arm.lo[j], arm.hi[j], limit_tol)
+        q[out], inside[out] = q_near, within
+        e = pose_error(np.repeat(flat[out], 4, axis=0), fk(robot, result.q))
+        pos_error[out] = np.linalg.norm(e[:, :3], axis=1).reshape(-1, 4)
+        rot_error[out] = np.linalg.norm(e[:, 3:], axis=1).reshape(-1, 4)
+        reaches[out] = (pos_error[out] <= tol_pos) & (rot_error[out] <= tol_rot)
+    elif not nearest:
+        refined[:] = False
+    shape = lambda x: x.reshape(batch + x.shape[1:])  # noqa: E731
+    return ClosedFormResult(q=shape(q), valid=shape(reaches & inside), reaches=shape(reaches),
+                            within_limits=shape(inside), pos_error=shape(pos_error),
+                            rot_error=shape(rot_error), refined=shape(refined))
+
+
+def branch_of(robot: Robot, q, axis_tol: float = 1e-10) -> np.ndarray:
+    """``(...)`` the index in :data:`BRANCHES` of the branch configurations ``q (..., 5)``
+    [rad] lie on: front when the wrist point is ahead of the base axis along x1, and the elbow
+    by the sign of its angle (module docstring). Raises ``ValueError`` for a robot not of the
+    class."""
+    g = check_class(robot, axis_tol)
+    t = joint_array(robot, q) + g.offset
+    gamma = g.sigma2 * t[..., 2]
+    phi = t[..., 1] + gamma + g.sigma * t[..., 3]
+    ahead = g.a1 + g.a2 * np.cos(t[..., 1]) + g.a3 * np.cos(t[..., 1] + gamma) + g.a4 * np.cos(phi)
+    back = ahead < 0
+    front = np.where(back, -1.0, 1.0)
+    down = g.up * front * np.sin(gamma) > 0
+    return 2 * back.astype(int) + down.astype(int)

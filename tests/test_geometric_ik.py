@@ -1,0 +1,400 @@
+"""The closed-form IK (nfarm.ik.closed_form) against forward kinematics, Pinocchio, multi-start
+LM and the geometry of the class: every solution found, every solution exact, every branch
+named, nothing non-finite at the singular poses, and every other robot refused in one line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from conftest import load_quietly, random_chains
+from nfarm.geometric_ik import check_class
+from nfarm.ik import BRANCHES, branch_of, closed_form, in_class, solve
+from nfarm.kinematics import fk, fk_all
+from nfarm.paths import ROOT
+from nfarm.pinocchio_ref import pinocchio_model
+from nfarm.robot import Robot, robot_from_dict, sample_configurations
+from nfarm.rotations import exp_so3, pose_error, quat_to_matrix
+
+ARMS = ["intelbot5", "so101"]
+
+
+def arm(name: str) -> Robot:
+    return load_quietly(ROOT / "params" / "robots" / f"{name}.yaml")
+
+
+def wrapped(x):
+    return np.abs(np.remainder(x + np.pi, 2 * np.pi) - np.pi)
+
+
+def errors(robot, T, q):
+    """Position and orientation errors of fk(q) ``(..., k, n)`` against ``T (..., 4, 4)``."""
+    e = pose_error(np.broadcast_to(T[..., None, :, :], q.shape[:-1] + (4, 4)), fk(robot, q))
+    return np.linalg.norm(e[..., :3], axis=-1), np.linalg.norm(e[..., 3:], axis=-1)
+
+
+def _tx_rx(a, alpha):
+    T = np.eye(4)
+    c, s = np.cos(alpha), np.sin(alpha)
+    T[:3, :3] = [[1, 0, 0], [0, c, -s], [0, s, c]]
+    T[0, 3] = a
+    return T
+
+
+@st.composite
+def class_arms(draw) -> Robot:
+    """A random yaw-pitch-pitch-pitch-roll arm: random lengths, lateral offsets, joint offsets,
+    tilted base and roll axes, tool point off the roll axis, base and tool, in either DH
+    convention (a modified table built as the standard chain it equals)."""
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    tilt = lambda: float(rng.choice([np.pi / 2, -np.pi / 2, rng.uniform(0.3, np.pi - 0.3)]))  # noqa: E731
+    alpha = [tilt(), float(rng.choice([0.0, np.pi])), float(rng.choice([0.0, np.pi])), 0.0,
+             float(rng.uniform(-np.pi, np.pi))]
+    beta = tilt()                                     # β = α2 + α3 + α4 away from 0 and π
+    alpha[3] = float(np.remainder(beta - alpha[1] - alpha[2] + np.pi, 2 * np.pi) - np.pi)
+    a = [rng.uniform(-0.1, 0.1), rng.choice([-1, 1]) * rng.uniform(0.1, 0.4),
+         rng.choice([-1, 1]) * rng.uniform(0.1, 0.4), rng.uniform(-0.05, 0.05),
+         rng.uniform(-0.05, 0.05)]
+    d = rng.uniform(-0.1, 0.1, 5)
+    d[0], d[4] = rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2)
+    offset = rng.uniform(-np.pi, np.pi, 5)
+    lo = -rng.uniform(1.0, np.pi, 5)
+    hi = rng.uniform(1.0, np.pi, 5)
+    tool, base = np.eye(4), np.eye(4)
+    tool[:3, :3], tool[:3, 3] = quat_to_matrix(rng.normal(size=4)), rng.uniform(-0.1, 0.1, 3)
+    if draw(st.booleans()):
+        base[:3, :3], base[:3, 3] = quat_to_matrix(rng.normal(size=4)), rng.uniform(-0.3, 0.3, 3)
+    convention = draw(st.sampled_from(["standard", "modified"]))
+    if convention == "modified":   # Tx(a_i) Rx(α_i) move to the next joint; the last to the tool
+        tool = _tx_rx(a[4], alpha[4]) @ tool
+        a, alpha = [0.0] + a[:4], [0.0] + alpha[:4]
+    joints = [{"a": float(a[i]), "alpha": float(alpha[i]), "d": float(d[i]),
+               "offset": float(offset[i]), "qlim": [float(lo[i]), float(hi[i])], "mass": 1.0,
+               "com": [0.0, 0.0, 0.0], "inertia": [0.01, 0.01, 0.01, 0.0, 0.0, 0.0]}
+              for i in range(5)]
+    return robot_from_dict({"name": f"class-{convention}", "convention": convention,
+                            "gravity": [0.0, 0.0, -9.81], "tool": tool.tolist(),
+                            "base": base.tolist(), "joints": joints}, source="<class arm>")
+
+
+def check_round_trip(robot: Robot, seed: int, count: int) -> None:
+    q = sample_configurations(robot, count, seed)
+    T = fk(robot, q)
+    result = closed_form(robot, T)
+    assert result.q.shape == (count, 4, 5) and np.isfinite(result.q).all()
+    # The original angles are among the valid solutions.
+    distance = wrapped(result.q - q[:, None]).max(-1)
+    found = ((distance < 1e-7) & result.valid).any(-1)
+    assert found.all(), f"{(~found).sum()} configurations not found, e.g. {q[~found][0]}"
+    # Every valid solution reaches its pose; the reported errors are fk's.
+    pos, rot = errors(robot, T, result.q)
+    assert pos[result.valid].max() <= 1e-9 and rot[result.valid].max() <= 1e-9
+    np.testing.assert_allclose(result.pos_error, pos, rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(result.rot_error, rot, rtol=1e-6, atol=1e-12)
+    assert not result.refined.any()
+    # Each branch's solution lies on that branch.
+    k = np.argmin(np.where(result.valid, distance, np.inf), axis=-1)
+    np.testing.assert_array_equal(branch_of(robot, q), k)
+
+
+@pytest.mark.parametrize("name", ARMS)
+@given(seed=st.integers(0, 2**32 - 1))
+@settings(max_examples=10)
+def test_shipped_arms_every_configuration_is_among_the_exact_solutions(name, seed):
+    check_round_trip(arm(name), seed, 2000)
+
+
+@given(robot=class_arms(), seed=st.integers(0, 2**32 - 1))
+@settings(max_examples=40)
+def test_random_arms_of_the_class_every_configuration_is_among_the_exact_solutions(robot, seed):
+    check_round_trip(robot, seed, 300)
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_valid_solutions_reach_their_pose_by_pinocchio(name):
+    """An independent forward kinematics (Pinocchio, built joint by joint)."""
+    robot = arm(name)
+    ref = pinocchio_model(robot)
+    q = sample_configurations(robot, 100, 7)
+    T = fk(robot, q)
+    result = closed_form(robot, T)
+    for target, solutions, valid in zip(T, result.q, result.valid):
+        assert valid.any()
+        for q_k in solutions[valid]:
+            e = pose_error(target, ref.fk(q_k))
+            assert np.linalg.norm(e[:3]) <= 1e-9 and np.linalg.norm(e[3:]) <= 1e-9
+
+
+def multistart_count(robot, T, starts=256, seed=0, distinct=1e-4):
+    """Distinct solutions within the limits that LM finds from ``starts`` random configurations."""
+    q0 = sample_configurations(robot, (len(T), starts), seed)
+    result = solve(robot, np.repeat(T[:, None], starts, axis=1), q0, restarts=0)
+    counts = []
+    for q, ok in zip(result.q, result.success):
+        found = []
+        for x in q[ok]:
+            if all(wrapped(x - y).max() > distinct for y in found):
+                found.append(x)
+        counts.append(len(found))
+    return np.array(counts)
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_the_count_of_solutions_agrees_with_exhaustive_multistart_lm(name):
+    robot = arm(name)
+    rng = np.random.default_rng(11)
+    # Targets from the whole joint ranges: one, two, three and four solutions within limits.
+    T = fk(robot, sample_configurations(robot, 40, rng))
+    counts = closed_form(robot, T).count(distinct=1e-4)
+    assert set(counts) >= ({1, 2, 3, 4} if name == "intelbot5" else {1, 2})
+    np.testing.assert_array_equal(counts, multistart_count(robot, T))
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_a_target_outside_the_pose_set_gets_the_nearest_pose_as_lm_finds_it(name):
+    """Poses turned and moved off the arm's 5-D pose set: the best branch's residual equals
+    the least residual of LM with 25 starts (joint limits aside), and no branch is valid."""
+    robot = arm(name)
+    rng = np.random.default_rng(3)
+    T = fk(robot, sample_configurations(robot, 60, rng))
+    turn = rng.standard_normal((60, 3))
+    turn *= np.radians(rng.uniform(0.5, 20, (60, 1))) / np.linalg.norm(turn, axis=1, keepdims=True)
+    T[:, :3, :3] = exp_so3(turn) @ T[:, :3, :3]
+    T[:, :3, 3] += rng.normal(0.0, 0.01, (60, 3))
+    result = closed_form(robot, T)
+    assert result.refined.all() and not result.valid.any() and not result.in_pose_set.any()
+    pos, rot = errors(robot, T, result.q)
+    np.testing.assert_allclose(result.pos_error, pos, atol=1e-15)
+    cost = (0.5 * (pos ** 2 + rot ** 2)).min(-1)
+    lm = solve(robot, T, respect_limits=False, restarts=24)
+    e = pose_error(T, fk(robot, lm.q))
+    cost_lm = 0.5 * (e ** 2).sum(-1)
+    assert (cost <= cost_lm * (1 + 1e-6) + 1e-15).all(), np.max(cost / cost_lm)
+    assert (cost_lm.min() > 1e-10)
+
+
+def test_weights_choose_what_nearest_means(intelbot5):
+    """Position-only weights: the nearest pose keeps the position exactly."""
+    T = fk(intelbot5, sample_configurations(intelbot5, 20, 5))
+    T[:, :3, :3] = exp_so3(np.tile([0.0, 0.3, 0.2], (20, 1))) @ T[:, :3, :3]
+    result = closed_form(intelbot5, T, weights=[1, 1, 1, 0, 0, 0])
+    best = result.best(weights=[1, 1, 1, 0, 0, 0])
+    assert result.refined.all()
+    assert np.take_along_axis(result.pos_error, best[:, None], 1).max() < 1e-9
+
+
+def wrist_on_axis(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """``q`` with its shoulder moved so that the wrist point lies on the base axis."""
+    from scipy.optimize import brentq
+    g = check_class(robot)
+
+    def ahead(q2):
+        x = q.copy()
+        x[1] = q2
+        t = x + g.offset
+        gamma = g.sigma2 * t[2]
+        phi = t[1] + gamma + g.sigma * t[3]
+        return g.a1 + g.a2 * np.cos(t[1]) + g.a3 * np.cos(t[1] + gamma) + g.a4 * np.cos(phi)
+
+    grid = np.linspace(-np.pi, np.pi, 721)
+    values = np.array([ahead(v) for v in grid])
+    k = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
+    q = q.copy()
+    q[1] = brentq(ahead, grid[k], grid[k + 1], xtol=1e-15)
+    return q
+
+
+def singular_configurations(robot: Robot) -> dict[str, np.ndarray]:
+    g = check_class(robot)
+    base = np.array([0.3, 0.2, 0.5, -0.4, 0.7])
+    stretched = base.copy()
+    stretched[2] = -g.offset[2]                                  # γ = 0
+    folded = base.copy()
+    folded[2] = np.pi - g.offset[2]                              # γ = π
+    on_axis = wrist_on_axis(robot, base)
+    both = on_axis.copy()                                        # the roll axis along the base axis too
+    roll_axis = lambda x: fk_all(robot, x)[4][:3, 2]            # noqa: E731
+    base_axis = robot.base[:3, 2]
+    from scipy.optimize import minimize_scalar
+    both[3] = minimize_scalar(lambda v: -abs(roll_axis(np.r_[both[:3], v, both[4]]) @ base_axis),
+                              bounds=(-np.pi, np.pi), method="bounded",
+                              options={"xatol": 1e-12}).x
+    return {"stretched": stretched, "folded": folded, "wrist on base axis": on_axis,
+            "near the axis": wrist_on_axis(robot, base) + [0, 1e-7, 0, 0, 0],
+            "wrist on base axis, roll axis along it": both}
+
+
+@pytest.mark.parametrize("name", ARMS)
+@pytest.mark.parametrize("case", ["stretched", "folded", "wrist on base axis", "near the axis",
+                                  "wrist on base axis, roll axis along it"])
+def test_singular_poses_give_finite_exact_answers(name, case):
+    robot = arm(name)
+    q = singular_configurations(robot)[case]
+    T = fk(robot, q)
+    result = closed_form(robot, T, tol_pos=1e-9, tol_rot=1e-9)
+    assert np.isfinite(result.q).all() and np.isfinite(result.pos_error).all()
+    pos, rot = errors(robot, T, result.q)
+    assert result.reaches.any()
+    assert pos[result.reaches].max() <= 1e-9 and rot[result.reaches].max() <= 1e-9
+    if case != "wrist on base axis, roll axis along it":     # there, a family: one member shown
+        assert (wrapped(result.q[result.reaches] - q).max(-1) < 1e-6).any()
+
+
+def test_the_home_pose_is_front_elbow_up(intelbot5):
+    result = closed_form(intelbot5, fk(intelbot5, np.zeros(5)))
+    assert BRANCHES[int(np.argmin(wrapped(result.q).max(-1)))] == "front, elbow up"
+    assert result.q.shape == (4, 5) and result.valid.shape == (4,)
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_elbow_up_is_above_the_shoulder_wrist_line(name):
+    """For front solutions (wrist ahead of the shoulder), the "up" branch's elbow lies above
+    the line from shoulder to wrist, up being against gravity."""
+    robot = arm(name)
+    q = sample_configurations(robot, 400, 9)
+    frames = fk_all(robot, q)                    # base, frame 1, …, frame 5
+    shoulder, elbow, wrist = frames[:, 1, :3, 3], frames[:, 2, :3, 3], frames[:, 3, :3, 3]
+    up = -robot.gravity / np.linalg.norm(robot.gravity)
+    line = wrist - shoulder
+    normal = np.cross(frames[:, 1, :3, 2], line)                 # in the arm's plane, ⊥ line
+    normal *= np.sign(normal @ up)[:, None]
+    above = np.einsum("mi,mi->m", elbow - shoulder, normal) > 0
+    radial = np.einsum("mi,mi->m", line, frames[:, 1, :3, 0])   # ahead along x1
+    steep = np.abs(line @ up) < 0.9 * np.linalg.norm(line, axis=1)
+    branch = branch_of(robot, q)
+    front = (branch < 2) & (radial > 0) & steep
+    assert front.sum() > 50
+    np.testing.assert_array_equal(branch[front] % 2 == 0, above[front])
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_lm_reports_the_branch_it_converged_to(name):
+    robot = arm(name)
+    T = fk(robot, sample_configurations(robot, 50, 4))
+    lm = solve(robot, T)
+    cf = closed_form(robot, T)
+    assert lm.branch.shape == (50,) and lm.branch_name[0] in BRANCHES
+    distance = wrapped(cf.q - lm.q[:, None]).max(-1)
+    same = distance.min(-1) < 1e-4     # LM's 1e-9 m near a stretched elbow: 4e-6 rad measured
+    assert same[lm.success].all()
+    np.testing.assert_array_equal(lm.branch[same], np.argmin(distance, -1)[same])
+
+
+@pytest.mark.parametrize("batch", [(), (3,), (2, 3)])
+def test_batch_shapes(intelbot5, batch):
+    T = fk(intelbot5, sample_configurations(intelbot5, batch, 1))
+    result = closed_form(intelbot5, T)
+    assert result.q.shape == (*batch, 4, 5)
+    for field in ("valid", "reaches", "within_limits", "pos_error", "rot_error"):
+        assert getattr(result, field).shape == (*batch, 4)
+    assert result.refined.shape == batch and result.count().shape == batch
+    assert result.best().shape == batch
+
+
+def test_threads_do_not_change_the_result(intelbot5):
+    T = fk(intelbot5, sample_configurations(intelbot5, 20000, 2))
+    one, two = closed_form(intelbot5, T, threads=1), closed_form(intelbot5, T, threads=2)
+    for field in ("q", "valid", "pos_error", "rot_error"):
+        np.testing.assert_array_equal(getattr(one, field), getattr(two, field))
+
+
+def test_joint_limits_mark_solutions_invalid_but_keep_them(intelbot5):
+    T = fk(intelbot5, sample_configurations(intelbot5, 500, 3))
+    result = closed_form(intelbot5, T)
+    outside = result.reaches & ~result.within_limits
+    assert outside.any()
+    lo, hi = intelbot5.qlim[:, 0], intelbot5.qlim[:, 1]
+    q = result.q[outside]
+    assert (((q < lo) | (q > hi)).any(-1)).all() and not result.valid[outside].any()
+    inside = result.q[result.valid]
+    assert ((inside >= lo) & (inside <= hi)).all()
+
+
+# -- refusals ---------------------------------------------------------------------------------
+
+
+def test_the_shipped_arms_are_in_the_class_and_the_puma_is_not(puma560):
+    assert in_class(arm("intelbot5")) and in_class(arm("so101")) and not in_class(puma560)
+    with pytest.raises(ValueError, match=r"^puma560 has no closed-form IK here: it has 6 joints"):
+        closed_form(puma560, np.eye(4))
+
+
+def chain(**changes) -> Robot:
+    joints = [{"a": 0.0, "alpha": np.pi / 2, "d": 0.1}, {"a": 0.2, "alpha": 0.0, "d": 0.0},
+              {"a": 0.2, "alpha": 0.0, "d": 0.0}, {"a": 0.0, "alpha": np.pi / 2, "d": 0.0},
+              {"a": 0.0, "alpha": 0.0, "d": 0.1}]
+    for key, value in changes.items():
+        name, i = key.rsplit("_", 1)
+        joints[int(i)][name] = value
+    for j in joints:
+        j.update(offset=0.0, qlim=[-3.0, 3.0], mass=1.0, com=[0, 0, 0],
+                 inertia=[0.01, 0.01, 0.01, 0, 0, 0])
+    return robot_from_dict({"name": "chain", "convention": "standard",
+                            "gravity": [0, 0, -9.81], "joints": joints})
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"alpha_1": 0.3}, r"joints 2 and 3 are not parallel \(standard-DH alpha2 = 17\.1887°"),
+    ({"alpha_2": -1.0}, r"joints 3 and 4 are not parallel"),
+    ({"alpha_0": 0.0}, r"joint 1 is parallel to joints 2-4"),
+    ({"alpha_3": np.pi}, r"joint 5 is parallel to joints 2-4"),
+    ({"a_1": 0.0}, r"a2 = 0 m: joints 2-4 need two links"),
+    ({"a_2": 0.0}, r"a3 = 0 m"),
+])
+def test_chains_outside_the_class_are_refused_in_one_line(changes, message):
+    robot = chain(**changes)
+    assert not in_class(robot)
+    with pytest.raises(ValueError, match=rf"^chain has no closed-form IK here: {message}") as info:
+        closed_form(robot, np.eye(4))
+    assert "\n" not in str(info.value)
+    with pytest.raises(ValueError, match=message):
+        branch_of(robot, np.zeros(5))
+
+
+@given(robot=random_chains(1, 7))
+@settings(max_examples=60)
+def test_random_chains_are_refused_in_one_line_or_solved_exactly(robot):
+    if not in_class(robot):
+        with pytest.raises(ValueError, match=r"has no closed-form IK here: .*; the closed form") as info:
+            closed_form(robot, fk(robot, np.zeros(robot.n)))
+        assert "\n" not in str(info.value)
+        return
+    check_round_trip(robot, 0, 50)
+
+
+BAD = {
+    "shape": (np.eye(3), r"T_target must have shape \(\.\.\., 4, 4\)"),
+    "nan": (np.full((4, 4), np.nan), r"T_target: contains NaN or inf"),
+    "not rigid": (np.diag([2.0, 1.0, 1.0, 1.0]), r"T_target: rotation is not orthonormal"),
+    "reflection": (np.diag([-1.0, 1.0, 1.0, 1.0]), r"T_target: rotation is a reflection"),
+    "text": ("pose", r"T_target must be an array of numbers"),
+}
+
+
+@pytest.mark.parametrize("case", BAD)
+def test_bad_targets_are_one_line_errors(intelbot5, case):
+    T, message = BAD[case]
+    with pytest.raises(ValueError, match=message) as info:
+        closed_form(intelbot5, T)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"tol_pos": -1.0}, r"tol_pos must be a finite number > 0"),
+    ({"tol_rot": float("nan")}, r"tol_rot must be a finite number"),
+    ({"nearest": "yes"}, r"nearest must be True or False"),
+    ({"nearest_iter": 0}, r"nearest_iter must be an integer >= 1"),
+    ({"threads": 0}, r"threads must be an integer >= 1"),
+    ({"limit_tol": -1e-3}, r"limit_tol must be a finite number >= 0"),
+    ({"weights": [1, 1]}, r"weights must be 6 numbers"),
+])
+def test_bad_options_are_one_line_errors(intelbot5, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        closed_form(intelbot5, np.eye(4), **kwargs)
+
+
+def test_not_a_robot_is_refused():
+    with pytest.raises(ValueError, match="closed_form needs a Robot, got str"):
+        closed_form("intelbot5", np.eye(4))
