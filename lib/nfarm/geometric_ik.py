@@ -274,15 +274,19 @@ def _solve_chunk(g: _Arm, T: np.ndarray):
     """``T (m, 4, 4)`` → the joint angles ``q1, q5 (2, m)`` (base branch, target) and
     ``q2, q3, q4 (2, 2, m)`` (base branch, elbow column, target), and per base branch the
     errors ``(2, m)`` [m], [rad]."""
-    R, p = T[:, :3, :3], T[:, :3, 3]
-    Rc0 = np.einsum("mij,j->mi", R, g.c0)
+    # Component layout: one transposed copy, then 3 × 3 products entry by entry (a batched
+    # (m, 3, 3) @ (3, 3) matmul costs five times as much).
+    flat = T.reshape(-1, 16).T.copy()                                      # (16, m)
+    R = [[flat[4 * i + j] for j in range(3)] for i in range(3)]
+    p = [flat[4 * i + 3] - g.pb[i] for i in range(3)]
     if g.RbT is None:
-        M, p4 = R, p - Rc0 - g.pb
+        m = R
     else:
-        M = g.RbT @ (R @ g.C)
-        p4 = (p - g.pb - Rc0) @ g.RbT.T                               # Rbᵀ (…) as rows
-    m = np.ascontiguousarray(M.transpose(1, 2, 0))                 # (3, 3, m)
-    px, py, pz = np.ascontiguousarray(p4.T)
+        RC = _product(R, g.C)
+        m = _product(g.RbT, RC)
+    Rc0 = [_dot(R[i], g.c0) for i in range(3)]
+    p = [p[i] - Rc0[i] for i in range(3)]
+    px, py, pz = p if g.RbT is None else [_dot(p, g.RbT[i]) for i in range(3)]
     sa, ca = g.sa1, g.ca1
 
     # 2. The base: both roots of the position condition; the orientation's where better.
@@ -299,7 +303,7 @@ def _solve_chunk(g: _Arm, T: np.ndarray):
     bad = np.flatnonzero(~np.isfinite(inv))                 # ρ = 0: the wrist point on the axis
     if bad.size:
         t1[:, bad] = np.arctan2(Bp[bad], Ap[bad]) + np.arctan2(Cp[bad], root[:, bad])
-    z4x, z4y, z4z = m[0, 2], m[1, 2], m[2, 2]
+    z4x, z4y, z4z = m[0][2], m[1][2], m[2][2]
     Ao, Bo, Co = sa * z4x, sa * z4y, g.cb - ca * z4z
     ho = np.sqrt(np.maximum(Ao * Ao + Bo * Bo - Co * Co, 0.0))
     # The position root's error grows as reach/hp, the orientation root's as 1/ho: switch only
@@ -321,7 +325,7 @@ def _solve_chunk(g: _Arm, T: np.ndarray):
 
     # 3. The wrist: G = R_1ᵀ M (rows x1ᵀM, y1ᵀM, z1ᵀM; the entries used).
     def G_entry(i, j):
-        mx, my, mz = m[0, j], m[1, j], m[2, j]
+        mx, my, mz = m[0][j], m[1][j], m[2][j]
         if i == 0:
             return c1 * mx + s1 * my
         if i == 1:
@@ -388,6 +392,20 @@ def _solve_chunk(g: _Arm, T: np.ndarray):
     o = g.offset
     angles = (t1 - o[0], q2 - o[1], g.sigma2 * gam - o[2], q4 - o[3], t5 - o[4])
     return angles, pos_error, rot_error
+
+
+def _dot(row: list, coefficients: np.ndarray):
+    """``Σ_k row[k] · c_k`` over component arrays, zero coefficients skipped."""
+    terms = [x * c for x, c in zip(row, coefficients) if c]
+    return sum(terms[1:], terms[0]) if terms else np.zeros_like(row[0])
+
+
+def _product(A, B):
+    """The 3 × 3 product of ``A`` and ``B``, one of them constant (an array) and the other
+    given entry by entry (lists of component arrays)."""
+    if isinstance(A, np.ndarray):
+        return [[_dot([B[j][k] for j in range(3)], A[i]) for k in range(3)] for i in range(3)]
+    return [[_dot(A[i], B[:, k]) for k in range(3)] for i in range(3)]
 
 
 def _cos_sin(angle: np.ndarray, x: np.ndarray, y: np.ndarray):
@@ -478,25 +496,30 @@ def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest, neare
     T = _ik.check_targets(T_target, ortho_tol, map_chunks=map_chunks)   # every pose first
     batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
     N = flat.shape[0]
-    q = np.empty((N, 4, 5))
-    pos_error, rot_error = np.empty((N, 4)), np.empty((N, 4))
-    inside = np.empty((N, 4), bool)
+    # Written in component layout (joint, branch, target) and handed out as its transposed
+    # view: the chunks write contiguous rows instead of every fifth number.
+    q_c, inside_c = np.empty((5, 4, N)), np.empty((4, N), bool)
+    pos_c, rot_c = np.empty((4, N)), np.empty((4, N))
 
     def chunk(start: int) -> None:
         part = slice(start, start + _CHUNK)
         angles, pe, re = _solve_chunk(arm, flat[part])
-        q_part, within = q[part], np.ones((2, 2, pe.shape[1]), bool)
+        within = np.ones((2, 2, pe.shape[1]), bool)
         for j, x in enumerate(angles):                    # (2, m) or (2, 2, m)
             ok = _wrap_joint(x, arm.lo[j], arm.hi[j], limit_tol)
-            within &= ok[:, None] if x.ndim == 2 else ok
-            for k in range(4):
-                q_part[:, k, j] = x[k // 2] if x.ndim == 2 else x[k // 2, k % 2]
-        for k in range(4):                                # the elbow branches share the errors
-            pos_error[part, k], rot_error[part, k] = pe[k // 2], re[k // 2]
-        inside[part] = within.reshape(4, -1).T
+            if x.ndim == 2:                               # q1, q5: the elbow branches share them
+                within &= ok[:, None]
+                q_c[j, 0:2, part], q_c[j, 2:4, part] = x[0], x[1]
+            else:
+                within &= ok
+                q_c[j, :, part] = x.reshape(4, -1)
+        pos_c[0:2, part], pos_c[2:4, part] = pe[0], pe[1]
+        rot_c[0:2, part], rot_c[2:4, part] = re[0], re[1]
+        inside_c[:, part] = within.reshape(4, -1)
 
     for _ in map_chunks(chunk, range(0, N, _CHUNK)):
         pass
+    q, inside, pos_error, rot_error = q_c.transpose(2, 1, 0), inside_c.T, pos_c.T, rot_c.T
     reaches = (pos_error <= tol_pos) & (rot_error <= tol_rot)
     refined = ~reaches.any(axis=1)
     if nearest and refined.any():
