@@ -205,16 +205,33 @@ def test_region_contains_and_samples(intelbot5):
     assert not region.contains(intelbot5.qlim[:, 1] * 0.999)
 
 
-def test_the_shipped_region_is_single_valued_and_the_full_range_is_not():
-    study = load_study(STUDY)
-    inside = check_single_valued(study.ik_region, 300, 16, seed=1)
-    assert inside.fraction == 0.0 and inside.solved.mean() > 4
-    full = check_single_valued(IKRegion.full(study.robot), 300, 16, seed=1)
-    assert full.fraction > 0.3
+@pytest.mark.parametrize("study_name", ["intelbot5", "so101"])
+def test_the_shipped_regions_are_single_valued_and_the_full_range_is_not(study_name):
+    study = load_study(PARAMS / "studies" / f"{study_name}.yaml")
+    inside = check_single_valued(study.ik_region, 20_000, seed=1, batch=7_000)
+    assert inside.method == "closed form" and (inside.inside == 1).all() and inside.fraction == 0
+    assert (inside.solutions >= 1).all() and inside.solutions.max() <= 4
+    full = check_single_valued(IKRegion.full(study.robot), 3000, seed=1)
+    assert full.fraction > 0.2 and full.solutions.max() <= 4
     k = full.offenders[0]
     np.testing.assert_allclose(fk(study.robot, full.q_second[k]), fk(study.robot, full.q[k]),
-                               atol=1e-8)
+                               atol=1e-9)
     assert np.abs(full.q_second[k] - full.q[k]).max() > 1e-3
+
+
+def test_lm_counts_no_more_solutions_than_exist_and_never_a_fifth():
+    """The LM route finds a subset of the closed form's solutions; distinct by wrapped angular
+    distance, it never counts one solution twice (rounding to a grid counted 5 and 6)."""
+    study = load_study(STUDY)
+    full = IKRegion.full(study.robot)
+    exact = check_single_valued(full, 300, seed=1)
+    lm = check_single_valued(full, 300, 16, seed=1, method="lm")
+    np.testing.assert_array_equal(exact.q, lm.q)
+    assert (lm.solutions <= exact.solutions).all() and lm.solutions.max() <= 4
+    assert (lm.inside <= exact.inside).all() and lm.solved.mean() > 4
+    assert not (lm.second & ~exact.second).any()
+    with pytest.raises(ValueError, match="method must be 'auto', 'closed form' or 'lm'"):
+        check_single_valued(full, 10, method="exact")
 
 
 def bad(path, value):

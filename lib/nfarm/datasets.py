@@ -6,9 +6,11 @@ many-valued — the base can turn half a turn and the arm lean back over its hea
 bend up or down — and no regressor learns a map that is not a function. The IK data therefore
 live in a declared :class:`IKRegion`: a box of joint sub-ranges that selects one branch, plus
 optional task-space filters on the tool point (distance from the base axis, reach in front of
-it, height) and on the tool's approach axis (a cone). :func:`check_single_valued` proves the choice by measurement:
-Levenberg–Marquardt from many starts spread over the *full* joint limits, looking for a second
-solution of each target inside the region. Samples are ``q`` from the region and ``T = fk(q)``.
+it, height) and on the tool's approach axis (a cone). :func:`check_single_valued` proves the choice:
+it counts every solution of each target (the closed form, :func:`nfarm.ik.closed_form`, for the
+arms it covers; else Levenberg–Marquardt from many starts spread over the *full* joint limits)
+and looks for a second one inside the region. Samples are ``q`` from the region and
+``T = fk(q)``.
 
 **Inverse dynamics.** Random smooth joint trajectories (:func:`random_trajectories`): for each
 trajectory, via points drawn within the joint limits (less a margin), joined by quintic
@@ -55,7 +57,8 @@ from scipy.stats import qmc
 
 from . import __version__
 from .dynamics import joint_drive_torques, rnea
-from .ik import solve
+from .ik import closed_form, count_distinct, in_class, solve
+from .geometric_ik import wrapped_gap as _wrapped_gap
 from .kinematics import fk
 from .paths import BUILD, atomic_path, project_path
 from .reading import ParamsError, Validator, load_json, load_yaml, show
@@ -208,24 +211,28 @@ class IKRegion:
 
 @dataclass(frozen=True)
 class SingleValuedness:
-    """Result of :func:`check_single_valued` for ``M`` targets and ``S`` starts each.
+    """Result of :func:`check_single_valued` for ``M`` targets.
 
     Attributes:
         q: ``(M, n)`` the targets' configurations (in the region).
         second: ``(M,)`` whether a second solution inside the region was found.
         q_second: ``(M, n)`` that solution (NaN where none).
-        solutions: ``(M,)`` distinct solutions within the joint limits found from the starts
-            (anywhere, not only in the region): how many-valued the full problem is.
-        solved: ``(M,)`` starts that converged.
-        starts: S.
+        solutions: ``(M,)`` distinct solutions within the joint limits (anywhere, not only in
+            the region): how many-valued the full problem is.
+        inside: ``(M,)`` distinct solutions inside the region.
+        solved: ``(M,)`` LM starts that converged (``method="lm"``), or ``solutions``.
+        starts: LM starts per target (0 for the closed form).
+        method: ``"closed form"`` (exact) or ``"lm"``.
     """
 
     q: np.ndarray
     second: np.ndarray
     q_second: np.ndarray
     solutions: np.ndarray
+    inside: np.ndarray
     solved: np.ndarray
     starts: int
+    method: str
 
     @property
     def fraction(self) -> float:
@@ -239,17 +246,34 @@ class SingleValuedness:
 
 def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int = 24, *,
                         seed: int = 0, tol: float = 1e-6, distinct: float = 1e-4,
+                        method: str = "auto", batch: int = 100_000,
                         **ik_options) -> SingleValuedness:
-    """Look for a second IK solution inside ``region`` for ``n_targets`` targets drawn in it.
+    """Count the IK solutions of ``n_targets`` targets ``T = fk(q)``, ``q`` drawn in ``region``:
+    within the full joint limits, and inside the region.
 
-    Each target ``T = fk(q)`` is solved by Levenberg–Marquardt (:func:`nfarm.ik.solve`, no
-    restarts) from ``n_starts`` starts spread over the **full** joint limits (a scrambled Sobol
-    sequence); a converged solution inside the region that differs from ``q`` by more than
-    ``tol`` [rad] in some joint is a second solution. Solutions are counted as distinct when
-    they differ by more than ``distinct`` [rad].
+    ``method="closed form"``: every solution of every target (:func:`nfarm.ik.closed_form`),
+    exact; in batches of ``batch`` targets, so that memory does not grow with ``n_targets``.
+    ``"lm"``: Levenberg–Marquardt (:func:`nfarm.ik.solve`, no restarts) from ``n_starts``
+    starts spread over the **full** joint limits (a scrambled Sobol sequence), which finds
+    only the solutions some start converges to. ``"auto"``: the closed form where the robot
+    is of its class, else LM.
+
+    A solution inside the region that differs from ``q`` by more than ``tol`` [rad] in some
+    joint is a second solution. Solutions are distinct when they differ by more than
+    ``distinct`` [rad] in some joint, angles 2π apart being the same.
     """
     robot = region.robot
+    if method == "auto":
+        method = "closed form" if in_class(robot) else "lm"
+    if method not in ("closed form", "lm"):
+        raise ValueError(f"method must be 'auto', 'closed form' or 'lm', got {method!r}")
     q = region.sample(n_targets, _rng(seed, _STREAMS["check"]), method="uniform")
+    if method == "closed form":
+        parts = [_closed_form_counts(region, q[k:k + batch], tol, distinct)
+                 for k in range(0, n_targets, batch)]
+        second, q_second, solutions, inside = (np.concatenate(x) for x in zip(*parts))
+        return SingleValuedness(q=q, second=second, q_second=q_second, solutions=solutions,
+                                inside=inside, solved=solutions, starts=0, method=method)
     T = fk(robot, q)
     lo, span = robot.qlim[:, 0], robot.qlim[:, 1] - robot.qlim[:, 0]
     sobol = qmc.Sobol(robot.n, scramble=True, seed=_rng(seed, _STREAMS["check_starts"]))
@@ -258,18 +282,29 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
     q0 = np.broadcast_to(starts, (n_targets, n_starts, robot.n))
     result = solve(robot, T_all, q0=q0, **{"restarts": 0, **ik_options})
     ok = result.success                                                # (M, S)
-    other = ok & region.contains(result.q) & \
-        (np.abs(result.q - q[:, None]).max(axis=-1) > tol)
+    in_region = ok & region.contains(result.q)
+    second, q_second = _second(q, result.q, in_region, tol)
+    return SingleValuedness(q=q, second=second, q_second=q_second,
+                            solutions=count_distinct(result.q, ok, distinct),
+                            inside=count_distinct(result.q, in_region, distinct),
+                            solved=ok.sum(axis=1), starts=n_starts, method=method)
+
+
+def _second(q: np.ndarray, candidates: np.ndarray, ok: np.ndarray, tol: float):
+    """Per target, whether some ``ok`` candidate ``(M, K, n)`` differs from ``q (M, n)`` by more
+    than ``tol`` in some joint (angles 2π apart being the same), and the first such one."""
+    other = ok & (_wrapped_gap(candidates - q[:, None]).max(axis=-1) > tol)
     second = other.any(axis=1)
-    first = np.argmax(other, axis=1)
-    q_second = np.where(second[:, None], result.q[np.arange(n_targets), first], np.nan)
-    # Distinct solutions per target: round to the `distinct` grid and count unique rows.
-    target, start = np.nonzero(ok)
-    keys = np.column_stack([target, np.round(result.q[target, start] / distinct)]).astype(np.int64)
-    unique = np.unique(keys, axis=0)
-    solutions = np.bincount(unique[:, 0], minlength=n_targets)
-    return SingleValuedness(q=q, second=second, q_second=q_second, solutions=solutions,
-                            solved=ok.sum(axis=1), starts=n_starts)
+    first = candidates[np.arange(len(q)), np.argmax(other, axis=1)]
+    return second, np.where(second[:, None], first, np.nan)
+
+
+def _closed_form_counts(region: IKRegion, q: np.ndarray, tol: float, distinct: float):
+    result = closed_form(region.robot, fk(region.robot, q))
+    in_region = result.valid & region.contains(result.q)
+    second, q_second = _second(q, result.q, in_region, tol)
+    return second, q_second, count_distinct(result.q, result.valid, distinct), \
+        count_distinct(result.q, in_region, distinct)
 
 
 def workspace_fraction(region: IKRegion, n: int = 200_000, seed: int = 0, *,

@@ -85,7 +85,8 @@ from .kinematics import fk, snap_right_angles
 from .robot import Robot, joint_array
 from .rotations import pose_error
 
-__all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "branch_of"]
+__all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "branch_of",
+           "count_distinct", "wrapped_gap"]
 
 #: The branches, in the order of the result's branch axis.
 BRANCHES = ("front, elbow up", "front, elbow down", "back, elbow up", "back, elbow down")
@@ -245,15 +246,9 @@ class ClosedFormResult:
         return self.reaches.any(axis=-1)
 
     def count(self, distinct: float = 1e-6) -> np.ndarray:
-        """``(...)`` the number of distinct valid solutions: valid branches whose angles differ
-        from every earlier valid branch's by more than ``distinct`` [rad] in some joint (2π
-        apart is the same angle). Branches coincide at singular poses (a stretched elbow)."""
-        diff = self.q[..., :, None, :] - self.q[..., None, :, :]          # (..., k, k, n)
-        apart = (np.abs(np.remainder(diff + np.pi, 2 * np.pi) - np.pi) > distinct).any(-1)
-        k = self.q.shape[-2]
-        earlier = np.tril(np.ones((k, k), bool), -1)                      # j < i
-        repeat = (~apart & earlier & self.valid[..., None, :]).any(-1)
-        return (self.valid & ~repeat).sum(-1)
+        """``(...)`` the number of distinct valid solutions (:func:`count_distinct`): branches
+        coincide at singular poses (a stretched elbow)."""
+        return count_distinct(self.q, self.valid, distinct)
 
     def best(self, weights=None) -> np.ndarray:
         """``(...)`` the index of the branch to take: a valid one if any (the first in
@@ -264,6 +259,23 @@ class ClosedFormResult:
         cost = w[:3].mean() * self.pos_error ** 2 + w[3:].mean() * self.rot_error ** 2
         cost = np.where(self.valid, -1.0, cost)
         return np.argmin(cost, axis=-1)
+
+
+def wrapped_gap(x: np.ndarray) -> np.ndarray:
+    """``|x|`` of angle differences [rad] with multiples of 2π taken out: in ``[0, π]``."""
+    return np.abs(np.remainder(x + np.pi, 2 * np.pi) - np.pi)
+
+
+def count_distinct(q: np.ndarray, ok: np.ndarray, distinct: float = 1e-6) -> np.ndarray:
+    """``(...)`` how many of the configurations ``q (..., k, n)`` marked ``ok (..., k)`` are
+    distinct: each counts unless an earlier one marked ``ok`` lies within ``distinct`` [rad]
+    in every joint, angles 2π apart being the same (rounding to a grid instead would split
+    one solution across a cell boundary and count it twice)."""
+    apart = (wrapped_gap(q[..., :, None, :] - q[..., None, :, :]) > distinct).any(-1)
+    k = q.shape[-2]
+    earlier = np.tril(np.ones((k, k), bool), -1)                          # j < i
+    repeat = (~apart & earlier & ok[..., None, :]).any(-1)
+    return (ok & ~repeat).sum(-1)
 
 
 # --------------------------------------------------------------------------------------------

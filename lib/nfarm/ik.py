@@ -657,6 +657,6 @@ def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
 # The closed form lives in its own module and uses this one's checks and LM: imported last,
 # when they exist.
 from .geometric_ik import (BRANCHES, ClosedFormResult, branch_of, closed_form,  # noqa: E402
-                           in_class)
+                           count_distinct, in_class)
 
-__all__ += ["closed_form", "ClosedFormResult", "BRANCHES", "branch_of", "in_class"]
+__all__ += ["closed_form", "ClosedFormResult", "BRANCHES", "branch_of", "in_class", "count_distinct"]
