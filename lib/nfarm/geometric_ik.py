@@ -85,8 +85,9 @@ from .kinematics import fk, snap_right_angles
 from .robot import Robot, joint_array
 from .rotations import pose_error
 
-__all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "branch_of",
-           "count_distinct", "wrapped_gap"]
+__all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "class_refusal",
+           "branch_of",
+           "branch_margins", "planar_points", "elbow_meeting_angles", "count_distinct", "wrapped_gap"]
 
 #: The branches, in the order of the result's branch axis.
 BRANCHES = ("front, elbow up", "front, elbow down", "back, elbow up", "back, elbow down")
@@ -208,7 +209,17 @@ def check_class(robot: Robot, axis_tol: float = 1e-10) -> _Arm:
 
 def in_class(robot: Robot, axis_tol: float = 1e-10) -> bool:
     """Whether :func:`closed_form` solves this robot."""
-    return isinstance(robot, Robot) and _reason(robot, axis_tol)[0] is not None
+    return class_refusal(robot, axis_tol) is None
+
+
+def class_refusal(robot: Robot, axis_tol: float = 1e-10) -> str | None:
+    """The one line :func:`check_class` refuses the robot with, or ``None`` for a robot of
+    the class."""
+    try:
+        check_class(robot, axis_tol)
+    except ValueError as exc:
+        return str(exc)
+    return None
 
 
 @dataclass(frozen=True)
@@ -571,3 +582,63 @@ def branch_of(robot: Robot, q, axis_tol: float = 1e-10) -> np.ndarray:
     front = np.where(back, -1.0, 1.0)
     down = g.up * front * np.sin(gamma) > 0
     return 2 * back.astype(int) + down.astype(int)
+
+
+def _planar(g: _Arm, q: np.ndarray):
+    """θ̄ (offsets in), the elbow angle γ and Φ of configurations ``q (..., 5)``."""
+    t = q + g.offset
+    gamma = g.sigma2 * t[..., 2]
+    return t, gamma, t[..., 1] + gamma + g.sigma * t[..., 3]
+
+
+def planar_points(robot: Robot, q) -> dict[str, np.ndarray]:
+    """The planar sub-problem of configurations ``q (..., 5)`` [rad], in the arm's plane (frame
+    1's x–y plane, coordinates [m] from the shoulder axis): the shoulder, elbow and wrist-pitch
+    axes, the wrist point, each ``(..., 2)``; the roll axis's direction in the plane; and the
+    angles θ̄2, γ, Φ [rad]; where the base axis crosses the x axis; whether y1 points up
+    (against gravity) or down."""
+    g = check_class(robot)
+    t, gamma, phi = _planar(g, joint_array(robot, q))
+    u = lambda a: np.stack([np.cos(a), np.sin(a)], axis=-1)  # noqa: E731
+    elbow = g.a2 * u(t[..., 1])
+    wrist_pitch = elbow + g.a3 * u(t[..., 1] + gamma)
+    return {"shoulder": np.zeros_like(elbow), "elbow": elbow, "wrist pitch": wrist_pitch,
+            "wrist point": wrist_pitch + g.a4 * u(phi),
+            "roll axis": g.s * np.stack([np.sin(phi), -np.cos(phi)], axis=-1),
+            "theta2": t[..., 1], "gamma": gamma, "Phi": phi, "base axis x": -g.a1,
+            "y1 up": g.up > 0}
+
+
+def branch_margins(robot: Robot, q) -> dict[str, np.ndarray]:
+    """How far configurations ``q (..., 5)`` [rad] lie from where their branch meets another,
+    each ``(...)``:
+
+    - ``"elbow"`` [rad]: the elbow angle γ's distance from the stretched (γ = 0) or folded
+      (γ = π) arm, where the elbow-up and elbow-down solutions meet;
+    - ``"wrist"`` [m]: the wrist point's distance ahead of (or behind) the base axis along
+      x1, where the front and back solutions meet (the base angle is undetermined at 0);
+    - ``"other"`` [rad]: the largest joint-angle difference to the nearest other solution of
+      the same pose within the joint limits (:func:`closed_form`), ``inf`` where there is none.
+    """
+    g = check_class(robot)
+    q = joint_array(robot, q)
+    t, gamma, phi = _planar(g, q)
+    ahead = g.a1 + g.a2 * np.cos(t[..., 1]) + g.a3 * np.cos(t[..., 1] + gamma) + g.a4 * np.cos(phi)
+    result = closed_form(robot, fk(robot, q))
+    gap = wrapped_gap(result.q - q[..., None, :]).max(-1)                 # (..., 4)
+    own = np.argmin(gap, axis=-1)
+    others = result.valid & (np.arange(4) != own[..., None]) & (gap > 1e-6)
+    return {"elbow": np.minimum(wrapped_gap(gamma), wrapped_gap(gamma - np.pi)),
+            "wrist": np.abs(ahead), "other": np.where(others, gap, np.inf).min(-1)}
+
+
+def elbow_meeting_angles(robot: Robot) -> tuple[float, float]:
+    """The elbow joint's angles q3 [rad] at which the arm is stretched (γ = 0) and folded
+    (γ = π), where its elbow-up and elbow-down solutions meet; each moved by a multiple of 2π
+    into ``[mid − π, mid + π)`` of the joint's range. An elbow range between them keeps one
+    elbow side."""
+    g = check_class(robot)
+    lo, hi = robot.qlim[2]
+    mid = 0.5 * (lo + hi)
+    wrap = lambda x: float(mid + np.remainder(x - mid + np.pi, 2 * np.pi) - np.pi)  # noqa: E731
+    return wrap(-g.offset[2]), wrap(np.pi - g.offset[2])

@@ -656,7 +656,8 @@ def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
 
 # The closed form lives in its own module and uses this one's checks and LM: imported last,
 # when they exist.
-from .geometric_ik import (BRANCHES, ClosedFormResult, branch_of, closed_form,  # noqa: E402
-                           count_distinct, in_class)
+from .geometric_ik import (BRANCHES, ClosedFormResult, branch_of, class_refusal,  # noqa: E402
+                           closed_form, count_distinct, in_class)
 
-__all__ += ["closed_form", "ClosedFormResult", "BRANCHES", "branch_of", "in_class", "count_distinct"]
+__all__ += ["closed_form", "ClosedFormResult", "BRANCHES", "branch_of", "in_class", "class_refusal",
+            "count_distinct"]

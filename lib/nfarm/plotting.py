@@ -24,7 +24,8 @@ __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_
            "plot_region", "plot_histograms", "plot_id_trajectories", "plot_torque_distributions",
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
            "plot_motion", "plot_learning_curves", "plot_joint_curves", "plot_size_curve",
-           "plot_predicted_vs_true", "plot_sweep", "plot_error_map", "plot_error_against", "DPI"]
+           "plot_predicted_vs_true", "plot_sweep", "plot_error_map", "plot_error_against",
+           "plot_planar_subproblem", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -85,6 +86,45 @@ def plot_arm_poses(robot: Robot, poses: Mapping[str, np.ndarray]) -> Figure:
                for c, a in zip(("r", "g", "b"), "xyz")]
     handles.append(plt.Line2D([], [], color="k", marker="o", ls="", ms=4, label="joint (DH frame origin)"))
     fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
+    return fig
+
+
+def plot_planar_subproblem(robot: Robot, solutions: Mapping[str, np.ndarray]) -> Figure:
+    """The closed form's planar sub-problem (:mod:`nfarm.geometric_ik`) in the arm's plane:
+    for each named configuration ``q (5,)`` [rad] (solutions of one pose), the links from the
+    shoulder axis through the elbow to the wrist-pitch axis and the wrist point, the elbow
+    angle γ, and the roll axis through the wrist point; angles in degrees. Up in the picture
+    is up in the world (against gravity)."""
+    from .geometric_ik import planar_points
+    fig, ax = plt.subplots(figsize=(7.2, 5.6), layout="constrained")
+    points = []
+    for k, (name, q) in enumerate(solutions.items()):
+        p = planar_points(robot, np.asarray(q))
+        chain = np.array([p["shoulder"], p["elbow"], p["wrist pitch"], p["wrist point"]])
+        points.append(chain)
+        ax.plot(*chain.T, "-o" if k == 0 else "--o", color=f"C{k}", lw=3 if k == 0 else 2, ms=6,
+                label=f"{name}: θ̄2 = {np.degrees(p['theta2']):.1f}°, γ = "
+                      f"{np.degrees(p['gamma']):.1f}°")
+    first = planar_points(robot, np.asarray(next(iter(solutions.values()))))
+    wrist, axis = first["wrist point"], first["roll axis"]
+    span = np.vstack(points)
+    size = float(np.ptp(span, axis=0).max())
+    ax.plot(*np.column_stack([wrist - 0.3 * size * axis, wrist + 0.3 * size * axis]), ":",
+            color="0.3", lw=1.5, label="roll axis (joint 5), direction Φ")
+    ax.annotate("", xy=first["wrist pitch"], xytext=(0, 0),
+                arrowprops=dict(arrowstyle="->", color="0.5", lw=1.2))
+    ax.text(*(0.5 * first["wrist pitch"]), "  Q", color="0.35", fontsize=11)
+    for label, key in (("shoulder (joint 2)", "shoulder"), ("elbow (joint 3)", "elbow"),
+                       ("wrist pitch (joint 4)", "wrist pitch")):
+        ax.annotate(label, first[key], xytext=(6, -14), textcoords="offset points", fontsize=9)
+    ax.axvline(first["base axis x"], color="k", lw=0.8, ls="-.", label="base axis (joint 1)")
+    ax.set(xlabel="x₁ [m] (frame 1)", ylabel="y₁ [m] (frame 1)" if first["y1 up"] else
+           "y₁ [m] (frame 1, pointing down: drawn reversed so that up is up)",
+           aspect="equal", title="The arm's plane: two links reach the point Q")
+    if not first["y1 up"]:
+        ax.invert_yaxis()
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8.5)
     return fig
 
 
