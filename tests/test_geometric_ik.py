@@ -294,7 +294,8 @@ def test_batch_shapes(intelbot5, batch):
 
 
 def test_threads_do_not_change_the_result(intelbot5):
-    T = fk(intelbot5, sample_configurations(intelbot5, 20000, 2))
+    from nfarm.geometric_ik import _CHUNK
+    T = fk(intelbot5, sample_configurations(intelbot5, 3 * _CHUNK + 5, 2))    # four chunks
     one, two = closed_form(intelbot5, T, threads=1), closed_form(intelbot5, T, threads=2)
     for field in ("q", "valid", "pos_error", "rot_error"):
         np.testing.assert_array_equal(getattr(one, field), getattr(two, field))
@@ -398,3 +399,49 @@ def test_bad_options_are_one_line_errors(intelbot5, kwargs, message):
 def test_not_a_robot_is_refused():
     with pytest.raises(ValueError, match="closed_form needs a Robot, got str"):
         closed_form("intelbot5", np.eye(4))
+
+
+# -- the geometry the chapters show -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_planar_points_are_the_arm_in_frame_1(name):
+    """Standard-DH arms: frame k's origin, seen from frame 1, is the planar chain's point (its
+    lateral part is the offset w)."""
+    from nfarm.geometric_ik import planar_points
+    robot = arm(name)
+    q = sample_configurations(robot, 50, 8)
+    frames = fk_all(robot, q)                                   # (N, 6, 4, 4): base, frames 1-5
+    R1, o1 = frames[:, 1, :3, :3], frames[:, 1, :3, 3]
+    local = lambda k: np.einsum("nji,nj->ni", R1, frames[:, k, :3, 3] - o1)  # noqa: E731
+    p = planar_points(robot, q)
+    for k, key in ((2, "elbow"), (3, "wrist pitch"), (4, "wrist point")):
+        np.testing.assert_allclose(local(k)[:, :2], p[key], atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_branch_margins_vanish_where_solutions_meet(name):
+    from nfarm.geometric_ik import branch_margins, elbow_meeting_angles
+    robot = arm(name)
+    q = singular_configurations(robot)
+    stretched, folded = elbow_meeting_angles(robot)
+    at_stretch, at_fold = q["stretched"].copy(), q["folded"].copy()
+    at_stretch[2], at_fold[2] = stretched, folded
+    m = branch_margins(robot, np.stack([at_stretch, at_fold, q["wrist on base axis"]]))
+    assert m["elbow"][0] < 1e-12 and m["elbow"][1] < 1e-12 and m["wrist"][2] < 1e-12
+    # Elsewhere: the nearest other solution is the closed form's, by the same distance.
+    q = sample_configurations(robot, 200, 12)
+    m = branch_margins(robot, q)
+    result = closed_form(robot, fk(robot, q))
+    distance = wrapped(result.q - q[:, None]).max(-1)
+    expected = np.where(result.valid & (distance > 1e-6), distance, np.inf).min(-1)
+    np.testing.assert_allclose(m["other"], expected)
+    assert np.isfinite(m["other"]).any() and (m["elbow"] > 0).all() and (m["wrist"] > 0).all()
+
+
+def test_empty_batches_and_nested_lists(intelbot5):
+    assert closed_form(intelbot5, np.zeros((0, 4, 4))).q.shape == (0, 4, 5)
+    assert closed_form(intelbot5, np.zeros((2, 0, 4, 4))).count().shape == (2, 0)
+    T = fk(intelbot5, np.zeros(5))
+    from_list = closed_form(intelbot5, T.tolist())
+    np.testing.assert_array_equal(from_list.q, closed_form(intelbot5, T).q)

@@ -33,11 +33,12 @@ refused in one line saying which condition it breaks (:func:`check_class`).
    each of the form ``A sin θ̄1 − B cos θ̄1 = C``, solved by
    ``θ̄1 = atan2(B, A) + atan2(C, ±√(A² + B² − C²))``. The two roots of the first are the base
    branches, *front* and *back* (the wrist point ahead of the base axis along x1, or behind
-   it). A target in the arm's pose set satisfies both; where the first is ill-conditioned
-   (its square root small: the wrist point near the base axis) the root of the second nearest
-   to it is taken instead. With w ≠ 0 the back branch reaches a target only when the roll
-   axis is parallel to the base axis; the SO-101 (w = −0.18 mm) has two solutions per pose
-   elsewhere, intelbot5 (w = 0) four.
+   it). A target in the arm's pose set satisfies both. Where the first is ill-conditioned (its
+   square root small: the wrist point near the base axis, its error growing as 1/√) the roots
+   of the second are taken instead, the one nearest to a root of the first for that root's
+   branch and the other for the other branch. With w ≠ 0 the back branch reaches a target
+   only when the roll axis is parallel to the base axis: the SO-101 (w = −0.18 mm) has two
+   solutions per pose elsewhere, intelbot5 (w = 0) four (joint limits aside).
 3. *Wrist angles*: ``G = R_1ᵀ M = Rz(Φ) Rx(β) Rz(θ̄5)``, a ZXZ decomposition whose middle angle
    is fixed: ``Φ = atan2(s G02, −s G12)``, ``θ̄5 = atan2(s G20, s G21)``, s = sign(sin β).
 4. *Planar two-link*: ``(X, Y, Z) = R_1ᵀ (p4 − o1)``, ``Q = (X, Y) − a4 u(Φ)``; with
@@ -55,7 +56,14 @@ the target only where a sub-problem had no exact solution, and each difference i
 from the sub-problems: the orientation error is the angle of ``G'ᵀ G`` (G' the decomposition's
 rotation), ``|β' − β|`` with ``cos β' = G22``; the position error is
 ``|(Q − Q', Z − w) + (G − G') v|`` (Q' the point the two links reach, v the tool point from the
-wrist point, ``(a5, 0, d5) + Rx(α5) p_tool``). The tests check both against :func:`nfarm.kinematics.fk` and Pinocchio.
+wrist point, ``(a5, 0, d5) + Rx(α5) p_tool``). The tests check both against
+:func:`nfarm.kinematics.fk` and Pinocchio. Why not call fk: its four branches would cost about
+twice the whole closed form (0.5 µs per configuration against 0.8 µs per pose on one core,
+measured on this project's machines; ``benchmarks/bench_ik_closed_form.py``).
+
+**Speed.** Everything is NumPy on component arrays (one array per matrix entry, targets last),
+in chunks of 32 768 targets solved side by side in threads (NumPy releases the GIL in its
+loops); half of the time is ``arctan2``, ten per pose, the least the four branches need.
 
 **Numerics.** The arguments of the square roots are clipped at 0. A clip by rounding (a target
 on the boundary of the workspace, a stretched or folded arm) leaves an error at rounding level;
@@ -86,23 +94,25 @@ from .robot import Robot, joint_array
 from .rotations import pose_error
 
 __all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "class_refusal",
-           "branch_of",
-           "branch_margins", "planar_points", "elbow_meeting_angles", "count_distinct", "wrapped_gap"]
+           "branch_of", "branch_margins", "planar_points", "elbow_meeting_angles", "count_distinct",
+           "wrapped_gap"]
 
 #: The branches, in the order of the result's branch axis.
 BRANCHES = ("front, elbow up", "front, elbow down", "back, elbow up", "back, elbow down")
 _CHUNK = 32768
+#: The base and roll axes must be this far from parallel to the pitch axes (sin of the angle):
+#: the base and roll angles are determined to the rounding of the pose divided by it.
+_MIN_SIN = 1e-6
 
 
 @dataclass(frozen=True)
 class _Arm:
     """The constants of a robot of the class, in standard DH (see the module docstring)."""
 
-    n: int
     RbT: np.ndarray | None       # base rotation transposed (None: identity base and tool part)
     pb: np.ndarray               # base origin
     C: np.ndarray | None         # tool⁻¹ rotation times Rx(−α5)
-    c0: np.ndarray               # R c0 = offset from the target point to the wrist point
+    c0: np.ndarray               # R c0 = the target point less the wrist point (world axes)
     sa1: float
     ca1: float
     sb: float
@@ -158,11 +168,11 @@ def _reason(robot: Robot, axis_tol: float):
         if abs(math.sin(alpha[i])) > axis_tol:
             return None, (f"joints {i + 1} and {i + 2} are not parallel (standard-DH alpha{i + 1} = "
                           f"{deg(alpha[i]):.6g}°; the class needs 0° or 180°)")
-    if abs(math.sin(alpha[0])) < 1e-6:
+    if abs(math.sin(alpha[0])) < _MIN_SIN:
         return None, (f"joint 1 is parallel to joints 2-4 (standard-DH alpha1 = "
                       f"{deg(alpha[0]):.6g}°): no base joint")
     beta = alpha[1] + alpha[2] + alpha[3]
-    if abs(math.sin(beta)) < 1e-6:
+    if abs(math.sin(beta)) < _MIN_SIN:
         return None, (f"joint 5 is parallel to joints 2-4 (alpha2 + alpha3 + alpha4 = "
                       f"{deg(beta):.6g}°): no roll joint")
     scale = float(np.abs(a).sum() + np.abs(d).sum())
@@ -180,9 +190,10 @@ def _reason(robot: Robot, axis_tol: float):
     up_world = -g / np.linalg.norm(g) if np.any(g) else Rb[:, 2]
     up = math.copysign(1.0, math.sin(alpha[0]) * float(Rb[:, 2] @ up_world) or 1.0)
     return _Arm(
-        n=5, RbT=None if plain else Rb.T.copy(), pb=base[:3, 3].copy(), C=None if plain else C,
+        RbT=None if plain else Rb.T.copy(), pb=base[:3, 3].copy(), C=None if plain else C,
         c0=c0, sa1=_snap(math.sin(alpha[0])), ca1=_snap(math.cos(alpha[0])),
-        sb=_snap(math.sin(beta)), cb=_snap(math.cos(beta)), s=math.copysign(1.0, math.sin(beta)), sigma2=sigma2, sigma=sigma,
+        sb=_snap(math.sin(beta)), cb=_snap(math.cos(beta)), s=math.copysign(1.0, math.sin(beta)),
+        sigma2=sigma2, sigma=sigma,
         w=float(d[1] + sigma2 * d[2] + sigma * d[3]), a1=float(a[0]), d1=float(d[0]),
         a2=float(a[1]), a3=float(a[2]), a4=float(a[3]),
         v=tuple(float(x) for x in np.array([a[4], 0.0, d[4]]) + _Rx(alpha[4]) @ tool[:3, 3]),
@@ -229,7 +240,7 @@ class ClosedFormResult:
 
     Attributes:
         q: ``(..., k, n)`` joint angles [rad] of every branch, each angle moved by a multiple
-            of 2π into ``[mid − π, mid + π)`` of its range.
+            of 2π to within π of the middle of its range.
         valid: ``(..., k)`` the branch reaches the target (``reaches``) within the joint
             limits (``within_limits``).
         reaches: ``(..., k)`` position and orientation errors within ``tol_pos``, ``tol_rot``.
@@ -468,13 +479,14 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
         weights: 6 weights on the squared errors (as :func:`nfarm.ik.solve`): the sense of
             "nearest pose" for targets outside the pose set.
         nearest: refine every branch of a target outside the pose set to its nearest pose
-            (LM); without it such a target keeps the closed form's projection.
+            (LM: four solves of some tens of µs each per such target); without it such a
+            target keeps the closed form's projection.
         nearest_iter: LM steps for that refinement.
         axis_tol: see :func:`check_class`.
         limit_tol: an angle this close [rad] outside its limit counts as within and is moved
             onto it (rounding of an angle sampled at its limit).
         ortho_tol: largest accepted ``|RᵀR − I|`` of a target rotation.
-        threads: chunks of 8192 targets solved side by side (default: the CPUs this process
+        threads: chunks of 32 768 targets solved side by side (default: the CPUs this process
             may use, at most 8); NumPy releases the GIL in its loops. The result does not
             depend on it.
 
@@ -486,10 +498,10 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
             rotation) or a bad option; one line naming it.
     """
     from . import ik as _ik         # ik imports this module at its end
-    arm = check_class(robot, axis_tol)
     for name, value in (("tol_pos", tol_pos), ("tol_rot", tol_rot), ("axis_tol", axis_tol),
                         ("ortho_tol", ortho_tol)):
         _ik._check_number(name, value, 0, None, open_lo=True)
+    arm = check_class(robot, axis_tol)
     _ik._check_number("limit_tol", limit_tol, 0, None, open_lo=False)
     _ik._check_integer("nearest_iter", nearest_iter, 1)
     if not isinstance(nearest, (bool, np.bool_)):
