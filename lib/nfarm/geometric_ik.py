@@ -596,6 +596,11 @@ def branch_of(robot: Robot, q, axis_tol: float = 1e-10) -> np.ndarray:
     return 2 * back.astype(int) + down.astype(int)
 
 
+def _principal(angle: np.ndarray) -> np.ndarray:
+    """Angles [rad] moved by multiples of 2π into ``(−π, π]``."""
+    return np.pi - np.remainder(np.pi - angle, 2 * np.pi)
+
+
 def _planar(g: _Arm, q: np.ndarray):
     """θ̄ (offsets in), the elbow angle γ and Φ of configurations ``q (..., 5)``."""
     t = q + g.offset
@@ -607,7 +612,7 @@ def planar_points(robot: Robot, q) -> dict[str, np.ndarray]:
     """The planar sub-problem of configurations ``q (..., 5)`` [rad], in the arm's plane (frame
     1's x–y plane, coordinates [m] from the shoulder axis): the shoulder, elbow and wrist-pitch
     axes, the wrist point, each ``(..., 2)``; the roll axis's direction in the plane; and the
-    angles θ̄2, γ, Φ [rad]; where the base axis crosses the x axis; whether y1 points up
+    angles θ̄2, γ, Φ [rad] in ``(−π, π]``; where the base axis crosses the x axis; whether y1 points up
     (against gravity) or down."""
     g = check_class(robot)
     t, gamma, phi = _planar(g, joint_array(robot, q))
@@ -617,7 +622,8 @@ def planar_points(robot: Robot, q) -> dict[str, np.ndarray]:
     return {"shoulder": np.zeros_like(elbow), "elbow": elbow, "wrist pitch": wrist_pitch,
             "wrist point": wrist_pitch + g.a4 * u(phi),
             "roll axis": g.s * np.stack([np.sin(phi), -np.cos(phi)], axis=-1),
-            "theta2": t[..., 1], "gamma": gamma, "Phi": phi, "base axis x": -g.a1,
+            "theta2": _principal(t[..., 1]), "gamma": _principal(gamma), "Phi": _principal(phi),
+            "base axis x": -g.a1,
             "y1 up": g.up > 0}
 
 

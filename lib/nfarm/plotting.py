@@ -480,10 +480,14 @@ def plot_error_map(points: np.ndarray, error: np.ndarray, *, label: str, title: 
 def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label: str,
                        bins: int = 12) -> Figure:
     """``error`` against each named quantity (the name carries the unit): the median and the
-    95th percentile of the error in equal-count bins of the quantity."""
+    95th percentile of the error in equal-count bins of the quantity. Samples whose quantity
+    is not finite (NaN: it does not apply to them) are left out of that panel."""
     fig, axes = plt.subplots(1, len(x), figsize=(4.6 * len(x), 3.6), layout="constrained",
                              squeeze=False, sharey=True)
+    all_errors = error
     for ax, (name, values) in zip(axes[0], x.items()):
+        keep = np.isfinite(values)
+        values, error = values[keep], all_errors[keep]
         edges = np.unique(np.quantile(values, np.linspace(0, 1, bins + 1)))
         which = np.clip(np.searchsorted(edges, values, side="right") - 1, 0, len(edges) - 2)
         centre = 0.5 * (edges[1:] + edges[:-1])
