@@ -267,6 +267,8 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
         method = "closed form" if in_class(robot) else "lm"
     if method not in ("closed form", "lm"):
         raise ValueError(f"method must be 'auto', 'closed form' or 'lm', got {method!r}")
+    if isinstance(batch, bool) or not isinstance(batch, (int, np.integer)) or batch < 1:
+        raise ValueError(f"batch must be a whole number >= 1, got {batch!r}")
     q = region.sample(n_targets, _rng(seed, _STREAMS["check"]), method="uniform")
     if method == "closed form":
         parts = [_closed_form_counts(region, q[k:k + batch], tol, distinct)

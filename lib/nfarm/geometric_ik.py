@@ -79,6 +79,9 @@ Levenberg–Marquardt (:func:`nfarm.ik.solve`, joint limits ignored) from its cl
 to the nearest pose in the weighted least-squares sense LM minimises, ``½ Σ w_i e_i²`` over the
 pose error ``e`` of :func:`nfarm.rotations.pose_error`; ``pos_error`` and ``rot_error`` are then
 the residual of each branch, by :func:`nfarm.kinematics.fk`, and ``refined`` is set.
+:meth:`ClosedFormResult.nearest` gives each target's nearest pose and its residual. Measured on
+targets turned and moved off the pose set (up to 20° and 1 cm), the best branch's residual
+equals that of LM with 25 starts to 1e-8 relative (``tests/test_geometric_ik.py``).
 """
 
 from __future__ import annotations
@@ -281,6 +284,15 @@ class ClosedFormResult:
         cost = w[:3].mean() * self.pos_error ** 2 + w[3:].mean() * self.rot_error ** 2
         cost = np.where(self.valid, -1.0, cost)
         return np.argmin(cost, axis=-1)
+
+    def nearest(self, weights=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The configuration ``(..., n)`` [rad] of the branch :meth:`best` picks, and its
+        position and orientation residual ``(...)`` [m], [rad]: for a target outside the pose
+        set, the nearest pose the arm reaches (LM's weighted sense) and how far it is."""
+        k = self.best(weights)[..., None]
+        return (np.take_along_axis(self.q, k[..., None], axis=-2)[..., 0, :],
+                np.take_along_axis(self.pos_error, k, axis=-1)[..., 0],
+                np.take_along_axis(self.rot_error, k, axis=-1)[..., 0])
 
 
 def wrapped_gap(x: np.ndarray) -> np.ndarray:
