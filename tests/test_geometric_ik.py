@@ -374,15 +374,20 @@ BAD = {
     "not rigid": (np.diag([2.0, 1.0, 1.0, 1.0]), r"T_target: rotation is not orthonormal"),
     "reflection": (np.diag([-1.0, 1.0, 1.0, 1.0]), r"T_target: rotation is a reflection"),
     "text": ("pose", r"T_target must be an array of numbers"),
+    "complex": (np.eye(4) * (1 + 0j), r"T_target must be an array of numbers .* got complex numbers"),
+    "booleans": (np.eye(4, dtype=bool), r"got booleans"),
+    "ragged": ([[1.0, 0.0], [0.0]], r"T_target must be an array of numbers"),
+    "None": (None, r"T_target must be an array of numbers"),
 }
 
 
 @pytest.mark.parametrize("case", BAD)
 def test_bad_targets_are_one_line_errors(intelbot5, case):
     T, message = BAD[case]
-    with pytest.raises(ValueError, match=message) as info:
-        closed_form(intelbot5, T)
-    assert "\n" not in str(info.value)
+    for solver in (closed_form, solve):
+        with pytest.raises(ValueError, match=message) as info:
+            solver(intelbot5, T)
+        assert "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize("kwargs, message", [

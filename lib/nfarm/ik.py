@@ -142,11 +142,21 @@ def check_targets(T_target, ortho_tol: float = 1e-9, *, map_chunks=map) -> np.nd
     each chunk in order (``map``, or an executor's ``map`` to check chunks side by side); the
     first bad pose is named either way.
     """
+    def refused(what: str = "") -> ValueError:
+        return ValueError(f"T_target must be an array of numbers of shape (..., 4, 4), got "
+                          f"{what + ' ' if what else ''}({type(T_target).__name__} "
+                          f"{str(T_target)[:40]!r})")
+
     try:
-        T = np.asarray(T_target, dtype=float)
+        # Real numbers only: a complex pose would lose its imaginary part to the cast, and
+        # booleans or objects are no poses.
+        kind = (T_target if isinstance(T_target, np.ndarray) else np.asarray(T_target)).dtype.kind
+        T = np.asarray(T_target, dtype=float) if kind in "iuf" else None
     except (TypeError, ValueError):
-        raise ValueError(f"T_target must be an array of numbers of shape (..., 4, 4), got "
-                         f"{type(T_target).__name__} {str(T_target)[:40]!r}") from None
+        raise refused() from None
+    if T is None:
+        raise refused({"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
+                       "O": "objects or ragged lists"}.get(kind, f"dtype kind {kind!r}"))
     if T.ndim < 2 or T.shape[-2:] != (4, 4):
         raise ValueError(f"T_target must have shape (..., 4, 4), got {T.shape}")
     batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
