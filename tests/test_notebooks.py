@@ -98,6 +98,8 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     run_chapter(notebook, executed, parameters)
     assert str(ROOT) not in executed.read_text(), "no absolute path of the checkout"
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
+    shown = json.dumps(outputs)     # what a reader sees: no path of the machine that ran it
+    assert str(tmp_path) not in shown and str(shared) not in shown, "an output shows a path of this machine"
     assert any("image/png" in o.get("data", {}) for o in outputs), "figures show in the chapter"
     prefix = notebook.name[:2]
     figures = sorted(out.glob("*.png"))

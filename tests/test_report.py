@@ -367,3 +367,21 @@ def test_editions_come_from_the_study_files():
     assert (so101.robot_file, so101.subdir) == ("params/robots/so101.yaml", "so101")
     assert so101.parameters(["robot_file", "seed"]) == {"robot_file": "params/robots/so101.yaml"}
     assert so101.parameters(["seed"]) is None and arms[0].parameters(["robot_file"]) == {}
+    # Its rerun recordings go beside the primary's, never over them.
+    assert so101.parameters(["study_file", "recordings_dir"]) == {
+        "study_file": "params/studies/so101.yaml", "recordings_dir": "build/recordings/so101"}
+    assert arms[0].parameters(["study_file", "recordings_dir"]) == {}
+    assert so101.parameters(["recordings_dir"]) is None      # a chapter that is not its own
+
+
+def test_the_index_links_each_arm_s_recordings(two_arms):
+    runs, dirs = two_arms
+    recordings = dirs["build_dir"] / "recordings"
+    (recordings / "b").mkdir(parents=True)
+    (recordings / "03_motion.rrd").write_bytes(b"a")
+    (recordings / "b" / "03_motion.rrd").write_bytes(b"b")
+    assert build_report(**dirs) == 0
+    index = (dirs["build_dir"] / "report" / "index.html").read_text()
+    a, b = index.index("Chapters for a"), index.index("Chapters for b")
+    assert index.index("href='../recordings/03_motion.rrd'", a) < b
+    assert index.index("href='../recordings/b/03_motion.rrd'", b) > b

@@ -553,6 +553,9 @@ def _git(*args: str) -> str:
 
 
 PRIMARY_STUDY = "intelbot5"      # the dissertation's arm: its edition publishes into figures/
+#: Where the chapters write their rerun recordings (their ``recordings_dir`` default); another
+#: edition's go to ``RECORDINGS/<name>/``.
+RECORDINGS = "build/recordings"
 
 
 @dataclass(frozen=True)
@@ -580,6 +583,8 @@ class Edition:
             return {}
         chosen = {k: v for k, v in (("robot_file", self.robot_file),
                                     ("study_file", self.study_file)) if k in declared}
+        if chosen and "recordings_dir" in declared:   # its recordings beside, not over, the primary's
+            chosen["recordings_dir"] = f"{RECORDINGS}/{self.name}"
         return chosen or None
 
 
@@ -688,9 +693,12 @@ def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> l
 
 def _write_index(report_dir: Path, figures_dir: Path,
                  pages: dict[str, list[tuple[str, str, str]]], arms: list[Edition],
-                 compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool) -> None:
+                 compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool,
+                 recordings_dir: Path | None = None) -> None:
     """``pages``: per edition name, (prefix, title, page path) of its chapters in order;
-    ``compared``: the same for the chapters comparing the editions."""
+    ``compared``: the same for the chapters comparing the editions. Each edition's section
+    links the rerun recordings its chapters wrote (:data:`RECORDINGS`, an edition's in its own
+    subdirectory) when ``recordings_dir`` holds any."""
     shown = report_dir / "figures"
     if shown.exists():
         shutil.rmtree(shown)
@@ -733,6 +741,12 @@ def _write_index(report_dir: Path, figures_dir: Path,
                       f"{'' if own(edition, e[2]) or e in compared else ' (the same for every arm)'}"
                       f"</li>" for e in entries]
             parts.append("</ol>")
+            found = sorted((recordings_dir / edition.subdir).glob("*.rrd")) if recordings_dir else []
+            if found:
+                parts.append("<p>Rerun recordings: " + ", ".join(
+                    f"<a href='{html.escape(os.path.relpath(f, report_dir))}'>{html.escape(f.name)}</a>"
+                    for f in found) + f" (open one with <code>.venv/bin/rerun "
+                    f"{html.escape(shown_path(found[0]))}</code>)</p>")
     for edition in arms:
         for entry in pages.get(edition.name, []):
             prefix, title, page = entry
@@ -851,7 +865,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                 print(f"report: {label}: {len(published)} figures and tables published in "
                       f"{shown_path(figures_dir / arm.subdir)}", file=sys.stderr)
         comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
-        _write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke)
+        _write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke,
+                     None if smoke or extra else build_dir / "recordings")
     except KeyboardInterrupt:
         print(f"report: interrupted; {shown_path(figures_dir)} holds the chapters published "
               f"before (its manifest matches)", file=sys.stderr)
@@ -862,7 +877,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
 
 
 def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report_dir: Path,
-                 figures_dir: Path, extra: dict, smoke: bool) -> None:
+                 figures_dir: Path, extra: dict, smoke: bool,
+                 recordings_dir: Path | None = None) -> None:
     """HTML pages of every executed chapter, with navigation within each arm's chapters, and
     the index."""
     pages: dict[str, list[tuple[str, str, str]]] = {}
@@ -893,4 +909,4 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
             executed = base / "notebooks" / page.replace(".html", ".ipynb")
             _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX)
     _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
-                 compared, parameters=extra, smoke=smoke)
+                 compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)
