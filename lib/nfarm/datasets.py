@@ -253,9 +253,9 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
 
     ``method="closed form"``: every solution of every target (:func:`nfarm.ik.closed_form`),
     exact; in batches of ``batch`` targets, so that memory does not grow with ``n_targets``.
-    ``"lm"``: Levenberg–Marquardt (:func:`nfarm.ik.solve`, no restarts) from ``n_starts``
-    starts spread over the **full** joint limits (a scrambled Sobol sequence), which finds
-    only the solutions some start converges to. ``"auto"``: the closed form where the robot
+    ``"lm"``: Levenberg–Marquardt (:func:`nfarm.ik.solve`, no restarts, ``ik_options``) from
+    ``n_starts`` starts spread over the **full** joint limits (a scrambled Sobol sequence),
+    which finds only the solutions some start converges to. ``"auto"``: the closed form where the robot
     is of its class, else LM.
 
     A solution inside the region that differs from ``q`` by more than ``tol`` [rad] in some
@@ -271,6 +271,9 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
         raise ValueError(f"batch must be a whole number >= 1, got {batch!r}")
     q = region.sample(n_targets, _rng(seed, _STREAMS["check"]), method="uniform")
     if method == "closed form":
+        if ik_options:
+            raise ValueError(f"LM options ({', '.join(sorted(ik_options))}) apply to method='lm' "
+                             f"only; the closed form takes none")
         parts = [_closed_form_counts(region, q[k:k + batch], tol, distinct)
                  for k in range(0, n_targets, batch)]
         second, q_second, solutions, inside = (np.concatenate(x) for x in zip(*parts))

@@ -38,7 +38,8 @@ refused in one line saying which condition it breaks (:func:`check_class`).
    of the second are taken instead, the one nearest to a root of the first for that root's
    branch and the other for the other branch. With w ≠ 0 the back branch reaches a target
    only when the roll axis is parallel to the base axis: the SO-101 (w = −0.18 mm) has two
-   solutions per pose elsewhere, intelbot5 (w = 0) four (joint limits aside).
+   solutions per pose elsewhere. Four need w = 0 and both conditions symmetric under a half
+   turn of the base (cos α1 = cos β = 0), as on intelbot5 (joint limits aside).
 3. *Wrist angles*: ``G = R_1ᵀ M = Rz(Φ) Rx(β) Rz(θ̄5)``, a ZXZ decomposition whose middle angle
    is fixed: ``Φ = atan2(s G02, −s G12)``, ``θ̄5 = atan2(s G20, s G21)``, s = sign(sin β).
 4. *Planar two-link*: ``(X, Y, Z) = R_1ᵀ (p4 − o1)``, ``Q = (X, Y) − a4 u(Φ)``; with
@@ -48,8 +49,11 @@ refused in one line saying which condition it breaks (:func:`check_class`).
    ``θ̄4 = σ (Φ − θ̄2 − γ)``.
 
 The branches: front and back, each with the elbow up and down (:data:`BRANCHES`). "Up" is the
-elbow above the line from shoulder to wrist, up meaning against gravity (the base's z axis
-when gravity is zero), for a wrist ahead of the shoulder; the back branch mirrors it.
+elbow above the line from the shoulder's axis to the wrist-pitch axis, up meaning against gravity (the base's z axis
+when gravity is zero), for a wrist ahead of the shoulder; the back branch mirrors it. The label
+takes the up-component of the arm's plane from the base axis, so it is exact for a base axis
+along gravity (both arms of the study) and a convention for a tilted one; it holds for links
+of either sign (the elbow's side is that of −a2 a3 sin γ).
 
 **Errors in closed form.** Nothing here calls forward kinematics: the reached pose differs from
 the target only where a sub-problem had no exact solution, and each difference is computed
@@ -71,7 +75,9 @@ a larger one means the sub-problem had no solution, and the branch holds the nea
 that sub-problem, its error in ``pos_error`` and the branch invalid. Where an angle is
 undetermined (the wrist point on the base axis with the roll axis along it; the wrist point on
 the shoulder axis of a two-link with a2 = ±a3) the family of solutions is represented by one
-member. No NaN is produced for finite targets.
+member. No NaN is produced for targets within 1e150 m of the base (squares of positions
+overflow beyond). Angles are wrapped to within π of the middle of their range: a range wider
+than 2π holds further copies of a solution, which are not listed.
 
 **Targets outside the pose set.** A 5-DOF arm reaches a 5-dimensional set of poses. For a target
 that no branch reaches (to ``tol_pos`` and ``tol_rot``), each branch is refined by
@@ -79,9 +85,12 @@ Levenberg–Marquardt (:func:`nfarm.ik.solve`, joint limits ignored) from its cl
 to the nearest pose in the weighted least-squares sense LM minimises, ``½ Σ w_i e_i²`` over the
 pose error ``e`` of :func:`nfarm.rotations.pose_error`; ``pos_error`` and ``rot_error`` are then
 the residual of each branch, by :func:`nfarm.kinematics.fk`, and ``refined`` is set.
-:meth:`ClosedFormResult.nearest` gives each target's nearest pose and its residual. Measured on
-targets turned and moved off the pose set (up to 20° and 1 cm), the best branch's residual
-equals that of LM with 25 starts to 1e-8 relative (``tests/test_geometric_ik.py``).
+:meth:`ClosedFormResult.nearest` gives each target's nearest pose and its residual. A refinement
+may converge to another branch's solution, so for such targets the columns are the four
+refinements' results, named by the branch each started from. Measured on targets turned and
+moved off the pose set (up to 20° and 1 cm), the best branch's residual is never above that of
+LM with 25 starts (equal to 1e-8 relative, or lower where LM's starts missed the nearest
+pose; ``tests/test_geometric_ik.py``).
 """
 
 from __future__ import annotations
@@ -96,7 +105,7 @@ from .kinematics import fk, snap_right_angles
 from .robot import Robot, joint_array
 from .rotations import pose_error
 
-__all__ = ["BRANCHES", "ClosedFormResult", "closed_form", "check_class", "in_class", "class_refusal",
+__all__ = ["BRANCHES", "ArmConstants", "ClosedFormResult", "closed_form", "check_class", "in_class", "class_refusal",
            "branch_of", "branch_margins", "planar_points", "elbow_meeting_angles", "count_distinct",
            "wrapped_gap"]
 
@@ -109,8 +118,9 @@ _MIN_SIN = 1e-6
 
 
 @dataclass(frozen=True)
-class _Arm:
-    """The constants of a robot of the class, in standard DH (see the module docstring)."""
+class ArmConstants:
+    """The constants the closed form needs, of a robot of the class in standard DH (the
+    module docstring's symbols); :func:`check_class` makes them."""
 
     RbT: np.ndarray | None       # base rotation transposed (None: identity base and tool part)
     pb: np.ndarray               # base origin
@@ -131,7 +141,8 @@ class _Arm:
     a4: float
     v: tuple                     # the tool point from the wrist point, in G's frame
     offset: np.ndarray           # (5,) joint offsets of the standard chain
-    up: float                    # +1 / −1: the sign of "elbow up" (module docstring)
+    up: float                    # +1 / −1: frame 1's y axis points up / down (module docstring)
+    elbow_up: float              # +1 / −1: the sign that makes the elbow "up" (module docstring)
     reach: float                 # a length scale [m]: |a| + |d| summed
     lo: np.ndarray
     hi: np.ndarray
@@ -181,18 +192,21 @@ def _reason(robot: Robot, axis_tol: float):
     scale = float(np.abs(a).sum() + np.abs(d).sum())
     for i in (1, 2):
         if abs(a[i]) <= 1e-9 * max(scale, 1e-300):
-            return None, (f"a{i + 1} = {a[i]:g} m: joints 2-4 need two links between their axes "
-                          f"(a2 and a3 non-zero)")
+            return None, (f"standard-DH a{i + 1} = {a[i]:g} m: joints 2-4 need two links between "
+                          f"their axes (a2 and a3 non-zero)")
     sigma2 = math.copysign(1.0, math.cos(alpha[1]))
     sigma = sigma2 * math.copysign(1.0, math.cos(alpha[2]))
     Rb, Re = base[:3, :3], tool[:3, :3]
     C = Re.T @ _Rx(-alpha[4])
     c0 = Re.T @ tool[:3, 3] + C @ np.array([a[4], 0.0, d[4]])
     plain = np.array_equal(Rb, np.eye(3)) and np.array_equal(C, np.eye(3))
+    # "Elbow up": frame 1's y axis has the up-component sin α1 · (z0 · up) (z0 the base axis),
+    # and the elbow lies on the side of the shoulder-wrist line given by −a2 a3 sin γ.
     g = robot.gravity
     up_world = -g / np.linalg.norm(g) if np.any(g) else Rb[:, 2]
-    up = math.copysign(1.0, math.sin(alpha[0]) * float(Rb[:, 2] @ up_world) or 1.0)
-    return _Arm(
+    vertical = float(Rb[:, 2] @ up_world)
+    up = math.copysign(1.0, math.sin(alpha[0]) * (vertical if abs(vertical) > 1e-9 else 1.0))
+    return ArmConstants(
         RbT=None if plain else Rb.T.copy(), pb=base[:3, 3].copy(), C=None if plain else C,
         c0=c0, sa1=_snap(math.sin(alpha[0])), ca1=_snap(math.cos(alpha[0])),
         sb=_snap(math.sin(beta)), cb=_snap(math.cos(beta)), s=math.copysign(1.0, math.sin(beta)),
@@ -200,11 +214,12 @@ def _reason(robot: Robot, axis_tol: float):
         w=float(d[1] + sigma2 * d[2] + sigma * d[3]), a1=float(a[0]), d1=float(d[0]),
         a2=float(a[1]), a3=float(a[2]), a4=float(a[3]),
         v=tuple(float(x) for x in np.array([a[4], 0.0, d[4]]) + _Rx(alpha[4]) @ tool[:3, 3]),
-        offset=np.asarray(offset, dtype=float), up=up, reach=max(scale, 1e-3),
+        offset=np.asarray(offset, dtype=float), up=up,
+        elbow_up=up * math.copysign(1.0, a[1] * a[2]), reach=max(scale, 1e-3),
         lo=robot.qlim[:, 0], hi=robot.qlim[:, 1]), None
 
 
-def check_class(robot: Robot, axis_tol: float = 1e-10) -> _Arm:
+def check_class(robot: Robot, axis_tol: float = 1e-10) -> ArmConstants:
     """The robot's constants for :func:`closed_form`, or a one-line ``ValueError`` naming the
     condition of the class (module docstring) it breaks.
 
@@ -243,7 +258,8 @@ class ClosedFormResult:
 
     Attributes:
         q: ``(..., k, n)`` joint angles [rad] of every branch, each angle moved by a multiple
-            of 2π to within π of the middle of its range.
+            of 2π to within π of the middle of its range (for a ``refined`` target: the
+            refinement started from that branch, which may end on another).
         valid: ``(..., k)`` the branch reaches the target (``reaches``) within the joint
             limits (``within_limits``).
         reaches: ``(..., k)`` position and orientation errors within ``tol_pos``, ``tol_rot``.
@@ -277,8 +293,9 @@ class ClosedFormResult:
 
     def best(self, weights=None) -> np.ndarray:
         """``(...)`` the index of the branch to take: a valid one if any (the first in
-        :data:`BRANCHES` order), else the one with the least ``½ Σ w e²`` (``weights`` as in
-        :func:`nfarm.ik.solve`; errors as position and rotation norms)."""
+        :data:`BRANCHES` order), else the one with the least ``w_p e_p² + w_r e_r²`` (``e_p``,
+        ``e_r`` the position and orientation error norms, ``w_p``, ``w_r`` the means of the
+        position and rotation ``weights`` of :func:`nfarm.ik.solve`)."""
         from . import ik as _ik     # ik imports this module at its end
         w = _ik._check_weights(weights)
         cost = w[:3].mean() * self.pos_error ** 2 + w[3:].mean() * self.rot_error ** 2
@@ -288,7 +305,8 @@ class ClosedFormResult:
     def nearest(self, weights=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The configuration ``(..., n)`` [rad] of the branch :meth:`best` picks, and its
         position and orientation residual ``(...)`` [m], [rad]: for a target outside the pose
-        set, the nearest pose the arm reaches (LM's weighted sense) and how far it is."""
+        set, the nearest pose the arm reaches (of the four refinements, the one :meth:`best`
+        picks) and how far it is."""
         k = self.best(weights)[..., None]
         return (np.take_along_axis(self.q, k[..., None], axis=-2)[..., 0, :],
                 np.take_along_axis(self.pos_error, k, axis=-1)[..., 0],
@@ -316,7 +334,7 @@ def count_distinct(q: np.ndarray, ok: np.ndarray, distinct: float = 1e-6) -> np.
 # The closed form on a chunk of targets (component layout, samples last)
 
 
-def _solve_chunk(g: _Arm, T: np.ndarray):
+def _solve_chunk(g: ArmConstants, T: np.ndarray):
     """``T (m, 4, 4)`` → the joint angles ``q1, q5 (2, m)`` (base branch, target) and
     ``q2, q3, q4 (2, 2, m)`` (base branch, elbow column, target), and per base branch the
     errors ``(2, m)`` [m], [rad]."""
@@ -343,7 +361,7 @@ def _solve_chunk(g: _Arm, T: np.ndarray):
     root = np.stack([front * hp, -front * hp])                             # ±√ of each root
     # cos, sin of θ̄1 = φ + ψ by the angle sum (cos φ = A/ρ, cos ψ = ±h/ρ, sin ψ = C/ρ).
     with np.errstate(invalid="ignore", divide="ignore"):
-        inv = 1.0 / np.sqrt((Ap * Ap + Bp * Bp) * (hp * hp + Cp * Cp))   # 1/ρ² unless clipped
+        inv = 1.0 / (np.sqrt(Ap * Ap + Bp * Bp) * np.sqrt(hp * hp + Cp * Cp))  # 1/ρ² unclipped
         c1, s1 = (Ap * root - Bp * Cp) * inv, (Bp * root + Ap * Cp) * inv   # NaN where ρ = 0
     t1 = np.arctan2(s1, c1)
     bad = np.flatnonzero(~np.isfinite(inv))                 # ρ = 0: the wrist point on the axis
@@ -431,7 +449,7 @@ def _solve_chunk(g: _Arm, T: np.ndarray):
         rot_error[behind] = np.pi - rot_error[behind]
 
     # The angles, offsets taken out: elbow column 0 is "up" (module docstring), 1 "down".
-    e_up = np.array([-g.up, g.up])[:, None, None] * np.array([1.0, -1.0])[:, None]  # (2, 2, 1)
+    e_up = np.array([-g.elbow_up, g.elbow_up])[:, None, None] * np.array([1.0, -1.0])[:, None]
     gam = e_up * gamma[:, None, :]
     q2 = psi[:, None, :] - e_up * delta[:, None, :]
     q4 = g.sigma * (Phi[:, None, :] - q2 - gam)
@@ -479,7 +497,7 @@ def _wrap_joint(x: np.ndarray, lo: float, hi: float, limit_tol: float) -> np.nda
 
 
 def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float = 1e-9,
-                weights=None, nearest: bool = True, nearest_iter: int = 200,
+                weights=None, refine: bool = True, refine_iter: int = 200,
                 axis_tol: float = 1e-10, limit_tol: float = 1e-12, ortho_tol: float = 1e-9,
                 threads: int | None = None) -> ClosedFormResult:
     """Every inverse-kinematics solution of every target, in closed form (module docstring).
@@ -490,10 +508,10 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
             orientation error [rad] are within these.
         weights: 6 weights on the squared errors (as :func:`nfarm.ik.solve`): the sense of
             "nearest pose" for targets outside the pose set.
-        nearest: refine every branch of a target outside the pose set to its nearest pose
+        refine: refine every branch of a target outside the pose set to its nearest pose
             (LM: four solves of some tens of µs each per such target); without it such a
             target keeps the closed form's projection.
-        nearest_iter: LM steps for that refinement.
+        refine_iter: LM steps for that refinement.
         axis_tol: see :func:`check_class`.
         limit_tol: an angle this close [rad] outside its limit counts as within and is moved
             onto it (rounding of an angle sampled at its limit).
@@ -515,9 +533,9 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
         _ik._check_number(name, value, 0, None, open_lo=True)
     arm = check_class(robot, axis_tol)
     _ik._check_number("limit_tol", limit_tol, 0, None, open_lo=False)
-    _ik._check_integer("nearest_iter", nearest_iter, 1)
-    if not isinstance(nearest, (bool, np.bool_)):
-        raise ValueError(f"nearest must be True or False, got {nearest!r}")
+    _ik._check_integer("refine_iter", refine_iter, 1)
+    if not isinstance(refine, (bool, np.bool_)):
+        raise ValueError(f"refine must be True or False, got {refine!r}")
     w = _ik._check_weights(weights)
     if threads is None:
         threads = min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
@@ -529,14 +547,14 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
         from concurrent.futures import ThreadPoolExecutor
         pool = ThreadPoolExecutor(min(threads, -(-size // _CHUNK)))
     try:
-        return _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest,
-                            nearest_iter, limit_tol, ortho_tol)
+        return _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, refine,
+                            refine_iter, limit_tol, ortho_tol)
     finally:
         if pool is not None:
             pool.shutdown()
 
 
-def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest, nearest_iter,
+def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, refine, refine_iter,
                  limit_tol, ortho_tol) -> ClosedFormResult:
     from . import ik as _ik
     map_chunks = map if pool is None else pool.map
@@ -569,10 +587,10 @@ def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest, neare
     q, inside, pos_error, rot_error = q_c.transpose(2, 1, 0), inside_c.T, pos_c.T, rot_c.T
     reaches = (pos_error <= tol_pos) & (rot_error <= tol_rot)
     refined = ~reaches.any(axis=1)
-    if nearest and refined.any():
+    if refine and refined.any():
         out = np.flatnonzero(refined)
         result = _ik.solve(robot, np.repeat(flat[out], 4, axis=0), q[out].reshape(-1, 5),
-                           weights=w, tol_pos=tol_pos, tol_rot=tol_rot, max_iter=nearest_iter,
+                           weights=w, tol_pos=tol_pos, tol_rot=tol_rot, max_iter=refine_iter,
                            restarts=0, respect_limits=False,
                            stall_rtol=1e-12, stall_iters=4, ortho_tol=ortho_tol)
         q_near = result.q.reshape(-1, 4, 5).copy()
@@ -584,7 +602,7 @@ def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, nearest, neare
         pos_error[out] = np.linalg.norm(e[:, :3], axis=1).reshape(-1, 4)
         rot_error[out] = np.linalg.norm(e[:, 3:], axis=1).reshape(-1, 4)
         reaches[out] = (pos_error[out] <= tol_pos) & (rot_error[out] <= tol_rot)
-    elif not nearest:
+    elif not refine:
         refined[:] = False
     shape = lambda x: x.reshape(batch + x.shape[1:])  # noqa: E731
     return ClosedFormResult(q=shape(q), valid=shape(reaches & inside), reaches=shape(reaches),
@@ -604,7 +622,7 @@ def branch_of(robot: Robot, q, axis_tol: float = 1e-10) -> np.ndarray:
     ahead = g.a1 + g.a2 * np.cos(t[..., 1]) + g.a3 * np.cos(t[..., 1] + gamma) + g.a4 * np.cos(phi)
     back = ahead < 0
     front = np.where(back, -1.0, 1.0)
-    down = g.up * front * np.sin(gamma) > 0
+    down = g.elbow_up * front * np.sin(gamma) > 0
     return 2 * back.astype(int) + down.astype(int)
 
 
@@ -613,7 +631,7 @@ def _principal(angle: np.ndarray) -> np.ndarray:
     return np.pi - np.remainder(np.pi - angle, 2 * np.pi)
 
 
-def _planar(g: _Arm, q: np.ndarray):
+def _planar(g: ArmConstants, q: np.ndarray):
     """θ̄ (offsets in), the elbow angle γ and Φ of configurations ``q (..., 5)``."""
     t = q + g.offset
     gamma = g.sigma2 * t[..., 2]

@@ -488,6 +488,11 @@ def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label:
     for ax, (name, values) in zip(axes[0], x.items()):
         keep = np.isfinite(values)
         values, error = values[keep], all_errors[keep]
+        ax.set_xlabel(name)
+        if not values.size:
+            ax.text(0.5, 0.5, "no sample has this quantity", ha="center", va="center",
+                    transform=ax.transAxes)
+            continue
         edges = np.unique(np.quantile(values, np.linspace(0, 1, bins + 1)))
         which = np.clip(np.searchsorted(edges, values, side="right") - 1, 0, len(edges) - 2)
         centre = 0.5 * (edges[1:] + edges[:-1])
@@ -495,7 +500,6 @@ def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label:
             stat = [np.percentile(error[which == b], q) if np.any(which == b) else np.nan
                     for b in range(len(edges) - 1)]
             ax.plot(centre, stat, style, label=f"{q}th percentile" if q != 50 else "median")
-        ax.set_xlabel(name)
         ax.set_yscale("log")
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].set_ylabel(label)
