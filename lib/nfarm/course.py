@@ -265,7 +265,8 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
                 raise ValueError(f"{notebook.name}: exercise {failed[0]['exercise']}'s check fails on "
                                  f"its worked solution: {failed[0]['message']}")
             _install_mathjax(out / "teacher")
-            _export_html(target, target.with_suffix(".html"))
+            _export_html(target, target.with_suffix(".html"),
+                         title=f"{_title(notebook)} · teacher's edition")
             executed = True
         found.append((notebook, _title(notebook), facts, executed))
     _index(out, found)

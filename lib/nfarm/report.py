@@ -476,7 +476,8 @@ def _nav(links: dict[str, tuple[str, str] | None]) -> str:
             + "".join(parts) + "</nav>")
 
 
-def _export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX) -> None:
+def _export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
+                 title: str = "") -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters."""
@@ -497,7 +498,8 @@ def _export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MAT
     quiet = _DropMessage("Alternative text is missing")
     exporter.log.addFilter(quiet)
     try:
-        body, _ = exporter.from_notebook_node(nbformat.read(executed, 4))
+        body, _ = exporter.from_notebook_node(
+            nbformat.read(executed, 4), resources={"metadata": {"name": title or executed.stem}})
     finally:
         exporter.log.removeFilter(quiet)
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
@@ -907,6 +909,7 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
                      "previous": (up + own[k - 1][2], own[k - 1][1]) if k > 0 else None,
                      "next": (up + own[k + 1][2], own[k + 1][1]) if k + 1 < len(own) else None}
             executed = base / "notebooks" / page.replace(".html", ".ipynb")
-            _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX)
+            _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
+                         title=f"{title} · {arm.name}")
     _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
                  compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)
