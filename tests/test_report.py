@@ -339,6 +339,7 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     assert "../mathjax/MathJax.js" in page and "../02_shared.html" in page   # the shared 02
     assert "<title>Chapter 01_robot · b</title>" in page                      # not "Notebook"
     assert "<title>Chapter 01_robot · a</title>" in (build / "report" / "01_robot.html").read_text()
+    assert "<title>Chapter 02_shared</title>" in (build / "report" / "02_shared.html").read_text()
     index = (build / "report" / "index.html").read_text()
     assert index.index("04_compare.html") < index.index("Chapters for a")      # comparison first
     assert "Chapters for b" in index and "b/tables/01_given.csv" in index

@@ -885,7 +885,10 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
     the index."""
     pages: dict[str, list[tuple[str, str, str]]] = {}
     compared = []
+    per_arm = set()              # chapters run for more than one arm: their titles name it
     for nb in everything:
+        if len(list(runs(nb))) > 1:
+            per_arm.add(nb.name[:2])
         for arm, _ in runs(nb):
             executed = base / "notebooks" / arm.subdir / nb.name
             if not executed.exists():
@@ -910,6 +913,6 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
                      "next": (up + own[k + 1][2], own[k + 1][1]) if k + 1 < len(own) else None}
             executed = base / "notebooks" / page.replace(".html", ".ipynb")
             _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
-                         title=f"{title} · {arm.name}")
+                         title=f"{title} · {arm.name}" if prefix in per_arm else title)
     _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
                  compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)
