@@ -287,7 +287,6 @@ def test_elbow_up_holds_for_links_of_either_sign_and_without_gravity(robot, seed
     base[:3, :3] = np.eye(3)
     robot = replace(robot, base=base, gravity=np.zeros(3) if weightless else robot.gravity)
     q = sample_configurations(robot, 300, seed)
-    frames = fk_all(robot, q)
     result = closed_form(robot, fk(robot, q))
     for k in (0, 1):                                 # the front branches' own geometry
         qk = result.q[:, k]
@@ -302,7 +301,6 @@ def test_elbow_up_holds_for_links_of_either_sign_and_without_gravity(robot, seed
         clear = (np.abs(side) > 1e-6) & (ahead > 1e-3) & (np.abs(line[:, 2]) < 0.9 * np.linalg.norm(line, axis=1))
         if robot.convention == "standard":
             assert ((side > 0) == (k == 0))[clear].all()
-    assert frames.shape[0] == 300
 
 
 @pytest.mark.parametrize("name", ARMS)
