@@ -166,9 +166,14 @@ X3, Y3, *_ = jang.three_input_data()
     ((np.c_[X3, np.ones(216)], Y3), {}, r"input 3 \(x4\) is constant"),
     ((X3, Y3), dict(mf="triangle"), r"mf must be one of gbell, gauss"),
     ((X3, Y3), dict(partition="kmeans"), r"partition must be one of grid, fcm, subtractive"),
-    ((X3, Y3), dict(n_mfs=[2, 2]), r"n_mfs must be an integer >= 1 or one per input \(3\)"),
+    ((X3, Y3), dict(n_mfs=[2, 2]), r"n_mfs must be an integer >= 1 or one per premise input \(3\)"),
     ((X3, Y3), dict(epochs=0), r"epochs must be an integer >= 1"),
-    ((X3, Y3), dict(n_mfs=2.5), r"n_mfs must be an integer >= 1 or one per input \(3\), got 2.5"),
+    ((X3, Y3), dict(n_mfs=2.5), r"n_mfs must be an integer >= 1 or one per premise input \(3\), got 2.5"),
+    ((X3, Y3), dict(premise_inputs=[0, 3]), r"premise_inputs must be None or distinct column indices in 0..2"),
+    ((X3, Y3), dict(premise_inputs=[1, 1]), r"premise_inputs must be None or distinct column indices"),
+    ((X3, Y3), dict(premise_inputs=[]), r"premise_inputs must be None or distinct column indices"),
+    ((X3, Y3), dict(premise_inputs="01"), r"premise_inputs must be None or distinct column indices"),
+    ((X3, Y3), dict(premise_inputs=[0, 2], n_mfs=[2, 2, 2]), r"one per premise input \(2\)"),
     ((X3, Y3), dict(partition="fcm"), r"partition 'fcm' needs n_rules \(an integer\) >= 2"),
     ((X3, Y3), dict(memory_budget=1e4), r"would need about .* GB, over memory_budget"),
     ((X3, Y3), dict(solver="qr"), r"solver must be one of normal, lstsq"),
@@ -294,3 +299,38 @@ def test_fast_grid_prediction_equals_the_training_path(n_mfs):
     assert model._grid_sizes() == n_mfs
     slow = model._predict_with(X, model.mfs_, model.rules_, model.consequents_)
     np.testing.assert_allclose(model.predict(X), slow, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("mf, partition", [("gbell", "grid"), ("gauss", "grid"), ("gauss", "fcm")])
+def test_premise_inputs_equal_inputs_with_one_function(mf, partition):
+    """Inputs outside the premises enter the consequents only: the same model as giving them
+    one membership function (a common factor of every rule, cancelled by the normalisation)."""
+    rng = np.random.default_rng(3)
+    X = rng.random((300, 4))
+    y = np.sin(3 * X[:, 0]) * X[:, 2] + X[:, 1] * X[:, 3]
+    options = dict(mf=mf, partition=partition, epochs=4, random_state=0)
+    if partition == "grid":
+        full = ANFIS(n_mfs=[3, 1, 2, 1], **options).fit(X, y, X[:60], y[:60])
+        part = ANFIS(n_mfs=[3, 2], premise_inputs=[0, 2], **options).fit(X, y, X[:60], y[:60])
+        np.testing.assert_allclose(part.loss_curve_, full.loss_curve_, rtol=1e-9)
+        np.testing.assert_allclose(part.predict(X), full.predict(X), atol=1e-9)
+    part = ANFIS(n_mfs=2, premise_inputs=[2, 0], n_rules=3, **options).fit(X, y)
+    assert part.rules_.shape[1] == 2 and part.consequents_.shape == (len(part.rules_), 5)
+    assert [len(m) for m in part.mfs_] == ([2, 2] if partition == "grid" else [3, 3])
+    # premises read their own columns: permuting the others changes only the consequents' inputs
+    assert "IF x3 is MF1 AND x1 is MF1" in part.describe()
+    again = ANFIS.from_dict(json.loads(json.dumps(part.to_dict())))
+    np.testing.assert_array_equal(again.predict(X), part.predict(X))
+
+
+def test_normal_equations_in_blocks_equal_the_whole(monkeypatch):
+    """A design too large to form is summed over blocks of samples: the same consequents."""
+    import nfarm.anfis as anfis_module
+    rng = np.random.default_rng(4)
+    X = rng.random((500, 6))
+    y = X[:, 0] * X[:, 1] + np.cos(2 * X[:, 2]) + 0.1 * X[:, 5]
+    whole = ANFIS(n_mfs=2, premise_inputs=[0, 1, 2], epochs=3).fit(X, y)
+    monkeypatch.setattr(anfis_module, "_DESIGN_BYTES", 8 * 56 * 37)     # 37 rows per block
+    blocks = ANFIS(n_mfs=2, premise_inputs=[0, 1, 2], epochs=3).fit(X, y)
+    np.testing.assert_allclose(blocks.consequents_, whole.consequents_, rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(blocks.loss_curve_, whole.loss_curve_, rtol=1e-9)

@@ -12,7 +12,7 @@ from nfarm.paths import ROOT
 LAYERS = {
     "model": ["reading", "paths", "robot", "rotations", "linalg", "kinematics", "dynamics",
               "fuzzy", "trajectory", "workspace"],
-    "solvers": ["ik", "geometric_ik", "anfis", "jang", "datasets", "learned"],
+    "solvers": ["ik", "geometric_ik", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
     "io": ["urdf", "recording", "plotting", "report", "pinocchio_ref", "jobs", "sweep", "course", "answers",
            "__main__"],
 }

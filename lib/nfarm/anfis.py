@@ -24,6 +24,16 @@ Mackey–Glass), which is why they are the default.
 
 Everything in an epoch is vectorised over samples and rules; memory is O(N · R · (n + 1)),
 checked against ``memory_budget`` before any work.
+
+**Premise inputs.** By default every input has membership functions and enters the
+consequents. ``premise_inputs`` names the inputs the rules are built over; the others enter the
+consequents only (each as if it had one "don't care" function, which cancels in layer 3) —
+Takagi and Sugeno's (1985) own form, where the premise and the consequent variables differ.
+Chapter 06 learns inverse dynamics this way: rules over the configuration ``q``, consequents
+over products of ``q̈``, ``q̇`` and trigonometric functions of ``q``, hundreds of columns. For
+such models the normal equations are summed over blocks of samples (``AᵀA`` of a
+``N × R·(n + 1)`` design without forming it) whenever the design would take more than 256 MB;
+smaller ones are solved as before, to the same bits.
 """
 
 from __future__ import annotations
@@ -64,7 +74,8 @@ class ANFIS:
     """A first-order Sugeno ANFIS for one output, with a scikit-learn estimator interface.
 
     Args:
-        n_mfs: membership functions per input (int, or one per input) for ``partition="grid"``.
+        n_mfs: membership functions per premise input (int, or one per premise input) for
+            ``partition="grid"``.
         mf: ``"gbell"`` (generalised bell, MATLAB's default) or ``"gauss"``.
         partition: ``"grid"`` (every combination of the inputs' functions is a rule, MATLAB's
             ``genfis1``), ``"fcm"`` (one rule per fuzzy c-means cluster of the input–output
@@ -81,9 +92,12 @@ class ANFIS:
         random_state: seed for the clustering partitions.
         feature_names: names of the inputs (default ``x1``, ``x2``, …), used by ``describe``.
         progress: show a progress bar over the epochs (tqdm; in a notebook, a widget).
+        premise_inputs: the columns of ``X`` the rules are built over (``None``: all); every
+            column enters the consequents.
 
-    Learned attributes: ``mfs_`` (per input, ``(m_i, p)`` parameters), ``rules_ (R, n)``
-    (the function of each input in each rule), ``consequents_ (R, n + 1)``,
+    Learned attributes: ``mfs_`` (per premise input, ``(m_i, p)`` parameters),
+    ``rules_ (R, n_p)`` (the function of each premise input in each rule),
+    ``consequents_ (R, n + 1)``,
     ``mfs_initial_``, ``loss_curve_`` (training RMSE per epoch), ``val_loss_curve_``,
     ``step_size_curve_``, ``best_epoch_``, ``n_features_in_``, ``feature_names_in_``.
     """
@@ -93,7 +107,8 @@ class ANFIS:
                  step_size: float = 0.01, step_increase: float = 1.1, step_decrease: float = 0.9,
                  error_goal: float = 0.0, solver: str = "normal", ridge: float = 1e-12,
                  memory_budget: float = 2e9, random_state: int | None = None,
-                 feature_names: Sequence[str] | None = None, progress: bool = False):
+                 feature_names: Sequence[str] | None = None, progress: bool = False,
+                 premise_inputs: Sequence[int] | None = None):
         self.n_mfs = n_mfs
         self.mf = mf
         self.partition = partition
@@ -110,6 +125,7 @@ class ANFIS:
         self.random_state = random_state
         self.feature_names = feature_names
         self.progress = progress
+        self.premise_inputs = premise_inputs
 
     # -- scikit-learn conventions ------------------------------------------------------------
 
@@ -155,18 +171,33 @@ class ANFIS:
         if self.partition == "fcm" and not (isinstance(self.n_rules, (int, np.integer))
                                             and not isinstance(self.n_rules, bool) and self.n_rules >= 2):
             raise ValueError(f"partition 'fcm' needs n_rules (an integer) >= 2, got {self.n_rules!r}")
+        premise = self._premise(n_features)
         if isinstance(self.n_mfs, (int, np.integer)) and not isinstance(self.n_mfs, bool):
-            n_mfs = [self.n_mfs] * n_features
+            n_mfs = [self.n_mfs] * len(premise)
         elif isinstance(self.n_mfs, (Sequence, np.ndarray)) and not isinstance(self.n_mfs, str):
             n_mfs = list(self.n_mfs)
         else:
             n_mfs = []
-        if len(n_mfs) != n_features or not all(isinstance(m, (int, np.integer))
-                                               and not isinstance(m, bool) and m >= 1 for m in n_mfs):
-            raise ValueError(f"n_mfs must be an integer >= 1 or one per input ({n_features}), got {self.n_mfs!r}")
+        if len(n_mfs) != len(premise) or not all(isinstance(m, (int, np.integer))
+                                                 and not isinstance(m, bool) and m >= 1 for m in n_mfs):
+            raise ValueError(f"n_mfs must be an integer >= 1 or one per premise input ({len(premise)}), "
+                             f"got {self.n_mfs!r}")
         if self.feature_names is not None and len(self.feature_names) != n_features:
             raise ValueError(f"feature_names has {len(self.feature_names)} names for {n_features} inputs")
         return [int(m) for m in n_mfs]
+
+    def _premise(self, n_features: int) -> np.ndarray:
+        """The premise inputs' column indices (validated)."""
+        if self.premise_inputs is None:
+            return np.arange(n_features)
+        given = self.premise_inputs
+        if isinstance(given, (str, bytes)) or not isinstance(given, (Sequence, np.ndarray)) or \
+                len(given) == 0 or not all(isinstance(i, (int, np.integer)) and not isinstance(i, bool)
+                                           and 0 <= i < n_features for i in given) \
+                or len(set(int(i) for i in given)) != len(given):
+            raise ValueError(f"premise_inputs must be None or distinct column indices in 0..{n_features - 1}, "
+                             f"got {given!r}")
+        return np.array([int(i) for i in given])
 
     @staticmethod
     def _check_data(X, y, what: str = "X") -> tuple[np.ndarray, np.ndarray | None]:
@@ -192,6 +223,7 @@ class ANFIS:
     # -- structure ----------------------------------------------------------------------------
 
     def _initial_structure(self, X, y, n_mfs):
+        """Membership functions and rules over the premise columns ``X (N, n_p)``."""
         lo, hi = X.min(axis=0), X.max(axis=0)
         if self.partition == "grid":
             mfs = [grid_params(self.mf, lo[i], hi[i], n_mfs[i]) for i in range(X.shape[1])]
@@ -240,6 +272,21 @@ class ANFIS:
         Xa = np.column_stack([X, np.ones(len(X))])
         return (w_bar[:, :, None] * Xa[:, None, :]).reshape(len(X), -1)
 
+    def _consequents(self, w_bar, X, y):
+        """The least-squares consequents ``θ (R·(n + 1),)``; the normal equations of a design
+        over :data:`_DESIGN_BYTES` are summed over blocks of samples."""
+        P = w_bar.shape[1] * (X.shape[1] + 1)
+        rows = _design_rows(P)
+        if self.solver == "lstsq" or len(X) <= rows:
+            return self._least_squares(self._design(w_bar, X), y)
+        G, b = np.zeros((P, P)), np.zeros(P)
+        for start in range(0, len(X), rows):
+            A = self._design(w_bar[start:start + rows], X[start:start + rows])
+            G += A.T @ A
+            b += A.T @ y[start:start + rows]
+        G[np.diag_indices_from(G)] += self.ridge * max(np.trace(G), 1e-300) / P + 1e-300
+        return scipy.linalg.solve(G, b, assume_a="pos", check_finite=False)
+
     def _least_squares(self, A, y):
         if self.solver == "lstsq":
             return scipy.linalg.lstsq(A, y, lapack_driver="gelsy", check_finite=False)[0]
@@ -265,8 +312,12 @@ class ANFIS:
             gradients.append(np.einsum("nm,nmp->mp", dE_dmu, dmu))
         return gradients
 
-    def _bytes_needed(self, N, R, n):
-        return 8.0 * N * R * (3 * n + 4) + 8.0 * (R * (n + 1)) ** 2
+    def _bytes_needed(self, N, R, n, n_p=None):
+        """Training memory: the premise layers (``n_p`` premise inputs), the consequents'
+        design (in blocks when large) and its normal equations."""
+        n_p = n if n_p is None else n_p
+        P = R * (n + 1)
+        return 8.0 * N * R * (2 * n_p + 3) + 8.0 * min(N, _design_rows(P)) * P + 8.0 * P ** 2
 
     # -- fitting ------------------------------------------------------------------------------
 
@@ -286,17 +337,21 @@ class ANFIS:
             X_val, y_val = self._check_data(X_val, y_val, "X_val")
             if X_val.shape[1] != n:
                 raise ValueError(f"X_val has {X_val.shape[1]} inputs, X has {n}")
-        constant = np.flatnonzero(np.ptp(X, axis=0) == 0)
+        premise = self._premise(n)
+        constant = np.flatnonzero(np.ptp(X[:, premise], axis=0) == 0)
+        constant = premise[constant]
         if constant.size:
             raise ValueError(f"input {constant[0]} ({self._names(n)[constant[0]]}) is constant: "
                              f"membership functions need a range")
         # Refuse before building anything: the grid and fcm rule counts are known; subtractive
         # clustering stops (with the same error) once it finds more centres than fit.
         if self.partition == "grid":
-            self._check_size(len(X), math.prod(n_mfs), n)
+            self._check_size(len(X), math.prod(n_mfs), n, len(premise))
         elif self.partition == "fcm":
-            self._check_size(len(X), int(self.n_rules), n)
-        mfs, rules = self._initial_structure(X, y, n_mfs)
+            self._check_size(len(X), int(self.n_rules), n, len(premise))
+        Xp = np.ascontiguousarray(X[:, premise]) if self.premise_inputs is not None else X
+        Xp_val = None if X_val is None else (X_val[:, premise] if self.premise_inputs is not None else X_val)
+        mfs, rules = self._initial_structure(Xp, y, n_mfs)
         R = len(rules)
 
         self.n_features_in_ = n
@@ -311,8 +366,8 @@ class ANFIS:
             from tqdm.auto import tqdm
             epochs = tqdm(epochs, desc="ANFIS epochs", leave=False)
         for epoch in epochs:
-            mu, factors, w, total, w_bar = self._layers(X, mfs, rules)
-            theta = self._least_squares(self._design(w_bar, X), y).reshape(R, n + 1)
+            mu, factors, w, total, w_bar = self._layers(Xp, mfs, rules)
+            theta = self._consequents(w_bar, X, y).reshape(R, n + 1)
             f = self._rule_outputs(X, theta)
             y_hat = (w_bar * f).sum(axis=1)
             rmse = float(np.sqrt(np.mean((y_hat - y) ** 2)))
@@ -320,13 +375,14 @@ class ANFIS:
             self.step_size_curve_.append(step)
             score = rmse
             if X_val is not None:
-                score = float(np.sqrt(np.mean((self._predict_with(X_val, mfs, rules, theta) - y_val) ** 2)))
+                score = float(np.sqrt(np.mean((self._predict_with(X_val, mfs, rules, theta, Xp_val)
+                                               - y_val) ** 2)))
                 self.val_loss_curve_.append(score)
             if score < best[0]:
                 best = (score, ([p.copy() for p in mfs], theta, epoch))
             if rmse <= self.error_goal or epoch == self.epochs - 1:
                 break
-            gradient = self._premise_gradient(X, y, mfs, rules, mu, factors, total, f, y_hat)
+            gradient = self._premise_gradient(Xp, y, mfs, rules, mu, factors, total, f, y_hat)
             norm = math.sqrt(sum(float((g * g).sum()) for g in gradient))
             if norm > 0:
                 mfs = [self._keep_valid(p - step * g / norm, p) for p, g in zip(mfs, gradient)]
@@ -338,15 +394,16 @@ class ANFIS:
     def _max_rules(self, N, n):
         """The most rules that N samples of n inputs can fit within the memory budget."""
         R = N // (n + 1)
-        while R > 0 and self._bytes_needed(N, R, n) > self.memory_budget:
+        n_p = len(self._premise(n))
+        while R > 0 and self._bytes_needed(N, R, n, n_p) > self.memory_budget:
             R = min(R - 1, int(R * 0.9))
         return max(R, 0)
 
-    def _check_size(self, N, R, n):
+    def _check_size(self, N, R, n, n_p=None):
         if N < R * (n + 1):
             raise ValueError(f"{N} samples are fewer than the {R * (n + 1)} consequent parameters "
                              f"({R} rules × {n + 1}): use fewer rules or more data")
-        need = self._bytes_needed(N, R, n)
+        need = self._bytes_needed(N, R, n, n_p)
         if need > self.memory_budget:
             raise ValueError(f"{N} samples × {R} rules × {n + 1} would need about "
                              f"{need / 1e9:.2f} GB, over memory_budget = "
@@ -380,8 +437,9 @@ class ANFIS:
         """``f_r = p_r · x + p_r0`` for every sample and rule: ``(N, R)``."""
         return np.column_stack([X, np.ones(len(X))]) @ theta.T
 
-    def _predict_with(self, X, mfs, rules, theta):
-        return (self._layers(X, mfs, rules)[4] * self._rule_outputs(X, theta)).sum(axis=1)
+    def _predict_with(self, X, mfs, rules, theta, Xp=None):
+        Xp = X if Xp is None else Xp
+        return (self._layers(Xp, mfs, rules)[4] * self._rule_outputs(X, theta)).sum(axis=1)
 
     def _grid_sizes(self) -> list[int] | None:
         """Functions per input when the rules are the full grid in :func:`grid_rules` order
@@ -393,7 +451,7 @@ class ANFIS:
         return None
 
     def _firing(self, X, sizes=None):
-        """Firing strengths ``w (R', N)`` of the fitted rules for inputs ``X (N, n)``, laid out
+        """Firing strengths ``w (R', N)`` of the fitted rules for premise inputs ``X (N, n_p)``, laid out
         rule by rule, for prediction (``sizes``: of a grid, see below).
 
         Cheaper than the training path (:meth:`_layers`), which keeps every factor for the
@@ -439,10 +497,11 @@ class ANFIS:
         n = X.shape[1]
         theta = np.column_stack([self.consequents_, np.ones(len(self.consequents_))])  # (R, n+2)
         sizes = self._grid_sizes()
+        Xp = X if self.premise_inputs is None else X[:, self._premise(n)]
         if sizes is None:
-            coefficients = theta.T @ self._firing(X)                           # (n + 2, N)
+            coefficients = theta.T @ self._firing(Xp)                          # (n + 2, N)
         else:
-            w, mu = self._firing(X, sizes)
+            w, mu = self._firing(Xp, sizes)
             if mu is None:
                 coefficients = theta.T @ w
             else:
@@ -490,9 +549,10 @@ class ANFIS:
         """The rules in words: ``IF x1 is MF2 AND x2 is MF1 THEN y = … x1 + … x2 + …``."""
         self._check_fitted()
         names = list(self.feature_names_in_)
+        premise_names = [names[i] for i in self._premise(len(names))]
         lines = []
         for r, (antecedent, p) in enumerate(zip(self.rules_, self.consequents_)):
-            premise = " AND ".join(f"{name} is MF{k + 1}" for name, k in zip(names, antecedent))
+            premise = " AND ".join(f"{name} is MF{k + 1}" for name, k in zip(premise_names, antecedent))
             terms = " ".join(f"{'+' if c >= 0 else '−'} {abs(c):.{digits}g}·{name}" for c, name in zip(p[:-1], names))
             lines.append(f"Rule {r + 1}: IF {premise} THEN {output} = {terms} "
                          f"{'+' if p[-1] >= 0 else '−'} {abs(p[-1]):.{digits}g}".replace("=  + ", "= "))
@@ -503,7 +563,8 @@ class ANFIS:
         import matplotlib.pyplot as plt
 
         self._check_fitted()
-        n = self.n_features_in_
+        premise = self._premise(self.n_features_in_)
+        n = len(premise)
         fig, axes = plt.subplots(1, n, figsize=(3.3 * n, 2.8), layout="constrained", squeeze=False)
         for i, ax in enumerate(axes[0]):
             centres = self.mfs_initial_[i][:, -1]
@@ -513,7 +574,7 @@ class ANFIS:
                                                     mf_values(self.mf, x, self.mfs_[i]).T)):
                 ax.plot(x, before, "--", color=f"C{k % 10}", lw=1)
                 ax.plot(x, after, "-", color=f"C{k % 10}", lw=1.6, label=f"MF{k + 1}")
-            ax.set(title=self.feature_names_in_[i], ylim=(-0.03, 1.05))
+            ax.set(title=self.feature_names_in_[premise[i]], ylim=(-0.03, 1.05))
             ax.grid(alpha=0.3)
         axes[0, 0].set_ylabel("membership (dashed: initial)")
         return fig
@@ -543,11 +604,12 @@ class ANFIS:
         n = len(names)
         params = _check_params(v, data["params"], "params", n_features=n)
         model = cls(**params)
+        n_p = len(model._premise(n))
         p = 3 if params["mf"] == "gbell" else 2
         mfs = {}
         for key in ("mfs", "mfs_initial"):
             mfs[key] = [v.array(m, f"state.{key}[{i}]", (None, p)) for i, m in
-                        enumerate(v.sequence(s[key], f"state.{key}", min_len=n, max_len=n))]
+                        enumerate(v.sequence(s[key], f"state.{key}", min_len=n_p, max_len=n_p))]
             for i, m in enumerate(mfs[key]):
                 if len(m) == 0 or (m[:, 0] <= 0).any() or (p == 3 and (m[:, 1] <= 0).any()):
                     v.fail(f"state.{key}[{i}]", f"must hold at least one {params['mf']} function "
@@ -555,7 +617,7 @@ class ANFIS:
         sizes = np.array([len(m) for m in mfs["mfs"]])
         if not np.array_equal(sizes, [len(m) for m in mfs["mfs_initial"]]):
             v.fail("state.mfs_initial", "must have as many functions per input as state.mfs")
-        rules = v.array(s["rules"], "state.rules", (None, n), integer=True)
+        rules = v.array(s["rules"], "state.rules", (None, n_p), integer=True)
         if len(rules) == 0:
             v.fail("state.rules", "must hold at least one rule")
         bad = (rules < 0) | (rules >= sizes)
@@ -633,6 +695,15 @@ class ANFISMulti:
     def save(self, path: str | os.PathLike) -> None:
         with atomic_path(path) as tmp:
             tmp.write_text(json.dumps(self.to_dict()), encoding="utf-8")
+
+
+#: Bytes a consequents' design may take before its normal equations are summed in blocks.
+_DESIGN_BYTES = 256 * 2**20
+
+
+def _design_rows(P: int) -> int:
+    """Samples per block of a design with ``P`` columns."""
+    return max(1, _DESIGN_BYTES // (8 * P))
 
 
 _STATE_KEYS = ("mfs", "rules", "consequents", "feature_names", "loss_curve", "val_loss_curve",

@@ -9,6 +9,10 @@ and returns its metrics, a flat mapping of numbers, strings or lists of numbers.
   validation RMSE at its best epoch.
 * ``learned_id`` — a study's learned inverse dynamics (chapter 6): every ``stride``-th training
   state, each joint's validation NRMSE (RMSE over the standard deviation of its torque).
+* ``id_baseline`` — a model-free scikit-learn baseline of a study's inverse dynamics
+  (:class:`nfarm.baselines.BaselineID`, chapters 06 and 07): fitted on every ``stride``-th
+  training state, judged on the ``split`` (``val`` to choose, ``test`` once for the chosen),
+  each joint's NRMSE, the fit's seconds and the prediction's microseconds per state.
 * ``idle`` — sleeps ``seconds`` and returns its parameters: the sweep machinery's own cost
   (``benchmarks/bench_sweep.py``).
 
@@ -38,6 +42,8 @@ import numpy as np
 
 from . import datasets, jang
 from .anfis import ANFIS
+from .baselines import DEFAULTS as BASELINE_OPTIONS
+from .baselines import BaselineID
 from .learned import LearnedID, LearnedIK, fit_cached, n_parameters
 from .paths import BUILD, project_path, shown_path
 from .reading import ParamsError
@@ -189,6 +195,37 @@ def learned_id(p: dict) -> dict:
             "parameters": n_parameters(model), "train_samples": int(len(train["q"]))}
 
 
+def _id_split(p: dict, study, directory: Path, split: str) -> dict:
+    torque = {"rigid": "tau", "measured": "tau_measured"}[p["torques"]]
+    loaded = datasets.load(directory / f"id_{split}.npz", study.robot, study)
+    if torque not in loaded:
+        raise ParamsError(f"{p['study_file']}: torques: the study has no measured torques (id.measured)")
+    return {**{k: loaded[k] for k in ("q", "qd", "qdd")}, "tau": loaded[torque]}
+
+
+def id_baseline(p: dict) -> dict:
+    if p["split"] not in ("val", "test"):
+        raise ParamsError(f"split must be 'val' or 'test', got {p['split']!r}")
+    study, directory, _ = _study_data(p)
+    robot = study.robot
+    train = _first(_id_split(p, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"],
+                   None, p["stride"])
+    judged = _id_split(p, study, directory, p["split"])
+    learner = p["learner"]
+    if learner not in BASELINE_OPTIONS:
+        raise ParamsError(f"learner must be one of {', '.join(BASELINE_OPTIONS)}, got {learner!r}")
+    options = {k: p[k] for k in BASELINE_OPTIONS[learner] if p[k] is not None}
+    model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"]).fit(robot, train)
+    start = time.perf_counter()
+    predicted = model.predict(judged["q"], judged["qd"], judged["qdd"])
+    seconds = time.perf_counter() - start
+    rmse = np.sqrt(((predicted - judged["tau"]) ** 2).mean(axis=0))
+    nrmse = rmse / judged["tau"].std(axis=0)
+    return {"rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
+            "fit_seconds": float(model.fit_seconds_), "predict_us": 1e6 * seconds / len(predicted),
+            "features": int(model.n_features_), "train_samples": int(len(train["q"]))}
+
+
 def idle(p: dict) -> dict:
     time.sleep(p["seconds"])
     return {"seconds": p["seconds"], "value": p["value"]}
@@ -220,6 +257,14 @@ JOBS: dict[str, Job] = {
         ("val_rmse", "val_nrmse", "worst_nrmse", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned ID, one ANFIS per joint",
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
+    "id_baseline": Job(
+        id_baseline,
+        {**_STUDY, "stride": 1, "torques": "rigid", "residual": False, "split": "val", "learner": "linear",
+         **{k: None for k in sorted({k for o in BASELINE_OPTIONS.values() for k in o})}},
+        ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples"),
+        paths=("study_file", "data_dir", "models_dir"),
+        doc="a model-free scikit-learn baseline of a study's ID",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
     "idle": Job(idle, {"seconds": 0.0, "value": 0}, ("seconds", "value"),
                 doc="sleeps; the sweep machinery's own cost"),

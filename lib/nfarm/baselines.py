@@ -1,0 +1,186 @@
+"""Model-free baselines for learned inverse dynamics, from scikit-learn (chapters 06 and 07).
+
+What an engineer would try before a fuzzy system, each fed states ``q, q̇, q̈`` and nothing of
+the arm's masses or lengths (:data:`LEARNERS`):
+
+* ``"linear"`` — ordinary least squares on ``[q, q̇, q̈]``: the floor any learner must beat;
+* ``"ridge"`` — ridge regression on a feature basis of :mod:`nfarm.bases` (``basis``:
+  ``"generic"``, 1 386 features for five joints; ``"chain"``, with the sums of parallel joints,
+  3 213) — torque affine in ``q̈``, quadratic in ``q̇``, trigonometric in ``q``;
+* ``"kernel"`` — kernel ridge regression with a Gaussian kernel, approximated by Nyström's
+  method (``n_components`` landmarks, ``gamma``) on standardised ``sin q, cos q, q̇, q̈``;
+* ``"boosting"`` — gradient-boosted trees per joint (``HistGradientBoostingRegressor``:
+  ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the same inputs;
+* ``"mlp"`` — a multilayer perceptron (``hidden`` layer widths, ``alpha``, ``max_iter`` epochs of
+  Adam) on the same inputs.
+
+Targets are standardised per joint (each joint's error then counts alike, as in the NRMSE the
+chapters report), inputs too where the learner is not scale-free. Every random draw comes from
+``random_state``; early stopping is off, so a fit is a function of its options, data and seed.
+With ``residual=True`` a baseline learns ``τ − rnea`` and predicts ``rnea + learned``.
+
+Fitted baselines are not saved: they are comparison rows, refitted from their options and seed
+wherever a chapter needs them (the sweeps cache their metrics), and a scikit-learn model could
+only be stored as a pickle, which this project never hands to a user.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .bases import BASES, basis
+from .dynamics import rnea
+from .robot import Robot
+
+__all__ = ["LEARNERS", "BaselineID", "DEFAULTS"]
+
+#: Each learner's options and their defaults.
+DEFAULTS: dict[str, dict[str, Any]] = {
+    "linear": {},
+    "ridge": {"basis": "generic", "alpha": 1e-6},
+    "kernel": {"n_components": 1000, "gamma": 0.1, "alpha": 1e-6},
+    "boosting": {"max_iter": 300, "learning_rate": 0.1, "max_leaf_nodes": 31},
+    "mlp": {"hidden": [128, 128], "alpha": 1e-4, "max_iter": 200},
+}
+LEARNERS = tuple(DEFAULTS)
+
+
+def _smooth_inputs(q, qd, qdd) -> np.ndarray:
+    return np.concatenate([np.sin(q), np.cos(q), qd, qdd], axis=1)
+
+
+class BaselineID:
+    """One scikit-learn learner of the torques of every joint (scikit-learn conventions).
+
+    Args:
+        learner: one of :data:`LEARNERS`.
+        options: the learner's options (:data:`DEFAULTS` for the rest).
+        residual: learn ``τ − rnea(q, q̇, q̈)`` instead of ``τ``.
+        random_state: seed of every random draw.
+
+    Learned attributes: ``model_``, ``robot_``, ``y_mean_``, ``y_scale_``, ``fit_seconds_``,
+    ``n_features_`` (inputs the learner sees).
+    """
+
+    def __init__(self, learner: str = "ridge", options: Mapping | None = None, residual: bool = False,
+                 random_state: int = 0):
+        self.learner = learner
+        self.options = options
+        self.residual = residual
+        self.random_state = random_state
+
+    def get_params(self, deep: bool = True) -> dict:
+        return {"learner": self.learner, "options": self.options, "residual": self.residual,
+                "random_state": self.random_state}
+
+    def __repr__(self) -> str:
+        return (f"BaselineID(learner={self.learner!r}, options={self.options!r}, "
+                f"residual={self.residual!r}, random_state={self.random_state!r})")
+
+    def _options(self) -> dict:
+        if self.learner not in LEARNERS:
+            raise ValueError(f"learner must be one of {', '.join(LEARNERS)}, got {self.learner!r}")
+        given = dict(self.options or {})
+        unknown = sorted(set(given) - set(DEFAULTS[self.learner]))
+        if unknown:
+            valid = ", ".join(DEFAULTS[self.learner]) or "none"
+            raise ValueError(f"unknown option {unknown[0]!r} for learner {self.learner!r}; valid: {valid}")
+        options = {**DEFAULTS[self.learner], **given}
+        for key in ("alpha", "gamma", "learning_rate"):
+            if key in options and not (isinstance(options[key], (int, float)) and options[key] > 0
+                                       and np.isfinite(options[key])):
+                raise ValueError(f"{self.learner}: {key} must be a positive number, got {options[key]!r}")
+        for key in ("n_components", "max_iter", "max_leaf_nodes"):
+            if key in options and not (isinstance(options[key], (int, np.integer))
+                                       and not isinstance(options[key], bool) and options[key] >= 2):
+                raise ValueError(f"{self.learner}: {key} must be an integer >= 2, got {options[key]!r}")
+        if "basis" in options and options["basis"] not in BASES:
+            raise ValueError(f"{self.learner}: basis must be one of {', '.join(BASES)}, got {options['basis']!r}")
+        if "hidden" in options:
+            hidden = options["hidden"]
+            if isinstance(hidden, (int, str)) or not all(isinstance(h, (int, np.integer)) and h >= 1
+                                                         for h in hidden) or not hidden:
+                raise ValueError(f"mlp: hidden must be a list of layer widths >= 1, got {hidden!r}")
+        return options
+
+    def _features(self, q, qd, qdd) -> np.ndarray:
+        if self.learner == "linear":
+            return np.concatenate([q, qd, qdd], axis=1)
+        if self.learner == "ridge":
+            return basis(self.robot_, q, qd, qdd, self.options_["basis"])[:, 1:]
+        return _smooth_inputs(q, qd, qdd)
+
+    def _estimator(self, options: dict):
+        from sklearn.ensemble import HistGradientBoostingRegressor
+        from sklearn.kernel_approximation import Nystroem
+        from sklearn.linear_model import LinearRegression, Ridge
+        from sklearn.multioutput import MultiOutputRegressor
+        from sklearn.neural_network import MLPRegressor
+        from sklearn.pipeline import make_pipeline
+        from sklearn.preprocessing import StandardScaler
+
+        seed = self.random_state
+        if self.learner == "linear":
+            return LinearRegression()
+        if self.learner == "ridge":
+            return make_pipeline(StandardScaler(), Ridge(alpha=options["alpha"], solver="cholesky"))
+        if self.learner == "kernel":
+            return make_pipeline(StandardScaler(),
+                                 Nystroem(kernel="rbf", gamma=options["gamma"],
+                                          n_components=options["n_components"], random_state=seed),
+                                 Ridge(alpha=options["alpha"], solver="cholesky"))
+        if self.learner == "boosting":
+            return MultiOutputRegressor(HistGradientBoostingRegressor(
+                max_iter=options["max_iter"], learning_rate=options["learning_rate"],
+                max_leaf_nodes=options["max_leaf_nodes"], early_stopping=False, random_state=seed))
+        return make_pipeline(StandardScaler(), MLPRegressor(
+            hidden_layer_sizes=tuple(options["hidden"]), alpha=options["alpha"],
+            max_iter=options["max_iter"], early_stopping=False, random_state=seed, tol=0.0,
+            n_iter_no_change=options["max_iter"] + 1))
+
+    def fit(self, robot: Robot, train: Mapping) -> "BaselineID":
+        """Fit on ``train`` (arrays ``q, qd, qdd, tau (N, n)``).
+
+        Raises:
+            ValueError: an unknown learner or option, or bad data, before any work.
+        """
+        import warnings
+
+        from sklearn.exceptions import ConvergenceWarning
+
+        from .learned import _states
+
+        options = self._options()
+        if not isinstance(self.residual, bool):
+            raise ValueError(f"residual must be True or False, got {self.residual!r}")
+        q, qd, qdd, tau = _states(train, robot, "train")
+        self.robot_, self.options_ = robot, options
+        target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
+        self.y_mean_ = target.mean(axis=0)
+        self.y_scale_ = np.where(target.std(axis=0) > 0, target.std(axis=0), 1.0)
+        X = self._features(q, qd, qdd)
+        self.n_features_ = X.shape[1]
+        start = time.perf_counter()
+        with warnings.catch_warnings():
+            # A fixed budget of epochs is the design (no early stopping): not a failure.
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            self.model_ = self._estimator(options).fit(X, (target - self.y_mean_) / self.y_scale_)
+        self.fit_seconds_ = time.perf_counter() - start
+        return self
+
+    def predict(self, q, qd, qdd) -> np.ndarray:
+        """Torques ``(N, n)`` [N·m] for states ``(N, n)``."""
+        if not hasattr(self, "model_"):
+            raise ValueError("this BaselineID is not fitted yet: call fit first")
+        from .learned import _states
+
+        q, qd, qdd = _states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)
+        y = self.model_.predict(self._features(q, qd, qdd)).reshape(len(q), -1)
+        tau = y * self.y_scale_ + self.y_mean_
+        if self.residual:
+            tau = tau + rnea(self.robot_, q, qd, qdd)
+        return tau
