@@ -1,9 +1,12 @@
-"""Learned ID (chapters 06–07): training time of the chosen and the residual models, and
-prediction time per sample against the Newton–Euler recursion (``rnea``) in the same run.
+"""Learned ID (chapters 06–07): training time of the model-free, the dissertation's, the
+identification and the residual models, and prediction time per sample against the
+Newton–Euler recursion (``rnea``) in the same run.
 
-Targets (issue 12): training of the chosen models ≤ 5 min on 2 cores; prediction time per
-sample reported against ``rnea``. The options are chapter 06's (``id_chosen``,
-``id_residual``, ``seed`` there).
+Targets (issue 12): training of each model ≤ 5 min on 2 cores; prediction time per sample
+reported against ``rnea``. The options are chapter 06's (``id_identified``, ``id_dissertation``,
+``id_residual``, ``id_final_epochs``, ``seed`` there); the model-free ANFIS's rule base is the
+cell chapter 06 chooses by validation on intelbot5 (:data:`MODEL_FREE`: affine inputs, eight
+rules over the pitch joints, every 16th training state).
 """
 
 from __future__ import annotations
@@ -21,14 +24,18 @@ from nfarm.paths import NOTEBOOKS, PARAMS
 from nfarm.report import Table
 
 N_PREDICT = 200_000
+MODEL_FREE = {"inputs": "affine", "partition": "grid", "n_mfs": [1, 2, 2, 2, 1], "mf": "gauss"}
+MODEL_FREE_STRIDE = 16
 
 
 def chapter_options() -> dict[str, dict]:
     """Chapter 06's ID options, read from the notebook (one source)."""
     declared = papermill.inspect_notebook(str(NOTEBOOKS / "06_anfis_training.ipynb"))
     seed = ast.literal_eval(declared["seed"]["default"])
-    return {key: {**ast.literal_eval(declared[key]["default"]), "random_state": seed}
-            for key in ("id_chosen", "id_dissertation", "id_residual")}
+    options = {key: {**ast.literal_eval(declared[key]["default"]), "random_state": seed}
+               for key in ("id_identified", "id_dissertation", "id_residual")}
+    epochs = ast.literal_eval(declared["id_final_epochs"]["default"])
+    return {"id_model_free": {**MODEL_FREE, "epochs": epochs, "random_state": seed}, **options}
 
 
 def main() -> None:
@@ -39,12 +46,13 @@ def main() -> None:
     train, val, test = (datasets.load(directory / f"id_{s}.npz", robot, study)
                         for s in ("train", "val", "test"))
     options = chapter_options()
-    pick = lambda d, key: {**{k: d[k] for k in ("q", "qd", "qdd")}, "tau": d[key]}   # noqa: E731
+    pick = lambda d, key, step=1: {**{k: d[k][::step] for k in ("q", "qd", "qdd")}, "tau": d[key][::step]}   # noqa: E731
     rows, models = [], {}
-    for name, key in (("id_chosen", "tau"), ("id_dissertation", "tau"), ("id_residual", "tau_measured")):
+    for name, key, step in (("id_model_free", "tau", MODEL_FREE_STRIDE), ("id_identified", "tau", 1),
+                            ("id_dissertation", "tau", 1), ("id_residual", "tau_measured", 1)):
         seconds = best_of(lambda: models.__setitem__(name, LearnedID(**options[name]).fit(
-            robot, pick(train, key), pick(val, key))), repeat=1)
-        rows.append([f"LearnedID.fit, {name}", f"{len(train['q']):,} samples", seconds, "",
+            robot, pick(train, key, step), pick(val, key))), repeat=1)
+        rows.append([f"LearnedID.fit, {name}", f"{len(train['q'][::step]):,} samples", seconds, "",
                      f"target ≤ 300 s: {'met' if seconds <= 300 else 'NOT met'}"])
     X = [np.resize(test[k], (N_PREDICT, robot.n)) for k in ("q", "qd", "qdd")]
     base = best_of(lambda: rnea(robot, *X)) / N_PREDICT

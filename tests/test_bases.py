@@ -127,13 +127,14 @@ def test_rules_over_the_configuration_add_what_one_rule_lacks(random_states, tmp
 # -- scikit-learn baselines --------------------------------------------------------------------
 
 SMALL = {"linear": {}, "ridge": {"basis": "generic"}, "kernel": {"n_components": 50},
-         "boosting": {"max_iter": 5}, "mlp": {"hidden": [8], "max_iter": 5}}
+         "boosting": {"max_iter": 5}, "mlp": {"hidden": [8], "max_iter": 5}, "friction": {}}
 
 
 @pytest.mark.parametrize("learner", LEARNERS)
 def test_baselines_are_seeded_functions_of_their_options(learner, trajectories):
     train, val = trajectories["train"], trajectories["val"]
-    fit = lambda: BaselineID(learner, SMALL[learner], random_state=3).fit(ROBOT, train)   # noqa: E731
+    fit = lambda: BaselineID(learner, SMALL[learner], residual=learner == "friction",   # noqa: E731
+                             random_state=3).fit(ROBOT, train)
     a, b = fit(), fit()
     pa = a.predict(val["q"], val["qd"], val["qdd"])
     assert pa.shape == val["tau"].shape and np.isfinite(pa).all()
@@ -151,16 +152,23 @@ def test_ridge_on_the_chain_basis_identifies_the_arm_and_the_linear_floor_does_n
 
 
 def test_residual_baseline_adds_newton_euler(trajectories):
-    """On torques that are Newton–Euler's plus a viscous term, a linear residual learns the term."""
+    """On torques that are Newton–Euler's plus a viscous term, a linear residual learns the term;
+    the friction identification recovers each joint's armature, viscous and Coulomb values."""
     train = dict(trajectories["train"])
     train["tau"] = train["tau"] + 0.05 * train["qd"]
     model = BaselineID("linear", residual=True).fit(ROBOT, train)
     v = trajectories["val"]
     np.testing.assert_allclose(model.predict(v["q"], v["qd"], v["qdd"]), v["tau"] + 0.05 * v["qd"], atol=1e-9)
+    law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
+    train["tau"] = trajectories["train"]["tau"] + np.einsum(
+        "njk,jk->nj", np.stack([train["qdd"], train["qd"], np.sign(train["qd"])], axis=-1), law)
+    friction = BaselineID("friction", residual=True).fit(ROBOT, train)
+    np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
 
 
 @pytest.mark.parametrize("learner, options, message", [
-    ("forest", None, "learner must be one of linear, ridge, kernel, boosting, mlp, got 'forest'"),
+    ("forest", None, "learner must be one of linear, ridge, kernel, boosting, mlp, friction, got 'forest'"),
+    ("friction", None, "learner 'friction' identifies the drives beside Newton–Euler: give residual=True"),
     ("ridge", {"degree": 2}, "unknown option 'degree' for learner 'ridge'; valid: basis, alpha"),
     ("ridge", {"alpha": -1}, "ridge: alpha must be a positive number, got -1"),
     ("ridge", {"basis": "fourier"}, "ridge: basis must be one of"),

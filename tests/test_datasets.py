@@ -12,9 +12,9 @@ import pytest
 import yaml
 
 from nfarm import datasets
-from nfarm.datasets import (IKRegion, build_datasets, check_single_valued, load, load_study,
+from nfarm.datasets import (IKRegion, build_datasets, measured_states, check_single_valued, load, load_study,
                             random_trajectories, study_from_dict)
-from nfarm.dynamics import rnea
+from nfarm.dynamics import rnea, stribeck_drive_torques
 from nfarm.kinematics import fk
 from nfarm.paths import PARAMS
 from nfarm.reading import ParamsError
@@ -94,8 +94,13 @@ def test_stored_data_obey_the_models(built):
         assert (np.abs(idd["qd"]) <= study.id.max_velocity).all()
         assert (np.abs(idd["qdd"]) <= study.id.max_acceleration).all()
         # The "measured" torques: rigid body + the study's drives + noise of the stated size.
-        noise = idd["tau_measured"] - rnea(study.id.measured, idd["q"], idd["qd"], idd["qdd"],
-                                           drive=True)
+        noise = idd["tau_measured"] - idd["tau"] - stribeck_drive_torques(
+            study.id.measured, idd["qd"], idd["qdd"], idd["tau"], **study.id.friction)
+        # ... on states the arm knows: encoder angles on its counts, filtered derivatives near the truth
+        step = 2 * np.pi / study.id.encoder_counts
+        np.testing.assert_allclose(idd["q_measured"] / step, np.round(idd["q_measured"] / step), atol=1e-9)
+        assert np.abs(idd["q_measured"] - idd["q"]).max() <= step / 2 + 1e-12
+        assert np.sqrt(np.mean((idd["qd_measured"] - idd["qd"]) ** 2)) < 0.05 * idd["qd"].std()
         assert noise.shape == idd["tau"].shape
         np.testing.assert_allclose(noise.std(axis=0), study.id.noise, rtol=0.2)
         assert np.abs(noise.mean(axis=0)).max() < 4 * study.id.noise.max() / np.sqrt(len(noise))
@@ -283,6 +288,11 @@ def bad(path, value):
     (("id", "measured", "coulomb_velocity_deg_s"), 0, r"id.measured.coulomb_velocity_deg_s: must be > 0"),
     (("id", "measured", "noise_nm"), KeyError, r"id.measured.noise_nm: required field is missing"),
     (("id", "measured", "armature_kg"), 1, r"id.measured.armature_kg: unknown field"),
+    (("id", "measured", "stribeck"), 0.01, r"id.measured.stribeck: the breakaway friction must be at least the Coulomb"),
+    (("id", "measured", "stribeck_velocity_deg_s"), KeyError, r"id.measured: stribeck needs stribeck_velocity_deg_s"),
+    (("id", "measured", "load_coefficient"), 1.5, r"id.measured.load_coefficient: must be < 1"),
+    (("id", "measured", "encoder_counts"), 8, r"id.measured.encoder_counts: must be >= 16"),
+    (("id", "measured", "filter_window"), 8, r"id.measured.filter_window: must be an odd number of samples, got 8"),
 ])
 def test_every_study_rule_has_a_bad_file(tmp_path, path, value, message):
     file = tmp_path / "bad.yaml"
@@ -363,3 +373,21 @@ def test_learned_ik_sets_the_chosen_size_and_not_the_data():
     assert chosen["n_mfs"] == [1, 4, 4, 4, 4, 1]
     assert chosen["joint_options"] == [{"n_mfs": 1, "epochs": 1}, *({"epochs": e} for e in (2, 3, 4, 5))]
     assert plain.chosen_ik({"n_mfs": 3}) == {"n_mfs": 3}
+
+
+def test_measured_states_read_an_encoder_and_differentiate_like_a_drive():
+    """A cubic motion is read to the encoder's counts; the Savitzky–Golay derivatives of the
+    readings are the motion's own to within the quantisation's effect, trajectory by trajectory."""
+    t = np.arange(0, 2, 0.02)
+    q = np.column_stack([0.3 * t ** 3 - t, np.sin(t)])
+    both = np.concatenate([q, q[::-1] + 0.1])
+    label = np.repeat([0, 1], len(t))
+    q_read, qd, qdd = measured_states(both, label, 0.02, 4096, 9)
+    step = 2 * np.pi / 4096
+    assert np.abs(q_read - both).max() <= step / 2 + 1e-15
+    exact = np.column_stack([0.9 * t ** 2 - 1, np.cos(t)])
+    # a count between two samples is step/dt = 0.077 rad/s; the filter brings it under a third of that
+    assert np.abs(qd[:len(t)] - exact)[5:-5].max() < step / 0.02 / 3   # rad/s, away from the ends
+    assert np.abs(qdd[:len(t), 0] - 1.8 * t)[5:-5].max() < step / 0.02 ** 2 / 10   # rad/s² (a count: 3.8)
+    # no derivative runs across the boundary between trajectories
+    np.testing.assert_allclose(qd[len(t):], measured_states(both[len(t):], label[len(t):], 0.02, 4096, 9)[1])

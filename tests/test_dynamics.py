@@ -12,7 +12,7 @@ from conftest import random_chains
 import dataclasses
 import math
 
-from nfarm.dynamics import (coriolis, gravity_torques, inertial_parameters, joint_drive_torques,
+from nfarm.dynamics import (coriolis, gravity_torques, inertial_parameters, joint_drive_torques, stribeck_drive_torques,
                             mass_matrix, regressor, rnea)
 from nfarm.kinematics import jacobian
 from nfarm.pinocchio_ref import pinocchio_model
@@ -243,3 +243,26 @@ def test_regressor_is_linear_in_any_masses(intelbot5):
     assert Y.shape == (2, 3, n, 10 * n)
     assert_close(Y @ inertial_parameters(other), rnea(other, q, qd, qdd).reshape(2, 3, n))
     assert regressor(intelbot5, q[0], qd[0], qdd[0]).shape == (n, 10 * n)
+
+
+def test_stribeck_friction_reduces_to_the_tanh_law_and_dissipates(intelbot5):
+    driven = with_drives(intelbot5, seed=6)
+    q, qd, qdd = states(intelbot5, 40, 7)
+    load = rnea(intelbot5, q, qd, qdd)
+    np.testing.assert_allclose(stribeck_drive_torques(driven, qd, qdd, load), joint_drive_torques(driven, qd, qdd),
+                               rtol=1e-15, atol=1e-15)
+    law = dict(stribeck=2 * driven.coulomb, stribeck_velocity=np.full(intelbot5.n, 0.2),
+               load_coefficient=np.full(intelbot5.n, 0.1))
+    zero = np.zeros_like(qd)
+    friction = stribeck_drive_torques(driven, qd, zero, load, **law)
+    assert (qd * friction >= 0).all(), "friction never does positive work"
+    # just above the smoothing speed the friction is near its breakaway level plus the load share;
+    # far above the Stribeck speed, the Coulomb level plus the load share
+    slow = 5 * driven.coulomb_velocity
+    near_rest = stribeck_drive_torques(driven, slow, np.zeros(intelbot5.n), load[0], **law) - driven.viscous * slow
+    np.testing.assert_allclose(near_rest, (2 * driven.coulomb * np.exp(-(slow / 0.2) ** 2)
+                                           + driven.coulomb * (1 - np.exp(-(slow / 0.2) ** 2))
+                                           + 0.1 * np.abs(load[0])) * np.tanh(5.0), rtol=1e-12)
+    fast = np.full(intelbot5.n, 30.0)
+    np.testing.assert_allclose(stribeck_drive_torques(driven, fast, np.zeros(intelbot5.n), load[0], **law),
+                               driven.viscous * fast + driven.coulomb + 0.1 * np.abs(load[0]), rtol=1e-12)

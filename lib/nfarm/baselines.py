@@ -12,7 +12,10 @@ the arm's masses or lengths (:data:`LEARNERS`):
 * ``"boosting"`` — gradient-boosted trees per joint (``HistGradientBoostingRegressor``:
   ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the same inputs;
 * ``"mlp"`` — a multilayer perceptron (``hidden`` layer widths, ``alpha``, ``max_iter`` epochs of
-  Adam) on the same inputs.
+  Adam) on the same inputs;
+* ``"friction"`` — not a learner but the identification any engineer tries first on a real
+  arm: with ``residual=True``, per joint, least squares of ``τ − rnea`` on that joint's
+  ``[q̈_j, q̇_j, sign q̇_j]`` — armature, viscous and Coulomb friction (chapter 06.8).
 
 Targets are standardised per joint (each joint's error then counts alike, as in the NRMSE the
 chapters report), inputs too where the learner is not scale-free. Every random draw comes from
@@ -45,6 +48,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "kernel": {"n_components": 1000, "gamma": 0.1, "alpha": 1e-6},
     "boosting": {"max_iter": 300, "learning_rate": 0.1, "max_leaf_nodes": 31},
     "mlp": {"hidden": [128, 128], "alpha": 1e-4, "max_iter": 200},
+    "friction": {},
 }
 LEARNERS = tuple(DEFAULTS)
 
@@ -110,6 +114,8 @@ class BaselineID:
     def _features(self, q, qd, qdd) -> np.ndarray:
         if self.learner == "linear":
             return np.concatenate([q, qd, qdd], axis=1)
+        if self.learner == "friction":
+            return np.stack([qdd, qd, np.sign(qd)], axis=-1)                 # (N, n, 3)
         if self.learner == "ridge":
             return basis(self.robot_, q, qd, qdd, self.options_["basis"])[:, 1:]
         return _smooth_inputs(q, qd, qdd)
@@ -124,6 +130,8 @@ class BaselineID:
         from sklearn.preprocessing import StandardScaler
 
         seed = self.random_state
+        if self.learner == "friction":
+            return _PerJointLeastSquares()
         if self.learner == "linear":
             return LinearRegression()
         if self.learner == "ridge":
@@ -157,13 +165,18 @@ class BaselineID:
         options = self._options()
         if not isinstance(self.residual, bool):
             raise ValueError(f"residual must be True or False, got {self.residual!r}")
+        if self.learner == "friction" and not self.residual:
+            raise ValueError("learner 'friction' identifies the drives beside Newton–Euler: give residual=True")
         q, qd, qdd, tau = _states(train, robot, "train")
         self.robot_, self.options_ = robot, options
         target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
-        self.y_mean_ = target.mean(axis=0)
-        self.y_scale_ = np.where(target.std(axis=0) > 0, target.std(axis=0), 1.0)
+        if self.learner == "friction":      # a physical law: no offset, no scaling
+            self.y_mean_, self.y_scale_ = np.zeros(robot.n), np.ones(robot.n)
+        else:
+            self.y_mean_ = target.mean(axis=0)
+            self.y_scale_ = np.where(target.std(axis=0) > 0, target.std(axis=0), 1.0)
         X = self._features(q, qd, qdd)
-        self.n_features_ = X.shape[1]
+        self.n_features_ = X.shape[-1]
         start = time.perf_counter()
         with warnings.catch_warnings():
             # A fixed budget of epochs is the design (no early stopping): not a failure.
@@ -184,3 +197,14 @@ class BaselineID:
         if self.residual:
             tau = tau + rnea(self.robot_, q, qd, qdd)
         return tau
+
+
+class _PerJointLeastSquares:
+    """``y_j ≈ X_j θ_j`` per joint by least squares (``X (N, n, k)``, ``y (N, n)``)."""
+
+    def fit(self, X, y):
+        self.coef_ = np.stack([np.linalg.lstsq(X[:, j], y[:, j], rcond=None)[0] for j in range(y.shape[1])])
+        return self
+
+    def predict(self, X):
+        return np.einsum("njk,jk->nj", X, self.coef_)

@@ -22,8 +22,13 @@ slowed down uniformly until its velocities and accelerations are within the stud
 ``rnea(q, qd, qdd)`` of the rigid-body model. With a ``measured`` arm in the study, the files
 also hold ``tau_measured``: what a real arm's joint sensors would record on the same
 trajectories — the rigid-body torques plus the joint drives' armature and friction
-(:func:`nfarm.dynamics.joint_drive_torques`) plus Gaussian sensor noise. Splits are by whole
-trajectories.
+(:func:`nfarm.dynamics.stribeck_drive_torques`: viscous, Coulomb, and where the study says so a
+Stribeck breakaway and friction that grows with the load) plus Gaussian sensor noise. With an
+``encoder_counts`` in the measured arm, the files also hold the states such an arm knows:
+``q_measured`` (each angle quantised to the encoder's counts per turn), ``qd_measured`` and
+``qdd_measured`` (its first and second derivatives by a Savitzky–Golay filter of
+``filter_window`` samples along each trajectory, as a drive controller estimates them). Splits
+are by whole trajectories.
 
 **Files** (:func:`build_datasets`, ``python -m nfarm datasets STUDY``):
 ``build/datasets/<robot>/{ik,ik_full,id}_{train,val,test}.npz`` of plain arrays (``np.load(...,
@@ -56,7 +61,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from . import __version__
-from .dynamics import joint_drive_torques, rnea
+from .dynamics import joint_drive_torques, rnea, stribeck_drive_torques
 from .ik import closed_form, count_distinct, in_class, solve
 from .geometric_ik import wrapped_gap as _wrapped_gap
 from .kinematics import fk
@@ -67,7 +72,7 @@ from .robot import Robot, joint_array, load_robot, robot_hash
 __all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "load_study",
            "study_from_dict", "smoke_study", "check_single_valued", "workspace_fraction",
            "random_trajectories", "ik_samples", "build_datasets", "load", "dataset_dir",
-           "DATA_VERSION", "SPLITS"]
+           "measured_states", "DATA_VERSION", "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
 DATA_VERSION = 3
@@ -393,6 +398,12 @@ class IDSettings:
         measured: the "real" arm of ``tau_measured`` — the robot with the study's joint
             drives (viscous and Coulomb friction, armature) — or ``None``.
         noise: ``(n,)`` standard deviation of the torque sensors' noise [N·m].
+        friction: the measured arm's Stribeck and load terms (keyword arguments of
+            :func:`nfarm.dynamics.stribeck_drive_torques`; empty: its tanh Coulomb law only).
+        encoder_counts: counts per turn of the measured arm's joint encoders, or ``None``
+            (the learners see the exact states).
+        filter_window: samples of the Savitzky–Golay filter that estimates ``q̇, q̈`` from the
+            encoder angles.
         via_points: via points per trajectory (the first is the start).
         segment_time: ``(lo, hi)`` nominal duration of each segment [s], drawn uniformly.
         dt: sampling step [s].
@@ -409,6 +420,31 @@ class IDSettings:
     max_acceleration: np.ndarray
     measured: Robot | None = None
     noise: np.ndarray | None = None
+    friction: dict = field(default_factory=dict)
+    encoder_counts: int | None = None
+    filter_window: int = 7
+
+
+def measured_states(q: np.ndarray, trajectory: np.ndarray, dt: float, counts: int, window: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What a real arm knows of its motion: each joint angle read by an encoder of ``counts``
+    per turn (rounded to its nearest count), and the velocity and acceleration a drive
+    estimates from those readings — Savitzky–Golay derivatives (cubic fits over ``window``
+    samples, scipy's ``savgol_filter``) along each trajectory. ``q (N, n)`` [rad], ``trajectory
+    (N,)`` labels, ``dt`` [s]; returns ``q, q̇, q̈ (N, n)``."""
+    from scipy.signal import savgol_filter
+
+    step = 2 * math.pi / counts
+    q_read = np.round(q / step) * step
+    qd, qdd = np.empty_like(q), np.empty_like(q)
+    order = min(3, window - 1)
+    for label in np.unique(trajectory):
+        rows = np.flatnonzero(trajectory == label)
+        part = q_read[rows]
+        w = min(window, len(rows) - (1 - len(rows) % 2))
+        qd[rows] = savgol_filter(part, w, min(order, w - 1), deriv=1, delta=dt, axis=0, mode="interp")
+        qdd[rows] = savgol_filter(part, w, min(order, w - 1), deriv=2, delta=dt, axis=0, mode="interp")
+    return q_read, qd, qdd
 
 
 def _quintic(p0, v0, p1, v1, T, s):
@@ -560,7 +596,8 @@ _ID = {"trajectories": True, "via_points": True, "segment_time_s": True, "dt_s":
        "margin_deg": False, "max_velocity_deg_s": True, "max_acceleration_deg_s2": True,
        "measured": False}
 _MEASURED = {"viscous": True, "coulomb": True, "coulomb_velocity_deg_s": True, "armature": True,
-             "noise_nm": True}
+             "noise_nm": True, "stribeck": False, "stribeck_velocity_deg_s": False,
+             "load_coefficient": False, "encoder_counts": False, "filter_window": False}
 
 
 def load_study(path: str | os.PathLike) -> Study:
@@ -668,7 +705,8 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
                                 f"({math.degrees(narrowest):.6g} deg), got {math.degrees(margin):.6g}")
     vmax = np.radians(_per_joint(v, idd["max_velocity_deg_s"], "id.max_velocity_deg_s", n))
     amax = np.radians(_per_joint(v, idd["max_acceleration_deg_s2"], "id.max_acceleration_deg_s2", n))
-    measured = noise = None
+    measured = noise = encoder_counts = None
+    friction, filter_window = {}, 7
     if idd.get("measured") is not None:
         m = v.mapping(idd["measured"], "id.measured", _MEASURED)
         drives = {key: _per_joint(v, m[key], f"id.measured.{key}", n, zero=True)
@@ -677,6 +715,28 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
             v, m["coulomb_velocity_deg_s"], "id.measured.coulomb_velocity_deg_s", n))
         measured = dataclasses.replace(robot, **drives)
         noise = _per_joint(v, m["noise_nm"], "id.measured.noise_nm", n, zero=True)
+        if "stribeck" in m:
+            friction["stribeck"] = _per_joint(v, m["stribeck"], "id.measured.stribeck", n, zero=True)
+            low = np.flatnonzero(friction["stribeck"] < drives["coulomb"])
+            if low.size:
+                v.fail("id.measured.stribeck", f"the breakaway friction must be at least the Coulomb "
+                                               f"friction (joint {low[0] + 1}: {friction['stribeck'][low[0]]:g} "
+                                               f"< {drives['coulomb'][low[0]]:g} N·m)")
+            if "stribeck_velocity_deg_s" not in m:
+                v.fail("id.measured", "stribeck needs stribeck_velocity_deg_s (> 0)")
+        if "stribeck_velocity_deg_s" in m:
+            friction["stribeck_velocity"] = np.radians(_per_joint(
+                v, m["stribeck_velocity_deg_s"], "id.measured.stribeck_velocity_deg_s", n))
+        if "load_coefficient" in m:
+            friction["load_coefficient"] = _per_joint(v, m["load_coefficient"], "id.measured.load_coefficient",
+                                                      n, zero=True)
+            if (friction["load_coefficient"] >= 1).any():
+                v.fail("id.measured.load_coefficient", "must be < 1 (a fraction of the joint's load torque)")
+        if m.get("encoder_counts") is not None:
+            encoder_counts = v.integer(m["encoder_counts"], "id.measured.encoder_counts", lo=16, hi=2**31)
+        filter_window = v.integer(m.get("filter_window", 7), "id.measured.filter_window", lo=5, hi=101)
+        if filter_window % 2 == 0:
+            v.fail("id.measured.filter_window", f"must be an odd number of samples, got {filter_window}")
 
     learned_ik = {}
     if data.get("learned_ik") is not None:
@@ -699,7 +759,8 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
         ik_region=IKRegion(robot, box, radial, height, axis, angle, reach), ik_sampler=sampler,
         ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
         check_starts=check_starts,
-        id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax, measured, noise),
+        id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax, measured, noise, friction,
+                      encoder_counts, filter_window),
         learned_ik=learned_ik, params=json.loads(json.dumps(data)))
 
 
@@ -859,9 +920,15 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
                 if study.id.measured is not None:
                     noise = np.random.default_rng(np.random.SeedSequence(
                         [study.seed, _STREAMS["id_noise"], _SPLIT_STREAM[split]]))
-                    data["tau_measured"] = data["tau"] + \
-                        joint_drive_torques(study.id.measured, data["qd"], data["qdd"]) + \
+                    drive = stribeck_drive_torques(study.id.measured, data["qd"], data["qdd"], data["tau"],
+                                                   **study.id.friction) if study.id.friction else \
+                        joint_drive_torques(study.id.measured, data["qd"], data["qdd"])
+                    data["tau_measured"] = data["tau"] + drive + \
                         study.id.noise * noise.standard_normal(data["tau"].shape)
+                    if study.id.encoder_counts is not None:
+                        data["q_measured"], data["qd_measured"], data["qdd_measured"] = measured_states(
+                            data["q"], data["trajectory"], study.id.dt, study.id.encoder_counts,
+                            study.id.filter_window)
             else:
                 region = study.ik_region if kind == "ik" else IKRegion.full(study.robot)
                 data = ik_samples(region, study.ik_sizes[split], np.random.SeedSequence(seed),

@@ -36,7 +36,7 @@ import numpy as np
 from .kinematics import cos_sin, joint_placements, snap_right_angles
 from .robot import Robot, joint_array
 
-__all__ = ["rnea", "joint_drive_torques", "gravity_torques", "mass_matrix", "coriolis", "regressor",
+__all__ = ["rnea", "joint_drive_torques", "stribeck_drive_torques", "gravity_torques", "mass_matrix", "coriolis", "regressor",
            "inertial_parameters", "INERTIAL_NAMES", "CHUNK"]
 
 #: Samples per chunk (keeps the working set in cache).
@@ -169,6 +169,30 @@ def joint_drive_torques(robot: Robot, qd, qdd) -> np.ndarray:
     qd, qdd = a["qd"], a["qdd"]
     return robot.armature * qdd + robot.viscous * qd + \
         robot.coulomb * np.tanh(qd / robot.coulomb_velocity)
+
+
+def stribeck_drive_torques(robot: Robot, qd, qdd, tau_load, *, stribeck=None, stribeck_velocity=None,
+                           load_coefficient=0.0) -> np.ndarray:
+    """Torques ``(..., n)`` [N·m] of joint drives with Stribeck friction that grows with the
+    load — a drive law no learner or identification of this project assumes (chapters 05–07):
+
+    ``τ_drive = I_a q̈ + b q̇ + [τ_c + μ |τ_load| + (τ_s − τ_c) exp(−(q̇ / v_s)²)] tanh(q̇ / ε)``
+
+    the armature ``I_a``, viscous ``b``, Coulomb ``τ_c`` and smoothing speed ``ε`` from the
+    robot's drive fields (:func:`joint_drive_torques`); the breakaway friction at rest ``τ_s``
+    (``stribeck``, ``(n,)`` [N·m], default ``τ_c``: no Stribeck effect) falling to ``τ_c`` over
+    speeds of about ``v_s`` (``stribeck_velocity`` [rad/s]; Armstrong-Hélouvry 1994); and
+    gear-mesh friction that grows by ``μ`` (``load_coefficient``, ``(n,)``) of the torque the
+    joint transmits, ``tau_load (..., n)`` (the rigid-body torque). With ``τ_s = τ_c`` and
+    ``μ = 0`` it is :func:`joint_drive_torques`. Friction only dissipates.
+    """
+    _, a = _check(robot, qd=qd, qdd=qdd, tau_load=tau_load)
+    qd, qdd, load = a["qd"], a["qdd"], a["tau_load"]
+    tau_s = robot.coulomb if stribeck is None else np.asarray(stribeck, float)
+    v_s = np.ones(robot.n) if stribeck_velocity is None else np.asarray(stribeck_velocity, float)
+    level = robot.coulomb + np.asarray(load_coefficient, float) * np.abs(load) + \
+        (tau_s - robot.coulomb) * np.exp(-(qd / v_s) ** 2)
+    return robot.armature * qdd + robot.viscous * qd + level * np.tanh(qd / robot.coulomb_velocity)
 
 
 def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None, drive: bool = False) -> np.ndarray:

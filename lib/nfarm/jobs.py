@@ -47,6 +47,7 @@ from .baselines import BaselineID
 from .learned import LearnedID, LearnedIK, fit_cached, n_parameters
 from .paths import BUILD, project_path, shown_path
 from .reading import ParamsError
+from .statistics import trajectory_sums
 
 __all__ = ["Job", "JOBS", "REQUIRED"]
 
@@ -173,15 +174,8 @@ def learned_ik(p: dict) -> dict:
 def learned_id(p: dict) -> dict:
     study, directory, models = _study_data(p)
     robot = study.robot
-    torque = {"rigid": "tau", "measured": "tau_measured"}[p["torques"]]
     states = ("q", "qd", "qdd")
-    data = {}
-    for split in ("train", "val"):
-        loaded = datasets.load(directory / f"id_{split}.npz", robot, study)
-        if torque not in loaded:
-            raise ParamsError(f"{p['study_file']}: torques: the study has no measured torques "
-                              f"(id.measured)")
-        data[split] = {**{k: loaded[k] for k in states}, "tau": loaded[torque]}
+    data = {split: _id_split(p, study, directory, split) for split in ("train", "val")}
     train = _first(data["train"], (*states, "tau"), p["fraction"], None, p["stride"])
     options = {k: p[k] for k in ("inputs", "residual", *_ANFIS_KEYS) if p[k] is not None}
     model = LearnedID(**options, random_state=p["seed"])
@@ -196,11 +190,17 @@ def learned_id(p: dict) -> dict:
 
 
 def _id_split(p: dict, study, directory: Path, split: str) -> dict:
-    torque = {"rigid": "tau", "measured": "tau_measured"}[p["torques"]]
+    """One split of a study's ID data: the rigid-body torques on the exact states, or the
+    measured torques on the states the measured arm knows (its encoder's, when it has one)."""
+    if p["torques"] not in ("rigid", "measured"):
+        raise ParamsError(f"torques must be 'rigid' or 'measured', got {p['torques']!r}")
     loaded = datasets.load(directory / f"id_{split}.npz", study.robot, study)
-    if torque not in loaded:
+    if p["torques"] == "rigid":
+        return {**{k: loaded[k] for k in ("q", "qd", "qdd", "trajectory")}, "tau": loaded["tau"]}
+    if "tau_measured" not in loaded:
         raise ParamsError(f"{p['study_file']}: torques: the study has no measured torques (id.measured)")
-    return {**{k: loaded[k] for k in ("q", "qd", "qdd")}, "tau": loaded[torque]}
+    return {**{k: loaded.get(f"{k}_measured", loaded[k]) for k in ("q", "qd", "qdd")},
+            "trajectory": loaded["trajectory"], "tau": loaded["tau_measured"]}
 
 
 def id_baseline(p: dict) -> dict:
@@ -221,9 +221,11 @@ def id_baseline(p: dict) -> dict:
     seconds = time.perf_counter() - start
     rmse = np.sqrt(((predicted - judged["tau"]) ** 2).mean(axis=0))
     nrmse = rmse / judged["tau"].std(axis=0)
+    sums = trajectory_sums(predicted, judged["tau"], judged["trajectory"])
     return {"rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
             "fit_seconds": float(model.fit_seconds_), "predict_us": 1e6 * seconds / len(predicted),
-            "features": int(model.n_features_), "train_samples": int(len(train["q"]))}
+            "features": int(model.n_features_), "train_samples": int(len(train["q"])),
+            "trajectory_sums": sums.ravel().tolist()}
 
 
 def idle(p: dict) -> dict:
@@ -262,7 +264,8 @@ JOBS: dict[str, Job] = {
         id_baseline,
         {**_STUDY, "stride": 1, "torques": "rigid", "residual": False, "split": "val", "learner": "linear",
          **{k: None for k in sorted({k for o in BASELINE_OPTIONS.values() for k in o})}},
-        ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples"),
+        ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples",
+         "trajectory_sums"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a model-free scikit-learn baseline of a study's ID",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir")),

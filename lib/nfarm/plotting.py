@@ -395,15 +395,20 @@ def plot_joint_curves(models: list, joint_names, *, joints=None, scale: float = 
     return fig
 
 
-def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg") -> Figure:
-    """Test RMSE ``errors (len(sizes), n)`` per joint against the training-set size."""
+def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg",
+                    quantity: str = "validation RMSE", symbol: str = "q",
+                    xlabel: str = "training samples", numbers=None) -> Figure:
+    """Validation errors ``errors (len(sizes), n)`` per joint against the training-set size
+    (``quantity [unit]`` on the y axis; joints labelled ``symbol<number> name``, ``numbers``
+    the joints' 1-based numbers when only some are drawn, default 1..n)."""
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-    for j, name in enumerate(joint_names):
-        ax.plot(sizes, errors[:, j], "o-", color=f"C{j}", label=f"q{j + 1} {name}")
+    numbers = range(1, len(joint_names) + 1) if numbers is None else numbers
+    for j, (name, number) in enumerate(zip(joint_names, numbers)):
+        ax.plot(sizes, errors[:, j], "o-", color=f"C{number - 1}", label=f"{symbol}{number} {name}")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("training samples")
-    ax.set_ylabel(f"validation RMSE [{unit}]")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(f"{quantity} [{unit}]")
     ax.set_xticks(sizes, [f"{s:,}" for s in sizes])
     ax.minorticks_off()
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))

@@ -1,0 +1,62 @@
+"""Bootstrap spreads over trajectories (nfarm.statistics): the sums reproduce the direct NRMSE,
+intervals are seeded, contain the estimate and narrow with more trajectories."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nfarm.statistics import bootstrap_nrmse, nrmse_from_sums, trajectory_sums, worst_difference
+
+
+def data(trajectories, seed=0, per=50, n=3):
+    rng = np.random.default_rng(seed)
+    label = np.repeat(np.arange(trajectories), per)
+    tau = rng.normal(size=(len(label), n)) * [1.0, 2.0, 0.5] + rng.normal(size=(trajectories, 1))[label]
+    predicted = tau + rng.normal(size=tau.shape) * [0.1, 0.1, 0.2] * (1 + rng.random((trajectories, 1))[label])
+    return predicted, tau, label
+
+
+def test_sums_reproduce_the_direct_nrmse():
+    predicted, tau, label = data(12)
+    direct = np.sqrt(((predicted - tau) ** 2).mean(axis=0)) / tau.std(axis=0)
+    sums = trajectory_sums(predicted, tau, label)
+    assert sums.shape == (12, 10)
+    np.testing.assert_allclose(nrmse_from_sums(sums.sum(axis=0)), direct, rtol=1e-12)
+
+
+def test_bootstrap_is_seeded_contains_the_estimate_and_narrows_with_more_trajectories():
+    widths = []
+    for T in (10, 160):
+        sums = trajectory_sums(*data(T))
+        a, b = bootstrap_nrmse(sums, seed=1), bootstrap_nrmse(sums, seed=1)
+        np.testing.assert_array_equal(a.low, b.low)
+        assert (a.low <= a.value).all() and (a.value <= a.high).all()
+        assert a.worst_low <= a.worst <= a.worst_high and a.trajectories == T
+        widths.append(a.worst_high - a.worst_low)
+    assert widths[1] < 0.5 * widths[0], widths
+
+
+@pytest.mark.parametrize("sums, kwargs, message", [
+    (np.ones((1, 4)), {}, r"sums must be \(trajectories >= 2, 1 \+ 3n\)"),
+    (np.ones((5, 5)), {}, r"sums must be"),
+    (np.ones((5, 4)), {"draws": 10}, r"draws must be an integer >= 100"),
+    (np.ones((5, 4)), {"level": 1.5}, r"level must be in \(0, 1\)"),
+])
+def test_bad_input_is_refused(sums, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        bootstrap_nrmse(sums, **kwargs)
+    with pytest.raises(ValueError, match="must be \\(N, n\\) arrays of one shape"):
+        trajectory_sums(np.ones((3, 2)), np.ones((3, 3)), np.zeros(3))
+
+
+def test_paired_difference_tells_a_real_gap_from_noise():
+    predicted, tau, label = data(40)
+    better = tau + 0.5 * (predicted - tau)
+    a, b = trajectory_sums(predicted, tau, label), trajectory_sums(better, tau, label)
+    value, low, high = worst_difference(a, b, seed=2)
+    assert 0 < low <= value <= high                     # a is worse, beyond the spread
+    value, low, high = worst_difference(a, a, seed=2)
+    assert value == low == high == 0.0                   # the same model: no difference
+    with pytest.raises(ValueError, match="same trajectories"):
+        worst_difference(a, a[:-1])
