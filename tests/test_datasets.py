@@ -391,3 +391,17 @@ def test_measured_states_read_an_encoder_and_differentiate_like_a_drive():
     assert np.abs(qdd[:len(t), 0] - 1.8 * t)[5:-5].max() < step / 0.02 ** 2 / 10   # rad/s² (a count: 3.8)
     # no derivative runs across the boundary between trajectories
     np.testing.assert_allclose(qd[len(t):], measured_states(both[len(t):], label[len(t):], 0.02, 4096, 9)[1])
+
+
+def test_seed_like_trajectories_are_the_dissertation_s_cubics():
+    """Rest to rest over 6 s, every 0.2 s (31 states), ends within the limits less the margin."""
+    study = load_study(STUDY)
+    d = datasets.seed_like_trajectories(study.robot, study.id, 4, 3)
+    assert d["q"].shape == (4 * 31, study.robot.n) and np.array_equal(np.bincount(d["trajectory"]), [31] * 4)
+    np.testing.assert_allclose(d["t"][:31], np.arange(31) * 0.2, atol=1e-12)
+    ends = d["qd"].reshape(4, 31, -1)[:, [0, -1]]
+    np.testing.assert_allclose(ends, 0.0, atol=1e-12)
+    lo, hi = study.robot.qlim[:, 0] + study.id.margin, study.robot.qlim[:, 1] - study.id.margin
+    assert ((d["q"] >= lo - 1e-12) & (d["q"] <= hi + 1e-12)).all()
+    again = datasets.seed_like_trajectories(study.robot, study.id, 4, 3)
+    np.testing.assert_array_equal(again["q"], d["q"])

@@ -68,10 +68,11 @@ from .kinematics import fk
 from .paths import BUILD, atomic_path, project_path
 from .reading import ParamsError, Validator, load_json, load_yaml, show
 from .robot import Robot, joint_array, load_robot, robot_hash
+from .trajectory import cubic
 
 __all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "load_study",
            "study_from_dict", "smoke_study", "check_single_valued", "workspace_fraction",
-           "random_trajectories", "ik_samples", "build_datasets", "load", "dataset_dir",
+           "random_trajectories", "seed_like_trajectories", "ik_samples", "build_datasets", "load", "dataset_dir",
            "measured_states", "DATA_VERSION", "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
@@ -471,6 +472,23 @@ def _via_velocities(points: np.ndarray, durations: np.ndarray) -> np.ndarray:
     v = np.zeros_like(points)
     v[:, 1:-1] = inner
     return v
+
+
+def seed_like_trajectories(robot: Robot, settings: IDSettings, count: int, seed, *, duration: float = 6.0,
+                           dt: float = 0.2) -> dict[str, np.ndarray]:
+    """``count`` trajectories made the way the dissertation's program makes them (its defaults,
+    ``docs/STUDY.md``): one cubic per trajectory (:func:`nfarm.trajectory.cubic`) from rest at a
+    random configuration to rest at another, drawn uniformly within the joint limits less the
+    study's margin, over ``duration`` [s] sampled every ``dt`` [s] (31 states each by default).
+    The arrays of :func:`random_trajectories` (``scale`` all ones); chapter 06's ablation trains
+    on them and chapter 07 tests on the study's own held-out trajectories."""
+    rng = np.random.default_rng(seed)
+    lo, hi = robot.qlim[:, 0] + settings.margin, robot.qlim[:, 1] - settings.margin
+    ends = lo + (hi - lo) * rng.random((count, 2, robot.n))
+    parts = [cubic(start, end, 0.0, 0.0, 0.0, duration, dt) for start, end in ends]
+    return {"t": np.concatenate([p.t for p in parts]), "q": np.concatenate([p.q for p in parts]),
+            "qd": np.concatenate([p.qd for p in parts]), "qdd": np.concatenate([p.qdd for p in parts]),
+            "trajectory": np.repeat(np.arange(count), [len(p.t) for p in parts]), "scale": np.ones(count)}
 
 
 def random_trajectories(robot: Robot, settings: IDSettings, count: int, seed) -> dict[str, np.ndarray]:
