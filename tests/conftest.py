@@ -88,3 +88,17 @@ def random_chains(draw, min_joints: int = 1, max_joints: int = 7) -> Robot:
         "name": f"random{n}{convention[0]}", "convention": convention,
         "gravity": [0.0, 0.0, -9.81], "tool": tool.tolist(), "joints": joints, **extra,
     }, source="<random chain>")
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config, items):
+    """`make test` keeps each chain of chapters (05 → 06 → 07 → 08) in one pytest-xdist worker
+    (``--dist loadgroup``), where its data and models are made once. A pytest/xdist pair that
+    ignores the groups (pytest-xdist 3.8 under pytest 9 did: every chain ran twice, a minute
+    more) is refused here rather than found in the suite's time."""
+    if getattr(config.option, "loadgroup", False):
+        lost = [item.nodeid for item in items
+                if any(item.iter_markers("xdist_group")) and "@" not in item.nodeid]
+        if lost:
+            raise pytest.UsageError(f"--dist loadgroup is not grouping tests ({lost[0]} has no group suffix): "
+                                    f"pytest-xdist and pytest disagree; use the versions in environment.lock")
