@@ -40,18 +40,21 @@ far from linear in a quaternion's components.
 Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model), so grid
 partitions and clustering see every input alike. Outputs are the joint angles [rad].
 
-:class:`LearnedID` feeds each joint's model one of four **input sets** (:func:`id_features`):
+:class:`LearnedID` feeds each joint's model one of six **input sets** (:func:`id_features`):
 the joint's own ``q, q̇, q̈`` (the likely dissertation design), every joint's, trigonometric
-features, or the joint's row of the rigid-body regressor (:func:`nfarm.dynamics.regressor`).
-Measured (chapter 06, intelbot5, 19 552 training samples, 10 epochs; validation NRMSE of the
-worst joint): own state with 8 or 27 grid rules 95 %, every joint's state with 8 c-means rules
-75 %, trigonometric features with 8 c-means rules 74 %, the regressor's row with one rule
-below 1e-6 %. A joint's torque depends on every joint's state through sums of products that
-few local linear models fit only roughly; in the regressor's columns it is linear
-(``τ = Y π``), so one rule — least squares — identifies the masses and the fuzzy partition adds
-nothing. With ``residual=True`` a model learns ``τ − rnea`` instead: on chapter 05's torques
-with friction, armature and 0.005 N·m sensor noise, own-state residual models leave
-0.0059–0.0065 N·m of Newton–Euler's 0.076–0.102 N·m (validation RMSE).
+features, the two ``affine`` sets — rules over the configuration, consequents over the terms
+every rigid arm's torque is a sum of (:mod:`nfarm.bases`) — or the joint's row of the
+rigid-body regressor (:func:`nfarm.dynamics.regressor`), which needs the arm's geometry.
+Measured (chapter 06, intelbot5, validation NRMSE of the worst joint): own state with 8 or 27
+grid rules 95 %, every joint's state with 8 c-means rules 75 %, trigonometric features with 8
+c-means rules 73 %; ``affine`` with one rule 37 %, with eight rules over q2–q4 2.4 % (2.42 % on
+the held-out trajectories) — the rules supply the products of angle functions the inertia
+needs. The regressor's row with one rule is below 1e-6 %: the torques are linear in it
+(``τ = Y π``), so one rule is least squares on the inertial parameters, an identification, not
+a learning result. With ``residual=True`` a model learns ``τ − rnea`` instead: on chapter 05's
+measured arm (Stribeck and load-dependent friction, encoder states, 0.005 N·m sensor noise)
+own-state residual models leave 0.030 N·m on the worst joint against 0.046 N·m for a
+least-squares friction identification (chapter 07).
 
 Models are saved as one JSON file (no pickle) holding the robot's parameter hash
 (:func:`nfarm.robot.robot_hash`); loading against another robot is an error, and the file is
