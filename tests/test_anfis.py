@@ -334,3 +334,19 @@ def test_normal_equations_in_blocks_equal_the_whole(monkeypatch):
     blocks = ANFIS(n_mfs=2, premise_inputs=[0, 1, 2], epochs=3).fit(X, y)
     np.testing.assert_allclose(blocks.consequents_, whole.consequents_, rtol=1e-7, atol=1e-9)
     np.testing.assert_allclose(blocks.loss_curve_, whole.loss_curve_, rtol=1e-9)
+
+
+def test_ill_conditioned_normal_equations_fall_back_to_an_orthogonal_solve():
+    """A consequent input that repeats another makes AᵀA singular (no ridge here): the fit takes
+    the orthogonal factorisation (no LinAlgWarning or error reaches the user) and equals
+    solver="lstsq"."""
+    import warnings
+    rng = np.random.default_rng(5)
+    X = rng.random((200, 2))
+    X = np.column_stack([X, X[:, 1]])                       # the third input repeats the second
+    y = np.sin(3 * X[:, 0]) + X[:, 1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        normal = ANFIS(n_mfs=3, premise_inputs=[0], epochs=2, ridge=0.0).fit(X, y)
+    lstsq = ANFIS(n_mfs=3, premise_inputs=[0], epochs=2, ridge=0.0, solver="lstsq").fit(X, y)
+    np.testing.assert_allclose(normal.predict(X), lstsq.predict(X), atol=1e-9)

@@ -17,9 +17,10 @@ consecutive up–down alternations. With validation data the model kept is the o
 least validation error (MATLAB's ``chkFIS``).
 
 Least squares: the consequents solve the normal equations ``(AᵀA + δI) θ = Aᵀy`` by Cholesky,
-with a tiny ridge ``δ = ridge · tr(AᵀA)/P``. ``solver="lstsq"`` uses an orthogonal
-factorisation instead. Chapter 4 measures both: on Jang's examples they reach the same errors,
-and the normal equations are 3–8 times faster (0.6 against 4.8 ms on the 500 × 80 system of
+with a tiny ridge ``δ = ridge · tr(AᵀA)/P``; where they are ill-conditioned (scipy warns) the
+design is solved by an orthogonal factorisation instead (:meth:`ANFIS._solve_normal`).
+``solver="lstsq"`` always uses the orthogonal factorisation. Chapter 4 measures both: on Jang's
+examples they reach the same errors, and the normal equations are 3–8 times faster (0.6 against 4.8 ms on the 500 × 80 system of
 Mackey–Glass), which is why they are the default.
 
 Everything in an epoch is vectorised over samples and rules; memory is O(N · R · (n + 1)),
@@ -284,15 +285,29 @@ class ANFIS:
             A = self._design(w_bar[start:start + rows], X[start:start + rows])
             G += A.T @ A
             b += A.T @ y[start:start + rows]
-        G[np.diag_indices_from(G)] += self.ridge * max(np.trace(G), 1e-300) / P + 1e-300
-        return scipy.linalg.solve(G, b, assume_a="pos", check_finite=False)
+        return self._solve_normal(G, b, lambda: scipy.linalg.lstsq(G, b, lapack_driver="gelsy",
+                                                                   check_finite=False)[0])
 
     def _least_squares(self, A, y):
         if self.solver == "lstsq":
             return scipy.linalg.lstsq(A, y, lapack_driver="gelsy", check_finite=False)[0]
-        G = A.T @ A
+        return self._solve_normal(A.T @ A, A.T @ y, lambda: scipy.linalg.lstsq(
+            A, y, lapack_driver="gelsy", check_finite=False)[0])
+
+    def _solve_normal(self, G, b, orthogonal):
+        """``(G + δI) θ = b`` by Cholesky; where that is ill-conditioned (scipy's
+        ``LinAlgWarning``: reciprocal condition below machine precision, e.g. a rule whose
+        consequent inputs barely vary over the samples it sees) or not positive definite, the
+        least-squares solution of ``orthogonal()`` instead (rank-revealing QR, ``gelsy``): the
+        squared condition of the normal equations would lose every digit."""
         G[np.diag_indices_from(G)] += self.ridge * max(np.trace(G), 1e-300) / len(G) + 1e-300
-        return scipy.linalg.solve(G, A.T @ y, assume_a="pos", check_finite=False)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
+            try:
+                return scipy.linalg.solve(G, b, assume_a="pos", check_finite=False)
+            except (scipy.linalg.LinAlgWarning, np.linalg.LinAlgError):
+                pass
+        return orthogonal()
 
     def _premise_gradient(self, X, y, mfs, rules, mu, factors, total, f, y_hat):
         """``∇E`` of ``E = Σ (y − ŷ)²`` with respect to every premise parameter, per input

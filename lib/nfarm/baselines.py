@@ -39,7 +39,7 @@ from .bases import BASES, basis
 from .dynamics import rnea
 from .robot import Robot
 
-__all__ = ["LEARNERS", "BaselineID", "DEFAULTS"]
+__all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label"]
 
 #: Each learner's options and their defaults.
 DEFAULTS: dict[str, dict[str, Any]] = {
@@ -51,6 +51,15 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "friction": {},
 }
 LEARNERS = tuple(DEFAULTS)
+#: Every learner's option names, in the order of :data:`DEFAULTS`.
+OPTION_NAMES = tuple(dict.fromkeys(k for options in DEFAULTS.values() for k in options))
+
+
+def label(params: Mapping) -> str:
+    """``"ridge (basis=chain, alpha=1e-06)"``: a learner and the options ``params`` gives it
+    (a sweep cell's flat parameters; ``None`` and other keys are left out)."""
+    given = {k: params[k] for k in OPTION_NAMES if params.get(k) is not None}
+    return params["learner"] + (" (" + ", ".join(f"{k}={v}" for k, v in given.items()) + ")" if given else "")
 
 
 def _smooth_inputs(q, qd, qdd) -> np.ndarray:

@@ -61,7 +61,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from . import __version__
-from .dynamics import joint_drive_torques, rnea, stribeck_drive_torques
+from .dynamics import rnea, stribeck_drive_torques
 from .ik import closed_form, count_distinct, in_class, solve
 from .geometric_ik import wrapped_gap as _wrapped_gap
 from .kinematics import fk
@@ -939,8 +939,7 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
                     noise = np.random.default_rng(np.random.SeedSequence(
                         [study.seed, _STREAMS["id_noise"], _SPLIT_STREAM[split]]))
                     drive = stribeck_drive_torques(study.id.measured, data["qd"], data["qdd"], data["tau"],
-                                                   **study.id.friction) if study.id.friction else \
-                        joint_drive_torques(study.id.measured, data["qd"], data["qdd"])
+                                                   **study.id.friction)
                     data["tau_measured"] = data["tau"] + drive + \
                         study.id.noise * noise.standard_normal(data["tau"].shape)
                     if study.id.encoder_counts is not None:
