@@ -10,7 +10,7 @@ import pytest
 from nfarm.paths import ROOT
 
 LAYERS = {
-    "model": ["reading", "paths", "robot", "rotations", "linalg", "kinematics", "dynamics",
+    "model": ["reading", "paths", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
               "fuzzy", "trajectory", "workspace"],
     "solvers": ["ik", "geometric_ik", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
     "io": ["urdf", "recording", "plotting", "report", "statistics", "pinocchio_ref", "jobs", "sweep", "course", "answers",

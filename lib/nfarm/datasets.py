@@ -65,6 +65,7 @@ from .dynamics import rnea, stribeck_drive_torques
 from .ik import closed_form, count_distinct, in_class, solve
 from .geometric_ik import wrapped_gap as _wrapped_gap
 from .kinematics import fk
+from .provenance import code_digest
 from .paths import BUILD, atomic_path, project_path
 from .reading import ParamsError, Validator, load_json, load_yaml, show
 from .robot import Robot, joint_array, load_robot, robot_hash
@@ -595,9 +596,10 @@ class Study:
     @property
     def inputs_hash(self) -> str:
         """SHA-256 of what the data depend on: the robot's parameters, the study's
-        parameters and the data code's version."""
+        parameters, the data code's version and the content of the code that makes them
+        (:func:`nfarm.provenance.code_digest` of this module)."""
         blob = json.dumps({"robot": robot_hash(self.robot), "study": self.data_params,
-                           "data_version": DATA_VERSION}, sort_keys=True)
+                           "data_version": DATA_VERSION, "code": code_digest("datasets")}, sort_keys=True)
         return hashlib.sha256(blob.encode()).hexdigest()
 
 
@@ -868,8 +870,10 @@ def load(path: str | os.PathLike, robot: Robot, study: Study | None = None) -> D
         diff = _differences(meta["study"], study.data_params)
         if meta["data_version"] != DATA_VERSION:
             diff.append(f"data code version ({meta['data_version']} → {DATA_VERSION})")
-        v.fail("study", f"made from other study parameters: {'; '.join(diff[:4]) or 'unknown'}; "
-                        f"{again}")
+        if diff:
+            v.fail("study", f"made from other study parameters: {'; '.join(diff[:4])}; {again}")
+        v.fail("study", f"made by other code than this checkout's (nfarm.datasets or a module it "
+                        f"imports changed since): {again}")
     raw = _read_limited(path)
     if hashlib.sha256(raw).hexdigest() != meta["npz_sha256"]:
         v.fail("npz_sha256", f"{path.name} is not the file this description was written for "

@@ -81,6 +81,7 @@ from .bases import basis, basis_width
 from .dynamics import regressor, rnea
 from .ik import check_targets
 from .kinematics import fk, fk_all
+from .provenance import code_digest
 from .paths import atomic_path
 from .reading import ParamsError, Validator, json_ready, load_json, show
 from .robot import Robot, joint_array, robot_hash
@@ -896,10 +897,11 @@ def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
                directory: str | os.PathLike) -> tuple[Any, str]:
     """Fit ``model`` (a :class:`LearnedIK` or :class:`LearnedID`), or load the one saved in
     ``directory`` if it was fitted with the same options on the same data for the same robot
-    by the same nfarm version.
+    by the same code.
 
     The inputs' hash (the model's class and options, the data's :func:`fingerprint`, the
-    robot's hash, the model format, the nfarm version and the numerical environment of
+    robot's hash, the model format, the content of this module and of every package module it
+    imports (:func:`nfarm.provenance.code_digest`) and the numerical environment of
     :data:`NUMERICS_ENV`) is stored beside the model as ``inputs.sha256``; a model whose
     stored hash differs is retrained and replaced (atomically). Returns the model and
     ``"made"`` or ``"reused"``.
@@ -919,7 +921,7 @@ def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
     else:
         raise TypeError(f"model must be a LearnedIK or a LearnedID, got {type(model).__name__}")
     parts = [cls.__name__, json.dumps(json_ready(model.get_params()), sort_keys=True),
-             fingerprint(*arrays(train, "train")), robot_hash(robot), form, __version__,
+             fingerprint(*arrays(train, "train")), robot_hash(robot), form, code_digest("learned"),
              json.dumps({k: os.environ.get(k) for k in NUMERICS_ENV})]
     if val is not None:
         parts.append(fingerprint(*arrays(val, "val")))

@@ -49,6 +49,8 @@ from pathlib import Path
 import numpy as np
 
 from .paths import BUILD, FIGURES, NOTEBOOKS, ROOT, atomic_path, shown_path
+from . import provenance
+from .provenance import digest_files as _digest_files
 
 __all__ = ["Table", "shown", "ReportError", "run_notebook", "build_report", "write_manifest",
            "verify_manifest", "chapters", "KERNEL_NAME"]
@@ -627,18 +629,34 @@ def declared_parameters(notebook: Path) -> list[str]:
 
 def digest_files(h, paths) -> None:
     """Feed each file's project-relative name and SHA-256 to the hash ``h`` (sorted)."""
-    for path in sorted(paths):
-        h.update(path.relative_to(ROOT).as_posix().encode() if path.is_relative_to(ROOT)
-                 else path.name.encode())
-        h.update(hashlib.sha256(path.read_bytes()).digest())
+    _digest_files(h, paths, ROOT)
+
+
+_NFARM_IMPORT = re.compile(r"^\s*(?:from\s+nfarm\.(\w+)\s+import|import\s+nfarm\.(\w+)|"
+                           r"from\s+nfarm\s+import\s+(\([^)]*\)|[\w ,]+)|import\s+nfarm\s*$)", re.M)
+
+
+def notebook_modules(notebook: Path) -> list[str]:
+    """The package modules a notebook's code cells import (``from nfarm.x import …``,
+    ``from nfarm import x``, ``import nfarm.x``); ``import nfarm`` alone means all of them."""
+    cells = json.loads(notebook.read_text(encoding="utf-8"))["cells"]
+    code = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+    everything = sorted(p.stem for p in provenance.PACKAGE.glob("*.py"))
+    found = set()
+    for sub, imported, names in _NFARM_IMPORT.findall(code):
+        if not (sub or imported or names):
+            return everything
+        found.update(n.split()[0] for n in (sub or imported or names).strip("()").split(",") if n.split())
+    return sorted(m for m in found if m in everything)
 
 
 def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     """SHA-256 of everything a chapter's results depend on: the notebook, its parameters, the
-    library's code, every parameter file (not the ``.md`` notes beside them), the locked
-    environment and the numerics settings (``make report``'s pinned kernels). Data sets and
-    models are derived from these; a conservative key, so any change to the library runs
-    every chapter again (the models themselves are reused, :func:`nfarm.learned.fit_cached`)."""
+    content of the package modules it imports and of this module (which runs it), with what
+    they import, transitively (:func:`nfarm.provenance.code_modules`), every parameter file
+    (not the ``.md`` notes beside them), the locked environment and the numerics settings
+    (``make report``'s pinned kernels). A change to a module no chapter imports (the course's)
+    leaves the chapters as they are."""
     from .learned import NUMERICS_ENV
     from .paths import PARAMS
 
@@ -647,7 +665,8 @@ def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     h.update(json.dumps({"parameters": parameters, "smoke": smoke,
                          "env": {k: os.environ.get(k) for k in NUMERICS_ENV},
                          "python": sys.version}, sort_keys=True, default=str).encode())
-    digest_files(h, (ROOT / "lib" / "nfarm").glob("*.py"))
+    modules = provenance.code_modules("report", *notebook_modules(notebook))
+    _digest_files(h, [provenance.PACKAGE / f"{m}.py" for m in modules], provenance.PACKAGE)
     digest_files(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"])
     digest_files(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
     return h.hexdigest()

@@ -21,9 +21,10 @@ notebook) and complete parameters (:meth:`nfarm.jobs.Job.complete`): its results
 ``OUT/<cell key>/`` — ``cell.json`` (parameters, metrics, status, seconds, worker), ``log.txt``
 (what the job printed and warned), ``error.txt`` (the traceback of a failed cell) and, for a
 notebook, the executed ``notebook.ipynb`` and the files it wrote under ``files/``. A cell
-whose ``cell.json`` says it succeeded with the same **code** — the library's sources, the
-parameter files (not ``params/sweeps/``), the lock file, the notebook and the numerics
-settings — is not run again: an interrupted sweep resumes, and a widened grid runs only its
+whose ``cell.json`` says it succeeded with the same **code** (:func:`code_key`: the sources of
+the job's modules and of what they import, transitively — :mod:`nfarm.provenance` — or for a
+notebook the whole library and the notebook; the parameter files (not ``params/sweeps/``), the
+lock file and the numerics settings) is not run again: an interrupted sweep resumes, and a widened grid runs only its
 new cells.
 
 Cells run on Dask's ``distributed``: a :class:`~distributed.LocalCluster` of one
@@ -69,6 +70,8 @@ from typing import Any
 
 from .jobs import JOBS
 from .paths import BUILD, NOTEBOOKS, PARAMS, ROOT, atomic_path, project_path, shown_path
+from . import provenance
+from .provenance import digest_files
 from .reading import ParamsError, Validator, json_ready, load_yaml, show
 
 __all__ = ["Sweep", "Cell", "CellResult", "SweepError", "load_sweep", "sweep_from_dict",
@@ -317,19 +320,26 @@ def load_sweep(path: str | os.PathLike, *, smoke: bool = False) -> Sweep:
 
 def code_key(sweep: Sweep) -> str:
     """SHA-256 of the code a cell's results depend on (module docstring): a finished cell with
-    another code key runs again."""
+    another code key runs again.
+
+    For a job: the content of :mod:`nfarm.jobs` and of every package module it imports,
+    transitively (:func:`nfarm.provenance.code_digest`), and this module's own file (it runs the
+    cell); a change to a presentation module (plotting, report) keeps the cells. For a
+    notebook: the whole library, which a notebook may import at will, and the notebook."""
     from .learned import NUMERICS_ENV
-    from .report import digest_files
 
     h = hashlib.sha256()
     env = {k: os.environ.get(k) for k in NUMERICS_ENV} | CELL_ENV
     h.update(_canonical({"env": env, "python": sys.version, "target": sweep.target}).encode())
-    digest_files(h, (ROOT / "lib" / "nfarm").glob("*.py"))
+    if sweep.job:
+        modules = {*provenance.code_modules("jobs"), "sweep"}
+        digest_files(h, [provenance.PACKAGE / f"{m}.py" for m in modules], provenance.PACKAGE)
+    else:
+        digest_files(h, provenance.PACKAGE.glob("*.py"), provenance.PACKAGE)
+        digest_files(h, [project_path(sweep.notebook)], ROOT)
     digest_files(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"
-                     and not p.is_relative_to(SWEEPS)])
-    digest_files(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
-    if sweep.notebook:
-        digest_files(h, [project_path(sweep.notebook)])
+                     and not p.is_relative_to(SWEEPS)], ROOT)
+    digest_files(h, [p for p in (ROOT / "environment.lock",) if p.is_file()], ROOT)
     return h.hexdigest()
 
 

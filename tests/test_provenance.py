@@ -1,0 +1,94 @@
+"""Cached artefacts are keyed on the content of the code that makes them (nfarm.provenance):
+editing a training module retrains, editing a presentation module reuses."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from nfarm import datasets, provenance, sweep
+from nfarm.dynamics import rnea
+from nfarm.learned import LearnedID, fit_cached
+from nfarm.paths import ROOT
+from nfarm.report import _chapter_key, notebook_modules
+
+STUDY = datasets.smoke_study(datasets.load_study(ROOT / "params" / "studies" / "intelbot5.yaml"))
+ROBOT = STUDY.robot
+
+
+@pytest.fixture()
+def package(tmp_path, monkeypatch) -> Path:
+    """A copy of the package's sources that the keys are computed from."""
+    copy = tmp_path / "nfarm"
+    shutil.copytree(provenance.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(provenance, "PACKAGE", copy)
+    return copy
+
+
+def edit(package: Path, module: str) -> None:
+    path = package / f"{module}.py"
+    path.write_text(path.read_text(encoding="utf-8") + "\n# an edit\n", encoding="utf-8")
+
+
+def test_the_closure_follows_imports_and_stops_at_the_layers_above():
+    learned = provenance.code_modules("learned")
+    assert {"learned", "anfis", "fuzzy", "bases", "kinematics", "__init__", "urdf"} <= set(learned)
+    assert not {"plotting", "report", "sweep", "jobs", "course"} & set(learned)
+    # A function-level import counts: jobs imports the learners at the top, sweep the report lazily.
+    assert "report" in provenance.code_modules("sweep")
+    with pytest.raises(ValueError, match="no module nosuch"):
+        provenance.code_modules("nosuch")
+
+
+@pytest.mark.parametrize("module, changes", [("anfis", True), ("learned", True), ("kinematics", True),
+                                             ("plotting", False), ("report", False), ("course", False)])
+def test_the_learners_digest_changes_with_their_code_only(package, module, changes):
+    before = provenance.code_digest("learned")
+    edit(package, module)
+    assert (provenance.code_digest("learned") != before) == changes
+
+
+def test_a_model_is_retrained_after_a_training_module_changes_and_reused_after_a_presentation_one(
+        package, tmp_path):
+    def split(count, seed):
+        d = datasets.random_trajectories(ROBOT, STUDY.id, count, seed)
+        return {**d, "tau": rnea(ROBOT, d["q"], d["qd"], d["qdd"])}
+    train, val = split(3, 1), split(1, 2)
+    where = tmp_path / "model"
+    make = lambda: LearnedID(inputs="own", n_mfs=2, epochs=1)          # noqa: E731
+    assert fit_cached(make(), ROBOT, train, val, where)[1] == "made"
+    assert fit_cached(make(), ROBOT, train, val, where)[1] == "reused"
+    edit(package, "plotting")
+    assert fit_cached(make(), ROBOT, train, val, where)[1] == "reused"
+    edit(package, "anfis")
+    assert fit_cached(make(), ROBOT, train, val, where)[1] == "made"
+    assert fit_cached(make(), ROBOT, train, val, where)[1] == "reused"
+
+
+def test_data_sets_are_remade_after_the_data_code_changes(package, tmp_path):
+    out = tmp_path / "data"
+    datasets.build_datasets(STUDY, out)
+    edit(package, "plotting")
+    assert {how for _, how in datasets.build_datasets(STUDY, out)} == {"reused"}
+    edit(package, "dynamics")
+    with pytest.raises(datasets.ParamsError, match=r"id_train\.json: study: made by other code than "
+                                                    r"this checkout's .*regenerate with"):
+        datasets.load(out / "id_train.npz", ROBOT, STUDY)
+    assert {how for _, how in datasets.build_datasets(STUDY, out)} == {"made"}
+
+
+def test_sweep_cells_and_chapters_rerun_only_for_code_they_import(package):
+    job = sweep.sweep_from_dict({"name": "t", "job": "idle", "metrics": ["value"]})
+    chapter = ROOT / "notebooks" / "04_anfis_method.ipynb"
+    assert {"jang", "anfis", "plotting", "report"} <= set(notebook_modules(chapter))
+    keys = lambda: (sweep.code_key(job), _chapter_key(chapter, {}, False))          # noqa: E731
+    before = keys()
+    edit(package, "recording")           # imported by neither the jobs nor chapter 04
+    assert keys() == before
+    edit(package, "plotting")            # chapter 04 draws with it; no job imports it
+    after = keys()
+    assert after[0] == before[0] and after[1] != before[1]
+    edit(package, "anfis")               # both
+    assert all(a != b for a, b in zip(keys(), after))
