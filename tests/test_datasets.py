@@ -405,3 +405,21 @@ def test_seed_like_trajectories_are_the_dissertation_s_cubics():
     assert ((d["q"] >= lo - 1e-12) & (d["q"] <= hi + 1e-12)).all()
     again = datasets.seed_like_trajectories(study.robot, study.id, 4, 3)
     np.testing.assert_array_equal(again["q"], d["q"])
+
+
+def test_a_redrawn_study_draws_new_training_data_and_keeps_the_test_set(built, tmp_path):
+    from nfarm.datasets import dataset_dir, load, redrawn
+    study, out, _ = built
+    assert redrawn(study, 0) is study
+    again = redrawn(study, 2)
+    assert again.seed == study.seed + 2 and again.draw == 2 and again.inputs_hash != study.inputs_hash
+    assert dataset_dir(again, out) == dataset_dir(study, out) / "draw2"
+    made = build_datasets(again, out)
+    assert {p.name for p, _ in made} == {f"{k}_{s}.npz" for k in ("ik", "id", "ik_full") for s in ("train", "val")}
+    own, new = load(out / "id_train.npz", study.robot, study), load(out / "draw2" / "id_train.npz", study.robot, again)
+    assert not np.array_equal(own["q"][:10], new["q"][:10])
+    # Draw k is the study with seed + k: a reader reproduces it from the study file.
+    assert again.data_params == {**study.data_params, "seed": study.seed + 2}
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ValueError, match="draw must be a non-negative integer"):
+            redrawn(study, bad)

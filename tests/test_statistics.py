@@ -60,3 +60,16 @@ def test_paired_difference_tells_a_real_gap_from_noise():
     assert value == low == high == 0.0                   # the same model: no difference
     with pytest.raises(ValueError, match="same trajectories"):
         worst_difference(a, a[:-1])
+
+
+def test_ranges_separate_only_when_no_seed_overlaps():
+    from nfarm.statistics import ranges_separate, separation_level
+    assert ranges_separate([1, 2, 3], [3.5, 4, 5]) and ranges_separate([4, 5], [1, 2])
+    assert not ranges_separate([1, 2, 4], [3, 5, 6])
+    assert separation_level(5, 5) == pytest.approx(2 / 252)
+    with pytest.raises(ValueError, match="at least two seeds"):
+        ranges_separate([1], [2, 3])
+    # Measured on draws from one distribution: separated about as often as the level says.
+    rng = np.random.default_rng(0)
+    rate = np.mean([ranges_separate(rng.normal(size=5), rng.normal(size=5)) for _ in range(20000)])
+    assert rate == pytest.approx(separation_level(5, 5), abs=0.003)

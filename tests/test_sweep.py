@@ -271,3 +271,36 @@ def test_a_scheduler_and_two_workers_started_apart_give_the_same_results(tmp_pat
     ok, failed = run_sweep(cells, tmp_path / "failing", scheduler=loopback)
     assert ok.ok and not failed.ok and "n_mfs" in failed.error and failed.cell.params["n_mfs"] == 0
     assert all(r.reused for r in run_sweep(sweep, tmp_path / "remote", scheduler=loopback))
+
+
+# --------------------------------------------------------------------------------------------
+# Seeds: a configuration's spread
+
+
+@pytest.mark.parametrize("name", ["id_comparison", "id_comparison_large", "id_baselines", "id_baselines_large",
+                                  "id_sizes"])
+def test_the_study_sweeps_run_five_seeds(name):
+    """Each configuration of a comparison the chapters show has at least five seeds."""
+    sweep = load_sweep(SWEEPS / f"{name}.yaml")
+    configurations = {json.dumps({k: v for k, v in c.params.items() if k != "seed"}, sort_keys=True)
+                      for c in sweep.cells}
+    assert len(sweep.cells) >= 5 * len(configurations) and len({c.params["seed"] for c in sweep.cells}) >= 5
+
+
+def test_results_group_by_configuration_with_the_mean_and_range_over_seeds(tmp_path):
+    from nfarm.sweep import best_by, by_configuration
+    sweep = sweep_from_dict(small(seeds=[0, 1, 2], fixed={"problem": "sinc", "epochs": 2, "partition": "fcm",
+                                                         "mf": "gauss"},
+                                  grid={"n_rules": [2, 3]}, metrics=["check_rmse", "rules"]))
+    results = run_sweep(sweep, tmp_path, workers=0)
+    groups = by_configuration(reversed(results))
+    assert [g.n for g in groups] == [3, 3] and all(g.seeds == [0, 1, 2] for g in groups)
+    for g in groups:
+        values = [r.metrics["check_rmse"] for r in g.runs]
+        assert len(set(values)) > 1                       # fuzzy c-means starts from the seed
+        assert g.metrics["check_rmse"] == pytest.approx(sum(values) / 3)
+        assert g.low("check_rmse") == min(values) and g.high("check_rmse") == max(values)
+        assert g.metrics["rules"] == g.runs[0].metrics["rules"]          # equal in every seed: as it is
+        assert "seed" not in {k for k in g.cell.params if g.cell.params[k] != g.runs[0].cell.params[k]}
+    best = best_by(groups, "partition", "check_rmse")
+    assert best["fcm"] is min(groups, key=lambda g: g.metrics["check_rmse"])

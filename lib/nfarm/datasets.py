@@ -73,7 +73,7 @@ from .trajectory import cubic
 
 __all__ = ["IKRegion", "Study", "IDSettings", "SingleValuedness", "Dataset", "load_study",
            "study_from_dict", "smoke_study", "check_single_valued", "workspace_fraction",
-           "random_trajectories", "seed_like_trajectories", "ik_samples", "build_datasets", "load", "dataset_dir",
+           "random_trajectories", "seed_like_trajectories", "ik_samples", "redrawn", "build_datasets", "load", "dataset_dir",
            "measured_states", "DATA_VERSION", "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
@@ -381,6 +381,26 @@ def smoke_study(study: Study, factor: int = 50) -> Study:
     return study_from_dict(params, source=study.source)
 
 
+def redrawn(study: Study, draw: int) -> Study:
+    """The study with its training and validation data drawn again: draw ``k`` is the study
+    with ``seed + k`` (a reader reproduces it by editing the seed), its data sets in a
+    directory of their own (``draw<k>/`` in the study's, :func:`dataset_dir`) and without a test split — the test set is
+    never redrawn, so every draw's models are tested on the same held-out data. Draw 0 is
+    the study itself. A sweep's ``seeds`` are draws (:mod:`nfarm.jobs`): the spread over
+    seeds is over data and initialisation together.
+
+    Raises:
+        ValueError: ``draw`` is not a non-negative integer.
+    """
+    if isinstance(draw, bool) or not isinstance(draw, (int, np.integer)) or draw < 0:
+        raise ValueError(f"draw must be a non-negative integer, got {draw!r}")
+    if draw == 0:
+        return study
+    params = json.loads(json.dumps(study.params))
+    params["seed"] = study.seed + int(draw)
+    return dataclasses.replace(study_from_dict(params, source=study.source), draw=int(draw))
+
+
 def ik_samples(region: IKRegion, n: int, seed, *, method: str = "sobol") -> dict[str, np.ndarray]:
     """``q (n, dof)`` in the region and ``T = fk(q) (n, 4, 4)``."""
     q = region.sample(n, seed, method=method)
@@ -571,6 +591,9 @@ class Study:
     id: IDSettings
     learned_ik: dict = field(default_factory=dict)   # the chosen learned IK's size for this arm
     params: dict = field(repr=False, default_factory=dict)
+    #: 0 for the study's own data; k for its training and validation data drawn again
+    #: (:func:`redrawn`).
+    draw: int = 0
 
     @property
     def data_params(self) -> dict:
@@ -790,11 +813,14 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
 
 def dataset_dir(study: Study, out: str | os.PathLike | None = None) -> Path:
     """Where a study's data sets go: ``out`` or ``build/datasets/<robot name>/`` (a smoke
-    study's: ``build/datasets/<robot name>-smoke/``)."""
+    study's: ``build/datasets/<robot name>-smoke/``); a redrawn study's (:func:`redrawn`) in
+    its subdirectory ``draw<k>/``."""
     if out is not None:
-        return project_path(out)
-    smoke = "-smoke" if study.name.endswith("(smoke)") else ""
-    return BUILD / "datasets" / f"{study.robot.name}{smoke}"
+        base = project_path(out)
+    else:
+        smoke = "-smoke" if study.name.endswith("(smoke)") else ""
+        base = BUILD / "datasets" / f"{study.robot.name}{smoke}"
+    return base / f"draw{study.draw}" if study.draw else base
 
 
 def _npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
@@ -921,9 +947,10 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
             "study": study.data_params, "seed": study.seed, "inputs_hash": inputs_hash,
             "nfarm_version": __version__, "data_version": DATA_VERSION,
             "command": command or f"python -m nfarm datasets {study.source}"}
-    jobs = [("ik", s) for s in SPLITS] + [("id", s) for s in SPLITS]
+    splits = [s for s in SPLITS if s != "test"] if study.draw else SPLITS    # never redrawn
+    jobs = [("ik", s) for s in splits] + [("id", s) for s in splits]
     if study.ik_full_range:
-        jobs += [("ik_full", s) for s in SPLITS]
+        jobs += [("ik_full", s) for s in splits]
     bar = None
     if progress:
         from tqdm.auto import tqdm

@@ -22,6 +22,12 @@ its complete parameters: a value left to its default and the same value written 
 same cell. Path parameters are stored relative to the repository root, so the cells of
 ``params/studies/x.yaml`` and of its absolute path are one.
 
+A study job's ``seed`` is the **data draw and the initialisation**: seed 0 trains on the
+study's own data sets, seed ``k`` on its training and validation data drawn again with the
+study's seed plus ``k`` (:func:`nfarm.datasets.redrawn`), and seeds the learner; a test split is
+always the study's own. A sweep's ``seeds: [0, 1, 2, 3, 4]`` thus gives each configuration's
+spread over data and initialisation (:func:`nfarm.sweep.by_configuration`).
+
 The learned jobs reuse data sets and models (:func:`nfarm.datasets.build_datasets`,
 :func:`nfarm.learned.fit_cached`, models under ``<models_dir>/ik/sweep/<options hash>/``): a
 cell run again after a change to the code retrains nothing whose inputs are unchanged.
@@ -49,7 +55,7 @@ from .paths import BUILD, project_path, shown_path
 from .reading import ParamsError
 from .statistics import trajectory_sums
 
-__all__ = ["Job", "JOBS", "REQUIRED"]
+__all__ = ["Job", "JOBS", "REQUIRED", "id_model"]
 
 REQUIRED = object()
 """Default of a parameter every cell must give."""
@@ -114,23 +120,40 @@ def anfis_benchmark(p: dict) -> dict:
 # Learned IK and ID on a study's data
 
 
-def _study(p: dict) -> datasets.Study:
-    """The cell's study (its smoke version with ``smoke``)."""
+def _own_study(p: dict) -> datasets.Study:
+    """The cell's study (its smoke version with ``smoke``) as its file draws it."""
     study = datasets.load_study(p["study_file"])
     return datasets.smoke_study(study) if p["smoke"] else study
 
 
+def _study(p: dict) -> datasets.Study:
+    """The study whose training and validation data the cell's ``seed`` draws
+    (:func:`nfarm.datasets.redrawn`: seed 0 is the study's own)."""
+    return datasets.redrawn(_own_study(p), p["seed"])
+
+
 def _build_data(p: dict) -> None:
     datasets.build_datasets(_study(p), p["data_dir"])
+    if p.get("split") == "test" and p["seed"]:
+        datasets.build_datasets(_own_study(p), p["data_dir"])
 
 
 def _study_data(p: dict) -> tuple[datasets.Study, Path, Path]:
-    """The cell's study, its data sets (built or reused) and its models directory."""
+    """The cell's study, its data sets (built or reused) and its models directory (the same
+    for every draw: a model's directory name holds its seed)."""
     study = _study(p)
     datasets.build_datasets(study, p["data_dir"])
     directory = datasets.dataset_dir(study, p["data_dir"])
-    models = project_path(p["models_dir"]) if p["models_dir"] else BUILD / "models" / directory.name
+    own = datasets.dataset_dir(_own_study(p), p["data_dir"])
+    models = project_path(p["models_dir"]) if p["models_dir"] else BUILD / "models" / own.name
     return study, directory, models
+
+
+def _test_split(p: dict, split_of) -> dict:
+    """The study's own held-out split, the same for every draw."""
+    own = _own_study(p)
+    datasets.build_datasets(own, p["data_dir"])
+    return split_of(p, own, datasets.dataset_dir(own, p["data_dir"]), "test")
 
 
 def _options_dir(models: Path, kind: str, options: Mapping) -> Path:
@@ -171,22 +194,39 @@ def learned_ik(p: dict) -> dict:
             "parameters": n_parameters(model), "train_samples": int(len(subset["q"]))}
 
 
-def learned_id(p: dict) -> dict:
+def _fit_id(p: dict) -> tuple[LearnedID, dict]:
+    """A ``learned_id`` cell's model, trained or reused (:func:`fit_cached`), and its data."""
     study, directory, models = _study_data(p)
-    robot = study.robot
     states = ("q", "qd", "qdd")
     data = {split: _id_split(p, study, directory, split) for split in ("train", "val")}
-    train = _first(data["train"], (*states, "tau"), p["fraction"], None, p["stride"])
-    options = {k: p[k] for k in ("inputs", "residual", *_ANFIS_KEYS) if p[k] is not None}
-    model = LearnedID(**options, random_state=p["seed"])
-    where = _options_dir(models, "id", {**model.get_params(), "fraction": p["fraction"],
-                                        "stride": p["stride"], "torques": p["torques"]})
-    model, _ = fit_cached(model, robot, train, data["val"], where)
+    data["train"] = _first(data["train"], (*states, "tau"), p["fraction"], None, p["stride"])
+    model, where = _id_model(p, models)
+    model, _ = fit_cached(model, study.robot, data["train"], data["val"], where)
+    return model, data
+
+
+def learned_id(p: dict) -> dict:
+    model, data = _fit_id(p)
     rmse = np.array([m.val_loss_curve_[m.best_epoch_] for m in model.models_])
     nrmse = rmse / data["val"]["tau"].std(axis=0)
     return {"val_rmse": rmse.tolist(), "val_nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
             "rules": [int(m.rules_.shape[0]) for m in model.models_],
-            "parameters": n_parameters(model), "train_samples": int(len(train["q"]))}
+            "parameters": n_parameters(model), "train_samples": int(len(data["train"]["q"]))}
+
+
+def _id_model(p: dict, models: Path) -> tuple[LearnedID, Path]:
+    """A ``learned_id`` cell's unfitted model and the directory its fitted one is kept in."""
+    options = {k: p[k] for k in ("inputs", "residual", *_ANFIS_KEYS) if p[k] is not None}
+    model = LearnedID(**options, random_state=p["seed"])
+    return model, _options_dir(models, "id", {**model.get_params(), "fraction": p["fraction"],
+                                               "stride": p["stride"], "torques": p["torques"]})
+
+
+def id_model(params: Mapping[str, Any]) -> LearnedID:
+    """The model a ``learned_id`` cell trains (``params``: the cell's parameters), reused from
+    where the cell keeps it (trained now if it is not there or was made by other code): a
+    chapter takes a sweep cell's model as its chosen one instead of training another."""
+    return _fit_id(JOBS["learned_id"].complete(params))[0]
 
 
 def _id_split(p: dict, study, directory: Path, split: str) -> dict:
@@ -210,7 +250,7 @@ def id_baseline(p: dict) -> dict:
     robot = study.robot
     train = _first(_id_split(p, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"],
                    None, p["stride"])
-    judged = _id_split(p, study, directory, p["split"])
+    judged = _id_split(p, study, directory, "val") if p["split"] == "val" else _test_split(p, _id_split)
     learner = p["learner"]
     if learner not in BASELINE_OPTIONS:
         raise ParamsError(f"learner must be one of {', '.join(BASELINE_OPTIONS)}, got {learner!r}")
@@ -252,14 +292,14 @@ JOBS: dict[str, Job] = {
         ("val_rmse_deg", "worst_deg", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned IK, one ANFIS per joint",
-        prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
     "learned_id": Job(
         learned_id,
         {**_STUDY, "stride": 1, "torques": "rigid", "inputs": "own", "residual": False, **_ANFIS},
         ("val_rmse", "val_nrmse", "worst_nrmse", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned ID, one ANFIS per joint",
-        prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
     "id_baseline": Job(
         id_baseline,
         {**_STUDY, "stride": 1, "torques": "rigid", "residual": False, "split": "val", "learner": "linear",
@@ -268,7 +308,7 @@ JOBS: dict[str, Job] = {
          "trajectory_sums"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a model-free scikit-learn baseline of a study's ID",
-        prepare=_build_data, shared=("study_file", "smoke", "data_dir")),
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
     "idle": Job(idle, {"seconds": 0.0, "value": 0}, ("seconds", "value"),
                 doc="sleeps; the sweep machinery's own cost"),
 }

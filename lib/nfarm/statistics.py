@@ -9,15 +9,24 @@ sums (:func:`trajectory_sums`), ``draws`` times from one seeded generator.
 The NRMSE of joint j is ``sqrt(SSE_j / N) / std(τ_j)``, the standard deviation taken over the
 same (resampled) samples, so a resample's NRMSE is a function of the sums of its trajectories'
 ``[count, SSE_j, Σ τ_j, Σ τ_j²]``.
+
+Over **seeds** (a sweep's configurations trained on several data draws and initialisations,
+:func:`nfarm.sweep.by_configuration`) a difference counts when the seeds' ranges do not
+overlap (:func:`ranges_separate`): if the two configurations' values came from one
+distribution, every value of one would lie below every value of the other with probability
+``1 / C(n_a + n_b, n_a)`` — for 5 seeds each, 2 / 252 = 0.8 % either way
+(:func:`separation_level`), a test that assumes no distribution.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["trajectory_sums", "nrmse_from_sums", "Interval", "bootstrap_nrmse", "worst_difference"]
+__all__ = ["trajectory_sums", "nrmse_from_sums", "Interval", "bootstrap_nrmse", "worst_difference",
+           "ranges_separate", "separation_level"]
 
 
 def trajectory_sums(predicted: np.ndarray, tau: np.ndarray, trajectory: np.ndarray) -> np.ndarray:
@@ -126,3 +135,20 @@ def worst_difference(sums_a: np.ndarray, sums_b: np.ndarray, *, draws: int = 200
     value = float(np.nanmax(nrmse_from_sums(sums_a.sum(axis=0), normalised=normalised))
                   - np.nanmax(nrmse_from_sums(sums_b.sum(axis=0), normalised=normalised)))
     return value, float(low), float(high)
+
+
+def ranges_separate(a, b) -> bool:
+    """Whether the values of two configurations over their seeds do not overlap (every value
+    of one below every value of the other): the rule by which a difference over seeds is
+    written as a difference. ``a``, ``b``: 1-D sequences of at least two values."""
+    a, b = np.asarray(a, float).ravel(), np.asarray(b, float).ravel()
+    if len(a) < 2 or len(b) < 2:
+        raise ValueError(f"a spread needs at least two seeds per configuration, got {len(a)} and {len(b)}")
+    return bool(a.max() < b.min() or b.max() < a.min())
+
+
+def separation_level(n_a: int, n_b: int) -> float:
+    """The probability that :func:`ranges_separate` holds (either way) for two configurations
+    whose ``n_a`` and ``n_b`` values come from one continuous distribution: ``2 / C(n_a + n_b,
+    n_a)``."""
+    return 2 / math.comb(n_a + n_b, n_a)

@@ -74,8 +74,8 @@ from . import provenance
 from .provenance import digest_files
 from .reading import ParamsError, Validator, json_ready, load_yaml, show
 
-__all__ = ["Sweep", "Cell", "CellResult", "SweepError", "load_sweep", "sweep_from_dict",
-           "run_sweep", "sweep_results",
+__all__ = ["Sweep", "Cell", "CellResult", "Replicates", "SweepError", "load_sweep", "sweep_from_dict",
+           "run_sweep", "sweep_results", "by_configuration", "best_by",
            "code_key", "record_metrics", "write_summary", "METRICS_MIME", "SWEEPS"]
 
 SWEEPS = PARAMS / "sweeps"
@@ -156,6 +156,81 @@ class CellResult:
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+
+@dataclass(frozen=True)
+class Replicates:
+    """One configuration's results over its seeds (:func:`by_configuration`): the cells of a
+    sweep whose parameters differ in ``seed`` only.
+
+    ``metrics`` holds each metric's **mean** over the seeds (a list metric per element; a
+    metric equal in every seed, or not a number, as it is), so a chapter reads a configuration
+    as it reads one cell; :meth:`low` and :meth:`high` give the range over the seeds.
+    """
+
+    runs: tuple[CellResult, ...]
+
+    @property
+    def cell(self) -> Cell:
+        """The first seed's cell (its parameters name the configuration)."""
+        return self.runs[0].cell
+
+    @property
+    def seeds(self) -> list[int]:
+        return [r.cell.params.get("seed", 0) for r in self.runs]
+
+    @property
+    def n(self) -> int:
+        return len(self.runs)
+
+    @property
+    def reused(self) -> bool:
+        return all(r.reused for r in self.runs)
+
+    def values(self, name: str) -> Any:
+        """``(seeds, ...)`` array of a numeric metric, one row per seed."""
+        import numpy as np
+        return np.array([r.metrics[name] for r in self.runs], dtype=float)
+
+    @property
+    def metrics(self) -> dict[str, Any]:
+        out = {}
+        for name, first in self.runs[0].metrics.items():
+            same = all(_canonical(r.metrics.get(name)) == _canonical(first) for r in self.runs)
+            numeric = isinstance(first, (int, float)) and not isinstance(first, bool) or \
+                isinstance(first, list) and all(isinstance(v, (int, float)) for v in first)
+            out[name] = first if same or not numeric else self.values(name).mean(axis=0).tolist()
+        return out
+
+    def low(self, name: str) -> Any:
+        """The least value of a numeric metric over the seeds (per element of a list)."""
+        return self.values(name).min(axis=0).tolist()
+
+    def high(self, name: str) -> Any:
+        """The largest value of a numeric metric over the seeds (per element of a list)."""
+        return self.values(name).max(axis=0).tolist()
+
+
+def by_configuration(results: Iterable[CellResult]) -> list[Replicates]:
+    """Group a sweep's results by their parameters other than ``seed``, in the order of each
+    configuration's first cell; each group's runs in the order of their seeds."""
+    groups: dict[str, list[CellResult]] = {}
+    for r in results:
+        key = _canonical({k: v for k, v in r.cell.params.items() if k != "seed"})
+        groups.setdefault(key, []).append(r)
+    return [Replicates(tuple(sorted(runs, key=lambda r: r.cell.params.get("seed", 0))))
+            for runs in groups.values()]
+
+
+def best_by(groups: Iterable[Replicates], parameter: str, metric: str) -> dict[Any, Replicates]:
+    """For each value of ``parameter`` (a learner, an input set), the configuration of least
+    mean ``metric`` over its seeds: the choice made on validation results."""
+    best: dict[Any, Replicates] = {}
+    for g in groups:
+        value = g.cell.params[parameter]
+        if value not in best or g.metrics[metric] < best[value].metrics[metric]:
+            best[value] = g
+    return best
 
 
 # --------------------------------------------------------------------------------------------
