@@ -182,3 +182,21 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     table = (tmp_path / "out" / "tables" / f"{compare.name[:2]}_arms.csv").read_text()
     assert table.splitlines()[0] == "quantity,intelbot5,so101"
     assert "learned IK, worst joint RMSE [deg]" in table
+
+
+def test_chapter_06_never_reads_a_test_split():
+    """Chapter 06 chooses every model on validation data: no cell of the chapter (the course's
+    exercise cells aside, which the report removes) names a test split — a data set file
+    ``*_test``, a ``"test"`` split or a sweep cell of ``split="test"``."""
+    nb = json.loads((NOTEBOOKS / "06_anfis_training.ipynb").read_text(encoding="utf-8"))
+    named = []
+    for k, cell in enumerate(nb["cells"]):
+        if cell["cell_type"] != "code" or set(cell["metadata"].get("tags", [])) & set(COURSE_TAGS):
+            continue
+        for node in ast.walk(ast.parse("".join(cell["source"]))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and \
+                    (node.value == "test" or node.value.endswith("_test") or "_test." in node.value):
+                named.append((k, node.value))
+            if isinstance(node, ast.Name) and node.id.endswith("_test"):
+                named.append((k, node.id))
+    assert not named, named

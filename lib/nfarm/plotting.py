@@ -397,18 +397,27 @@ def plot_joint_curves(models: list, joint_names, *, joints=None, scale: float = 
 
 def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg",
                     quantity: str = "validation RMSE", symbol: str = "q",
-                    xlabel: str = "training samples", numbers=None) -> Figure:
+                    xlabel: str = "training samples", numbers=None, low=None, high=None,
+                    spread_label: str = "range over seeds") -> Figure:
     """Validation errors ``errors (len(sizes), n)`` per joint against the training-set size
     (``quantity [unit]`` on the y axis; joints labelled ``symbol<number> name``, ``numbers``
-    the joints' 1-based numbers when only some are drawn, default 1..n)."""
+    the joints' 1-based numbers when only some are drawn, default 1..n). With ``low`` and
+    ``high`` (arrays like ``errors``) each joint's spread is drawn as a band, named in the
+    legend by ``spread_label``."""
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     numbers = range(1, len(joint_names) + 1) if numbers is None else numbers
     for j, (name, number) in enumerate(zip(joint_names, numbers)):
         ax.plot(sizes, errors[:, j], "o-", color=f"C{number - 1}", label=f"{symbol}{number} {name}")
+        if low is not None and high is not None:
+            ax.fill_between(sizes, np.asarray(low)[:, j], np.asarray(high)[:, j], color=f"C{number - 1}",
+                            alpha=0.15, linewidth=0)
+    if low is not None and high is not None:
+        ax.fill_between([], [], [], color="0.5", alpha=0.3, linewidth=0, label=spread_label)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(f"{quantity} [{unit}]")
+    sizes = [int(round(s)) for s in sizes]
     ax.set_xticks(sizes, [f"{s:,}" for s in sizes])
     ax.minorticks_off()
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
