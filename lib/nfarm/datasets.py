@@ -384,9 +384,9 @@ def smoke_study(study: Study, factor: int = 50) -> Study:
 def redrawn(study: Study, draw: int) -> Study:
     """The study with its training and validation data drawn again: draw ``k`` is the study
     with ``seed + k`` (a reader reproduces it by editing the seed), its data sets in a
-    directory of their own (``draw<k>/`` in the study's, :func:`dataset_dir`) and without a test split — the test set is
-    never redrawn, so every draw's models are tested on the same held-out data. Draw 0 is
-    the study itself. A sweep's ``seeds`` are draws (:mod:`nfarm.jobs`): the spread over
+    directory of their own (``draw<k>/`` in the study's, :func:`dataset_dir`) and without a
+    test split — the test set is never redrawn, so every draw's models are tested on the same
+    held-out data. Draw 0 is the study itself. A sweep's ``seeds`` are draws (:mod:`nfarm.jobs`): the spread over
     seeds is over data and initialisation together.
 
     Raises:

@@ -664,8 +664,11 @@ def _client(scheduler: str | None, workers: int | None):
         except (OSError, TimeoutError, ValueError) as exc:
             raise ParamsError(f"cannot reach the Dask scheduler at {scheduler}: "
                               f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    # silence_logs=CRITICAL: a worker whose scheduler is shutting down logs an ERROR with a
+    # traceback from its heartbeat (seen once in a make report, printed into a chapter's
+    # output with the machine's paths); a cell's own failure is in its cell.json, not the log.
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, silence_logs=40,
+                           processes=True, silence_logs=50,
                            # no fixed port (its HTTP server starts anyway; clusters side by side)
                            dashboard_address="127.0.0.1:0")
     return Client(cluster)
