@@ -15,8 +15,8 @@ learners and the model layer under them, not the plotting or report modules abov
 to a figure's style retrains nothing (``tests/test_provenance.py`` edits a copy of the package
 both ways).
 
-Measured: the closure of :mod:`nfarm.jobs` (every learner and data module, 22 files) hashes in
-about 3 ms; results are cached on the files' sizes and modification times.
+Measured: the first digest of :mod:`nfarm.jobs`'s closure (23 files) parses and hashes them in
+0.2–0.4 s; it is then cached on the files' sizes and modification times (under 1 ms a call).
 """
 
 from __future__ import annotations

@@ -51,6 +51,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import datetime
+import functools
 import hashlib
 import io
 import itertools
@@ -192,7 +193,7 @@ class Replicates:
         import numpy as np
         return np.array([r.metrics[name] for r in self.runs], dtype=float)
 
-    @property
+    @functools.cached_property
     def metrics(self) -> dict[str, Any]:
         out = {}
         for name, first in self.runs[0].metrics.items():
