@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.statistics import bootstrap_nrmse, nrmse_from_sums, trajectory_sums, worst_difference
+from nfarm.statistics import (bootstrap_nrmse, bootstrap_rows, nrmse_from_sums, trajectory_maxima, trajectory_sums,
+                              worst_difference)
 
 
 def data(trajectories, seed=0, per=50, n=3):
@@ -73,3 +74,53 @@ def test_ranges_separate_only_when_no_seed_overlaps():
     rng = np.random.default_rng(0)
     rate = np.mean([ranges_separate(rng.normal(size=5), rng.normal(size=5)) for _ in range(20000)])
     assert rate == pytest.approx(separation_level(5, 5), abs=0.003)
+
+
+# --------------------------------------------------------------------------------------------
+# Independent rows: per-trajectory maxima, test poses
+
+
+def test_trajectory_maxima_are_each_trajectorys_largest_error():
+    rng = np.random.default_rng(3)
+    labels = np.repeat([4, 1, 7], [5, 9, 3])
+    predicted, tau = rng.normal(size=(17, 2)), rng.normal(size=(17, 2))
+    maxima = trajectory_maxima(predicted, tau, labels)
+    for row, label in zip(maxima, [1, 4, 7]):
+        np.testing.assert_array_equal(row, np.abs(predicted - tau)[labels == label].max(axis=0))
+    with pytest.raises(ValueError, match="one shape"):
+        trajectory_maxima(predicted, tau[:, :1], labels)
+
+
+@pytest.mark.parametrize("n", [400, 4000])
+def test_bootstrap_of_a_mean_matches_the_normal_interval(n):
+    """The percentile interval of a mean of normal rows is close to mean ± 1.96 σ/√N."""
+    x = np.random.default_rng(n).normal(2.0, 3.0, size=n)
+    est = bootstrap_rows(x, lambda X: X[..., 0].mean(axis=-1), draws=4000, seed=1)
+    half = 1.96 * x.std(ddof=1) / np.sqrt(n)
+    assert est.value == pytest.approx(x.mean())
+    assert est.low == pytest.approx(x.mean() - half, abs=0.15 * half)
+    assert est.high == pytest.approx(x.mean() + half, abs=0.15 * half)
+    assert (est.rows, est.draws, est.level) == (n, 4000, 0.95)
+
+
+def test_bootstrap_rows_is_seeded_and_takes_several_statistics():
+    rows = np.random.default_rng(0).exponential(size=(500, 3))
+    stat = lambda X: np.stack([np.median(X[..., 0], axis=-1), X.max(axis=(-2, -1))], axis=-1)  # noqa: E731
+    a, b = (bootstrap_rows(rows, stat, draws=500, seed=5) for _ in range(2))
+    np.testing.assert_array_equal(a.low, b.low)
+    assert a.value.shape == a.low.shape == (2,)
+    assert np.all(a.low <= a.value) and np.all(a.value <= a.high)
+    assert a.high[1] == rows.max()            # a maximum's upper end is the sample's
+    c = bootstrap_rows(rows, stat, draws=500, seed=6)
+    assert not np.array_equal(a.low, c.low)
+
+
+@pytest.mark.parametrize("rows, kwargs, message", [
+    (np.ones((1, 2)), {}, "N >= 2"),
+    (np.array([[1.0], [np.nan]]), {}, "finite"),
+    (np.ones((5, 2)), {"draws": 10}, "draws"),
+    (np.ones((5, 2)), {"level": 1.0}, "level"),
+])
+def test_bootstrap_rows_refuses_bad_input(rows, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        bootstrap_rows(rows, lambda X: X.mean(axis=(-2, -1)), **kwargs)

@@ -53,7 +53,7 @@ from .baselines import BaselineID
 from .learned import LearnedID, LearnedIK, fit_cached, n_parameters
 from .paths import BUILD, project_path, shown_path
 from .reading import ParamsError
-from .statistics import trajectory_sums
+from .statistics import trajectory_maxima, trajectory_sums
 
 __all__ = ["Job", "JOBS", "REQUIRED", "id_model"]
 
@@ -173,7 +173,9 @@ def _first(data: Mapping, keys: tuple[str, ...], fraction: float, samples: int |
 _ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint_options")
 
 
-def learned_ik(p: dict) -> dict:
+def _fit_ik(p: dict) -> tuple[LearnedIK, int]:
+    """A ``learned_ik`` cell's model, trained or reused (:func:`fit_cached`), and the number of
+    training samples it saw."""
     study, directory, models = _study_data(p)
     robot = study.robot
     train = datasets.load(directory / "ik_train.npz", robot, study)
@@ -187,11 +189,22 @@ def learned_ik(p: dict) -> dict:
     model = LearnedIK(**options, random_state=p["seed"])
     where = _options_dir(models, "ik", {**model.get_params(), "fraction": p["fraction"],
                                         "samples": p["samples"]})
-    model, _ = fit_cached(model, robot, subset, val, where)
+    return fit_cached(model, robot, subset, val, where)[0], len(subset["q"])
+
+
+def learned_ik(p: dict) -> dict:
+    model, n_train = _fit_ik(p)
     rmse = np.degrees([m.val_loss_curve_[m.best_epoch_] for m in model.models_])
     return {"val_rmse_deg": rmse.tolist(), "worst_deg": float(rmse.max()),
             "rules": [int(m.rules_.shape[0]) for m in model.models_],
-            "parameters": n_parameters(model), "train_samples": int(len(subset["q"]))}
+            "parameters": n_parameters(model), "train_samples": n_train}
+
+
+def ik_model(params: Mapping[str, Any]) -> LearnedIK:
+    """The model a ``learned_ik`` cell trains (``params``: the cell's parameters), reused from
+    where the cell keeps it (trained now if it is not there or was made by other code): a
+    chapter takes a sweep cell's model as its chosen one instead of training another."""
+    return _fit_ik(JOBS["learned_ik"].complete(params))[0]
 
 
 def _fit_id(p: dict) -> tuple[LearnedID, dict]:
@@ -262,10 +275,11 @@ def id_baseline(p: dict) -> dict:
     rmse = np.sqrt(((predicted - judged["tau"]) ** 2).mean(axis=0))
     nrmse = rmse / judged["tau"].std(axis=0)
     sums = trajectory_sums(predicted, judged["tau"], judged["trajectory"])
+    maxima = trajectory_maxima(predicted, judged["tau"], judged["trajectory"])
     return {"rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
             "fit_seconds": float(model.fit_seconds_), "predict_us": 1e6 * seconds / len(predicted),
             "features": int(model.n_features_), "train_samples": int(len(train["q"])),
-            "trajectory_sums": sums.ravel().tolist()}
+            "trajectory_sums": sums.ravel().tolist(), "trajectory_maxima": maxima.ravel().tolist()}
 
 
 def idle(p: dict) -> dict:
@@ -305,7 +319,7 @@ JOBS: dict[str, Job] = {
         {**_STUDY, "stride": 1, "torques": "rigid", "residual": False, "split": "val", "learner": "linear",
          **{k: None for k in sorted({k for o in BASELINE_OPTIONS.values() for k in o})}},
         ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples",
-         "trajectory_sums"),
+         "trajectory_sums", "trajectory_maxima"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a model-free scikit-learn baseline of a study's ID",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
