@@ -350,3 +350,16 @@ def test_ill_conditioned_normal_equations_fall_back_to_an_orthogonal_solve():
         normal = ANFIS(n_mfs=3, premise_inputs=[0], epochs=2, ridge=0.0).fit(X, y)
     lstsq = ANFIS(n_mfs=3, premise_inputs=[0], epochs=2, ridge=0.0, solver="lstsq").fit(X, y)
     np.testing.assert_allclose(normal.predict(X), lstsq.predict(X), atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_jang_data_draws_are_seeded_uniform_and_keep_the_checking_grid(seed):
+    X, z = jang.sinc_data(seed=seed)
+    assert X.shape == (121, 2) and np.all(np.abs(X) <= 10) and len(np.unique(X[:, 0])) == 121
+    np.testing.assert_array_equal(X, jang.sinc_data(seed=seed)[0])
+    np.testing.assert_allclose(z, np.sin(X[:, 0]) / X[:, 0] * np.sin(X[:, 1]) / X[:, 1])
+    X3, y3, X3c, y3c = jang.three_input_data(seed=seed)
+    grid = jang.three_input_data()
+    assert X3.shape == (216, 3) and np.all((X3 >= 1) & (X3 <= 6))
+    np.testing.assert_array_equal(X3c, grid[2]) and np.testing.assert_array_equal(y3c, grid[3])
+    assert not np.array_equal(X3, jang.three_input_data(seed=seed + 1)[0])

@@ -15,11 +15,15 @@ __all__ = ["sinc_data", "three_input_data", "mackey_glass", "mackey_glass_data",
            "rmse"]
 
 
-def sinc_data(points: int = 11, span: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+def sinc_data(points: int = 11, span: float = 10.0, *, seed: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``z = sinc(x) · sinc(y)`` (sinc(x) = sin(x)/x) on a ``points × points`` grid over
-    ``[−span, span]²``: ``X (points², 2)``, ``z``."""
-    g = np.linspace(-span, span, points)
-    x, y = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+    ``[−span, span]²`` (Jang's): ``X (points², 2)``, ``z``. With ``seed``, as many points
+    drawn uniformly over the square instead (a data draw, for the spread of a result)."""
+    if seed is None:
+        g = np.linspace(-span, span, points)
+        x, y = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+    else:
+        x, y = np.random.default_rng(seed).uniform(-span, span, size=(2, points * points))
     return np.column_stack([x, y]), np.sinc(x / np.pi) * np.sinc(y / np.pi)
 
 
@@ -29,9 +33,16 @@ def _three_input(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return X, (1 + x**0.5 + y**-1 + z**-1.5) ** 2
 
 
-def three_input_data() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``X_train (216, 3)``, ``y_train``, ``X_check (125, 3)``, ``y_check``."""
-    return (*_three_input(np.arange(1.0, 7.0)), *_three_input(np.arange(1.5, 6.0)))
+def three_input_data(*, seed: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``X_train (216, 3)``, ``y_train``, ``X_check (125, 3)``, ``y_check`` (Jang's grids). With
+    ``seed``, the 216 training points are drawn uniformly over ``[1, 6]³`` instead (a data
+    draw); the checking grid stays Jang's."""
+    X_check, y_check = _three_input(np.arange(1.5, 6.0))
+    if seed is None:
+        return (*_three_input(np.arange(1.0, 7.0)), X_check, y_check)
+    X = np.random.default_rng(seed).uniform(1.0, 6.0, size=(216, 3))
+    x, y, z = X.T
+    return X, (1 + x**0.5 + y**-1 + z**-1.5) ** 2, X_check, y_check
 
 
 def mackey_glass(t_end: float = 1200.0, *, tau: float = 17.0, x0: float = 1.2, h: float = 0.1,
