@@ -21,7 +21,7 @@ from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
 from nfarm import report
 from nfarm.paths import ROOT, atomic_path
-from nfarm.report import Table, build_report, verify_manifest, write_manifest
+from nfarm.report import Table, build_report, markdown_section, verify_manifest, write_manifest
 
 
 def make_notebook(path, *code, tags=None):
@@ -388,3 +388,21 @@ def test_the_index_links_each_arm_s_recordings(two_arms):
     a, b = index.index("Chapters for a"), index.index("Chapters for b")
     assert index.index("href='../recordings/03_motion.rrd'", a) < b
     assert index.index("href='../recordings/b/03_motion.rrd'", b) > b
+
+
+def test_markdown_section_returns_one_sections_text(tmp_path):
+    doc = tmp_path / "doc.md"
+    doc.write_text("# Title\n\n## A\n\nfirst\n### sub\ntext\n## B\n\nsecond\n", encoding="utf-8")
+    assert markdown_section(doc, "A") == "first\n### sub\ntext\n"
+    assert markdown_section(doc, "B") == "second\n"
+    with pytest.raises(ValueError, match=r"doc.md: heading '## C': expected once, found 0"):
+        markdown_section(doc, "C")
+    with pytest.raises(ValueError, match="cannot read"):
+        markdown_section(tmp_path / "missing.md", "A")
+
+
+def test_the_deviations_table_chapter_05_shows_is_in_the_study_document():
+    text = markdown_section(ROOT / "docs" / "STUDY.md", "Deviations from the dissertation")
+    rows = [line for line in text.splitlines() if line.startswith("| ") and not line.startswith("| element")]
+    assert len(rows) >= 10 and all(line.count(" | ") == 3 for line in rows)
+    assert any("(seed, line" in line for line in rows) and any("not in the seed" in line for line in rows)

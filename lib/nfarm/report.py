@@ -138,6 +138,29 @@ class Table:
         return self
 
 
+DOCUMENTS = ("docs/STUDY.md",)   # project documents a chapter shows a part of (in every chapter's key)
+
+
+def markdown_section(path: str | os.PathLike, heading: str) -> str:
+    """The text of the section ``## heading`` of a Markdown file (up to the next heading of
+    the same or a higher level, without the heading line): a chapter shows a document's table
+    from its one source instead of a copy."""
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise ValueError(f"{shown_path(path)}: cannot read it ({exc.strerror})") from None
+    starts = [k for k, line in enumerate(lines) if line.strip() == f"## {heading}"]
+    if len(starts) != 1:
+        raise ValueError(f"{shown_path(path)}: heading '## {heading}': expected once, found {len(starts)} times")
+    body = []
+    for line in lines[starts[0] + 1:]:
+        if re.match(r"#{1,2} ", line):
+            break
+        body.append(line)
+    return "\n".join(body).strip() + "\n"
+
+
 # --------------------------------------------------------------------------------------------
 # Running notebooks
 
@@ -668,7 +691,7 @@ def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     modules = provenance.code_modules("report", *notebook_modules(notebook))
     _digest_files(h, [provenance.PACKAGE / f"{m}.py" for m in modules], provenance.PACKAGE)
     digest_files(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"])
-    digest_files(h, [p for p in (ROOT / "environment.lock",) if p.is_file()])
+    digest_files(h, [p for p in (ROOT / "environment.lock", *(ROOT / d for d in DOCUMENTS)) if p.is_file()])
     return h.hexdigest()
 
 
