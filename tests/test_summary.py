@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from nfarm.statistics import trajectory_maxima, trajectory_sums
-from nfarm.summary import (IK_METRICS, id_rows, ik_difference, ik_rows, largest_difference, long_table,
+from nfarm.summary import (IK_METRICS, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference, long_table,
+                           read_long_table,
                            wide_table)
 
 
@@ -70,3 +71,29 @@ def test_the_long_table_has_one_line_per_task_method_and_metric():
     assert len(lines) == 1 + 2 * len(IK_METRICS)
     wide = wide_table(rows, "inverse kinematics")
     assert len(wide.rows) == 2 and len(wide.columns) == 2 + len(IK_METRICS)
+
+
+def test_the_abstract_reads_every_number_from_the_summary_table(tmp_path):
+    rng = np.random.default_rng(4)
+    anfis, base = ik_errors(5), {k: v * 3 for k, v in ik_errors(6).items()}
+    base["orientation"] = base["orientation"] / 100          # the baseline wins on orientation
+    rows = ik_rows("ANFIS, chosen", "learned (chosen)", anfis, draws=300) + \
+        ik_rows("RBF", "best baseline (on validation)", base, draws=300)
+    label = np.repeat(np.arange(10), 20)
+    tau = rng.normal(size=(200, 2))
+    for name, role, noise in (("ANFIS, model-free", "learned (chosen)", 0.3), ("ridge", "best baseline (on validation)", 0.01)):
+        predicted = tau + rng.normal(0, noise, size=tau.shape)
+        rows += id_rows(name, role, trajectory_sums(predicted, tau, label), trajectory_maxima(predicted, tau, label),
+                        ["a", "b"], draws=300)
+    long_table(rows).save(tmp_path, "07_summary")
+    table = read_long_table(tmp_path / "tables" / "07_summary.csv")
+    ik_line, id_line = abstract_lines("arm", table)
+    chosen_median = next(r for r in table if r["method"] == "ANFIS, chosen" and r["metric"] == "position median")
+    assert f"{chosen_median['value']} mm ({chosen_median['ci_low']}–{chosen_median['ci_high']})" in ik_line
+    assert "is better beyond both intervals on orientation median" in ik_line
+    assert "The ANFIS is better on worst joint RMSE, position median" in ik_line
+    assert "ridge" in id_line and "better than the ANFIS" in id_line
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n", encoding="utf-8")
+    with pytest.raises(ValueError, match="not a summary table"):
+        read_long_table(bad)

@@ -735,6 +735,47 @@ def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> l
     return parts
 
 
+ABSTRACT_QUESTION = (
+    "Can adaptive neuro-fuzzy inference systems (ANFIS), trained with Jang's hybrid rule on data generated "
+    "from a 5-DOF arm's numerical models — the DH forward kinematics, Levenberg–Marquardt inverse "
+    "kinematics and recursive Newton–Euler inverse dynamics — compute the arm's inverse kinematics and "
+    "inverse dynamics, and how do they compare with the exact solutions and with strong baselines?")
+ABSTRACT_LIMITS = (
+    "The learned inverse kinematics covers one declared region of each arm, where the inverse map is "
+    "single-valued (chapter 05); over the full joint ranges it is many-valued and not learnable as one "
+    "function. The data are simulated: the rigid-body torques are exact, and the arm with friction is a "
+    "model whose law no learner assumes. The dissertation's text does not give its robot's numbers, data "
+    "settings, rule bases or budgets: those designs are assumed and labelled so (the deviations table of "
+    "chapter 05). The spreads are over the sweep files' seeds (data draws) for the comparisons made on "
+    "validation data and bootstrap intervals over the held-out poses or trajectories for the results.")
+
+
+def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
+    """The abstract: the study's question, each arm's answers read from its published
+    ``07_summary.csv`` (every number computed by chapter 07; :func:`nfarm.summary.abstract_lines`),
+    and the study's limits."""
+    from .summary import abstract_lines, read_long_table
+
+    parts = ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
+    answers = []
+    for edition in arms:
+        path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
+        if path.is_file():
+            try:
+                answers += abstract_lines(edition.name, read_long_table(path))
+            except (ValueError, KeyError) as exc:      # an older chapter 07's table: say so, not fail
+                answers.append(f"{edition.name}: no answers ({exc}); rerun chapter 07.")
+    if answers:
+        parts.append("<p><b>Answers</b> (on held-out data, with 95 % bootstrap intervals; from each arm's "
+                     "<code>tables/07_summary.csv</code>):</p><ul>")
+        parts += [f"<li>{html.escape(line)}</li>" for line in answers]
+        parts.append("</ul>")
+    else:
+        parts.append("<p><b>Answers.</b> Not yet computed: chapter 07 has not published its summary table.</p>")
+    parts.append(f"<p><b>Limits.</b> {html.escape(ABSTRACT_LIMITS)}</p>")
+    return parts
+
+
 def _write_index(report_dir: Path, figures_dir: Path,
                  pages: dict[str, list[tuple[str, str, str]]], arms: list[Edition],
                  compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool,
@@ -759,7 +800,9 @@ def _write_index(report_dir: Path, figures_dir: Path,
              "figures": shown_path(figures_dir) + " (checked by MANIFEST.sha256)"}
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>nfarm — study report"
              f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
-             "numerical methods and ANFIS</h1><dl>"]
+             "numerical methods and ANFIS</h1>"]
+    parts += _abstract_html(figures_dir, arms)
+    parts.append("<dl>")
     parts += [f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in facts.items()]
     parts.append("</dl>")
     for prefix, title, page in compared:           # the arms side by side, first

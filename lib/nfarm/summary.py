@@ -227,3 +227,113 @@ def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: i
     test = sweep_results(sweep.select(lambda p: unseeded(p) == config).restrict(split="test", seed=seed),
                          sweeps_dir, workers=workers)
     return baseline_label(best.cell.params), best, test[0]
+
+
+# --------------------------------------------------------------------------------------------
+# The report's abstract, from the published long tables
+
+
+def read_long_table(path) -> list[dict[str, str]]:
+    """The rows of a long table written by :func:`long_table` (``07_summary.csv``), as dicts
+    of its columns' text; a file without the table's columns is refused with a one-line error."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as f:
+        rows = list(csv.DictReader(f))
+    needed = {"task", "method", "role", "metric", "unit", "value", "ci_low", "ci_high"}
+    if rows and not needed <= set(rows[0]):
+        raise ValueError(f"{path}: not a summary table: columns {', '.join(sorted(needed - set(rows[0])))} missing")
+    return rows
+
+
+def _number(text: str) -> float:
+    """A table's value as a number; ``< 1e-06`` (below a floor) as 0."""
+    return 0.0 if text.startswith("<") else float(text)
+
+
+def _with_interval(row: Mapping[str, str]) -> str:
+    value, low, high = row["value"], row["ci_low"], row["ci_high"]
+    unit = {"deg": "°", "%": " %", "mm": " mm", "N·m": " N·m"}.get(row["unit"], f" {row['unit']}")
+    return f"{value}{unit}" if low == high == value else f"{value}{unit} ({low}–{high})"
+
+
+def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
+    """-1 when ours is lower beyond both intervals, +1 when higher, 0 when they overlap."""
+    if _number(ours["ci_high"]) < _number(theirs["ci_low"]):
+        return -1
+    if _number(ours["ci_low"]) > _number(theirs["ci_high"]):
+        return 1
+    return 0
+
+
+def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
+    """Plain-text sentences (one per task) of one arm's answers, every number read from its
+    summary rows: the chosen ANFIS, the dissertation's design (assumed), the best baseline and
+    the references, and on which metrics the baseline is better beyond both intervals."""
+    def find(task, role_start, metric):
+        return next((r for r in rows if r["task"] == task and r["role"].startswith(role_start)
+                     and r["metric"] == metric), None)
+
+    lines = []
+    task = "inverse kinematics"
+    chosen = [r for r in rows if r["task"] == task and r["role"] == "learned (chosen)"]
+    if chosen:
+        get = {r["metric"]: r for r in chosen}
+        text = (f"{arm}, inverse kinematics: the chosen model, {chosen[0]['method']}, misses by "
+                f"{_with_interval(get['worst joint RMSE'])} on its worst joint; the tool lands "
+                f"{_with_interval(get['position median'])} from the target at the median, "
+                f"{_with_interval(get['position p95'])} at the 95th percentile and "
+                f"{_with_interval(get['position max'])} at worst.")
+        recipe = find(task, "dissertation's recipe", "worst joint RMSE")
+        if recipe:
+            text += f" The dissertation's recipe (assumed) on the same data: {_with_interval(recipe)}."
+        base = [r for r in rows if r["task"] == task and r["role"].startswith("best baseline")]
+        if base:
+            wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
+                    for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) < 0]
+            losses = [r["metric"] for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) > 0]
+            text += (f" The best baseline on validation, {base[0]['method']}, is better beyond both intervals on "
+                     + "; ".join(wins) + "." if wins else
+                     f" The best baseline on validation, {base[0]['method']}, is better on no metric beyond both "
+                     f"intervals.")
+            if losses:
+                text += f" The ANFIS is better on {', '.join(losses)}."
+        exact = find(task, "exact reference", "position max")
+        if exact:
+            text += f" The closed form is exact (largest tool position error {_with_interval(exact)})."
+        lines.append(text)
+    task = "inverse dynamics"
+    free = find(task, "learned (chosen)", "worst joint NRMSE")
+    if free:
+        text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {free['method']}, "
+                f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE), largest error "
+                f"{_with_interval(find(task, 'learned (chosen)', 'largest error'))}.")
+        base = find(task, "best baseline", "worst joint NRMSE")
+        if base:
+            verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
+                       0: "no different from the ANFIS within the intervals"}[_compare(base, free)]
+            text += f" The best baseline on validation, {base['method']}: {_with_interval(base)}, {verdict}."
+        recipe = find(task, "dissertation's design", "worst joint NRMSE")
+        if recipe:
+            text += f" The dissertation's design (assumed, each joint's own state): {_with_interval(recipe)}."
+        ident = find(task, "physics-informed", "worst joint NRMSE")
+        if ident:
+            text += f" Given the geometry, identifying the inertial parameters: {_with_interval(ident)}."
+        lines.append(text)
+    task = "ID, measured arm"
+    residual = find(task, "learned (chosen)", "worst joint RMSE")
+    if residual:
+        alone = find(task, "numerical reference", "worst joint RMSE")
+        ls = find(task, "baseline (friction", "worst joint RMSE")
+        learner = find(task, "baseline (learner", "worst joint RMSE")
+        text = (f"{arm}, an arm with friction (measured torques): Newton–Euler alone leaves {_with_interval(alone)} "
+                f"on the worst joint, Newton–Euler with an ANFIS residual {_with_interval(residual)}")
+        if ls:
+            verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(residual, ls)]
+            text += f", {verdict} the least-squares friction identification ({_with_interval(ls)})"
+        if learner:
+            text += f"; the best learner as a residual, {learner['method']}: {_with_interval(learner)}"
+        lines.append(text + ".")
+    return lines
