@@ -91,7 +91,7 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     if "study_files" in declared:       # the comparison, here of one arm (both: test below)
         study = "params/studies/intelbot5.yaml"
         parameters.update(study_files=[study], data_dirs=[str(shared / "data_dir")],
-                          models_dirs=[str(shared / "models_dir")])
+                          models_dirs=[str(shared / "models_dir")], sweeps_dirs=[str(shared / "sweeps_dir")])
         ensure_models(shared, study, tmp_path)
     elif notebook.name.startswith("07"):
         ensure_models(shared, "params/studies/intelbot5.yaml", tmp_path)
@@ -178,7 +178,8 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     run_chapter(compare, tmp_path / compare.name, {
         "smoke": True, "out_dir": str(tmp_path / "out"), "study_files": list(studies),
         "data_dirs": [str(d / "data_dir") for d in studies.values()],
-        "models_dirs": [str(d / "models_dir") for d in studies.values()]})
+        "models_dirs": [str(d / "models_dir") for d in studies.values()],
+        "sweeps_dirs": [str(d / "sweeps_dir") for d in studies.values()]})
     table = (tmp_path / "out" / "tables" / f"{compare.name[:2]}_arms.csv").read_text()
     assert table.splitlines()[0] == "quantity,intelbot5,so101"
     assert "learned IK, worst joint RMSE [deg]" in table
