@@ -177,6 +177,8 @@ X3, Y3, *_ = jang.three_input_data()
     ((X3, Y3), dict(partition="fcm"), r"partition 'fcm' needs n_rules \(an integer\) >= 2"),
     ((X3, Y3), dict(memory_budget=1e4), r"would need about .* GB, over memory_budget"),
     ((X3, Y3), dict(solver="qr"), r"solver must be one of normal, lstsq"),
+    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_tolerance=0.0), r"fcm_tolerance must be a positive number"),
+    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_max_iter=0), r"fcm_max_iter must be an integer >= 1"),
 ])
 def test_bad_input_is_refused_before_any_work(args, kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -363,3 +365,14 @@ def test_jang_data_draws_are_seeded_uniform_and_keep_the_checking_grid(seed):
     assert X3.shape == (216, 3) and np.all((X3 >= 1) & (X3 <= 6))
     np.testing.assert_array_equal(X3c, grid[2]) and np.testing.assert_array_equal(y3c, grid[3])
     assert not np.array_equal(X3, jang.three_input_data(seed=seed + 1)[0])
+
+
+def test_fuzzy_c_means_stops_at_its_tolerance():
+    """A looser tolerance stops the clustering sooner; the partition it starts from hardly moves."""
+    X = np.random.default_rng(0).random((400, 3))
+    y = np.sin(3 * X).sum(axis=1)
+    tight = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_tolerance=1e-9, random_state=0).fit(X, y)
+    loose = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_tolerance=1e-3, random_state=0).fit(X, y)
+    one = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_max_iter=1, random_state=0).fit(X, y)
+    centres = lambda m: np.column_stack([p[:, 1] for p in m.mfs_initial_])   # noqa: E731 (gauss: sigma, centre)
+    assert np.abs(centres(tight) - centres(loose)).max() < 1e-2 < np.abs(centres(tight) - centres(one)).max()

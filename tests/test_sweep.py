@@ -18,7 +18,7 @@ import yaml
 from nfarm.__main__ import main
 from nfarm.paths import ROOT
 from nfarm.reading import ParamsError
-from nfarm.sweep import SWEEPS, load_sweep, run_sweep, sweep_from_dict
+from nfarm.sweep import SWEEPS, load_sweep, run_sweep, run_sweeps, sweep_from_dict
 
 SMOKE = SWEEPS / "smoke.yaml"
 NOTEBOOK = "tests/data/sweep_notebook.ipynb"
@@ -227,6 +227,33 @@ def test_a_local_cluster_of_two_processes_gives_the_same_results(tmp_path):
         assert client.status == "running"          # a client of the caller's is left open
 
 
+def test_cells_a_chapter_makes_take_the_jobs_defaults_its_name_and_every_metric():
+    sweep = sweep_from_dict(small(), "t.yaml")
+    made = sweep.with_cells([{"problem": "sinc", "n_mfs": 4}, {"problem": "sinc", "n_mfs": 4, "seed": 0}], name="mine")
+    assert made.name == "mine" and made.job == sweep.job and len(made.cells) == 1     # the default written out: one cell
+    assert made.cells[0].params["epochs"] == 10 and made.metrics == ("train_rmse", "check_rmse", "rules")
+    assert sweep.with_cells([{"n_mfs": 4}]).name == "t"
+    with pytest.raises(ParamsError, match="unknown"):
+        sweep.with_cells([{"n_mfs": 4, "colour": 1}])
+    with pytest.raises(ParamsError, match="directory name"):
+        sweep.with_cells([{"n_mfs": 4}], name="../up")
+
+
+def test_several_sweeps_run_together_as_each_alone(tmp_path):
+    one = sweep_from_dict(small(), "t.yaml")
+    two = sweep_from_dict(small(name="u", grid={"n_mfs": [3, 4]}), "u.yaml")
+    alone = [run_sweep(s, tmp_path / "alone" / s.name, workers=0) for s in (one, two)]
+    together = run_sweeps([one, two, one], [tmp_path / "t", tmp_path / "u", tmp_path / "t"], workers=0)
+    assert [metrics(r) for r in together] == [metrics(r) for r in (alone[0], alone[1], alone[0])]
+    assert not any(r.reused for r in together[0])
+    assert all(a is b for a, b in zip(together[2], together[0]))     # listed twice, run once
+    assert sorted(p.name for p in (tmp_path / "t").iterdir() if p.is_dir()) == sorted(c.key for c in one.cells)
+    again = run_sweeps([two, one], [tmp_path / "u", tmp_path / "t"], workers=0)
+    assert all(r.reused for runs in again for r in runs)
+    with pytest.raises(ValueError, match="one directory per sweep"):
+        run_sweeps([one, two], [tmp_path / "t"], workers=0)
+
+
 @pytest.fixture
 def loopback(tmp_path):
     """A ``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1; its address."""
@@ -304,3 +331,53 @@ def test_results_group_by_configuration_with_the_mean_and_range_over_seeds(tmp_p
         assert "seed" not in {k for k in g.cell.params if g.cell.params[k] != g.runs[0].cell.params[k]}
     best = best_by(groups, "partition", "check_rmse")
     assert best["fcm"] is min(groups, key=lambda g: g.metrics["check_rmse"])
+
+
+# --------------------------------------------------------------------------------------------
+# The learned jobs' options
+
+
+@pytest.fixture(scope="module")
+def smoke_cell(tmp_path_factory):
+    """The parameters of a smoke study's cell with its own data and models directories."""
+    base = tmp_path_factory.mktemp("jobs")
+    return {"study_file": "params/studies/intelbot5.yaml", "smoke": True,
+            "data_dir": str(base / "data"), "models_dir": str(base / "models")}
+
+
+def test_a_learned_id_cell_trains_on_as_many_states_made_the_seeds_way(smoke_cell):
+    from nfarm.jobs import JOBS, id_training_data
+    import numpy as np
+    cell = {**smoke_cell, "inputs": "own", "n_mfs": 2, "epochs": 1, "stride": 2}
+    spec = {"duration_s": 6.0, "dt_s": 0.2, "seed": 7}
+    own, made = id_training_data(cell), id_training_data({**cell, "seed_like": spec})
+    assert len(made["q"]) == len(own["q"])
+    # cubics from rest to rest over 6 s sampled every 0.2 s: 31 states each, at rest at both ends
+    assert np.allclose(made["qd"][::31], 0) and np.allclose(made["qd"][30::31], 0)
+    assert not np.allclose(made["q"][:31], id_training_data({**cell, "seed_like": spec, "seed": 1})["q"][:31])
+    result = JOBS["learned_id"].function(JOBS["learned_id"].complete({**cell, "seed_like": spec}))
+    assert result["train_samples"] == len(own["q"]) and np.isfinite(result["worst_nrmse"])
+
+
+@pytest.mark.parametrize("seed_like, more, message", [
+    ({"duration_s": 6.0, "dt_s": 0.2}, {}, "seed_like must be null or a mapping of duration_s, dt_s, seed"),
+    ({"duration_s": 6.0, "dt_s": 0.0, "seed": 7}, {}, "0 < dt_s <= duration_s <= 600"),
+    ({"duration_s": 6.0, "dt_s": 1e-6, "seed": 7}, {}, "at most 10 000 samples"),
+    ({"duration_s": 6.0, "dt_s": 0.2, "seed": -1}, {}, r"seed must be an integer in \[0, 2\^32\)"),
+    ({"duration_s": 6.0, "dt_s": 0.2, "seed": 7}, {"torques": "measured"}, "rigid-body torques only"),
+])
+def test_bad_seed_like_trajectories_are_one_line_errors(smoke_cell, seed_like, more, message):
+    from nfarm.jobs import id_training_data
+    with pytest.raises(ParamsError, match=message):
+        id_training_data({**smoke_cell, "seed_like": seed_like, **more})
+
+
+def test_a_learned_ik_cell_trains_on_the_poses_it_names(smoke_cell):
+    from nfarm.jobs import JOBS
+    job = JOBS["learned_ik"]
+    cell = {**smoke_cell, "encoding": "quat_xyz", "n_mfs": [2, 2, 1, 1, 1, 1, 1], "epochs": 1}
+    region = job.function(job.complete(cell))
+    full = job.function(job.complete({**cell, "poses": "full_range"}))
+    assert region["worst_deg"] != full["worst_deg"]
+    with pytest.raises(ParamsError, match="poses must be one of region, full_range, got 'all'"):
+        job.function(job.complete({**cell, "poses": "all"}))

@@ -5,10 +5,14 @@ and returns its metrics, a flat mapping of numbers, strings or lists of numbers.
   training pairs; checked on a 41 × 41 grid of the same square), ``three_input`` (216 / 125) or
   ``mackey_glass`` (500 / 500). Seconds per fit: what a smoke grid needs.
 * ``learned_ik`` — a study's learned inverse kinematics (chapter 6): one ANFIS per joint on the
-  first ``fraction`` (at most ``samples``) of the study's training poses, judged by each joint's
-  validation RMSE at its best epoch.
+  first ``fraction`` (at most ``samples``) of the study's training poses (``poses: region``, or
+  ``full_range``: its poses over the whole joint ranges), judged by each joint's validation RMSE
+  at its best epoch.
 * ``learned_id`` — a study's learned inverse dynamics (chapter 6): every ``stride``-th training
-  state, each joint's validation NRMSE (RMSE over the standard deviation of its torque).
+  state, each joint's validation NRMSE (RMSE over the standard deviation of its torque). With
+  ``seed_like: {duration_s, dt_s, seed}`` it trains instead on as many states on trajectories
+  made the dissertation's program's way (:func:`nfarm.datasets.seed_like_trajectories`, drawn from that
+  seed and the cell's), validated on the study's own validation trajectories.
 * ``id_baseline`` — a model-free scikit-learn baseline of a study's inverse dynamics
   (:class:`nfarm.baselines.BaselineID`, chapters 06 and 07): fitted on every ``stride``-th
   training state, judged on the ``split`` (``val`` to choose, ``test`` once for the chosen),
@@ -50,12 +54,13 @@ from . import datasets, jang
 from .anfis import ANFIS
 from .baselines import DEFAULTS as BASELINE_OPTIONS
 from .baselines import BaselineID
+from .dynamics import rnea
 from .learned import LearnedID, LearnedIK, fit_cached, n_parameters
 from .paths import BUILD, project_path, shown_path
 from .reading import ParamsError
 from .statistics import trajectory_maxima, trajectory_sums
 
-__all__ = ["Job", "JOBS", "REQUIRED", "id_model"]
+__all__ = ["Job", "JOBS", "REQUIRED", "id_model", "ik_model", "id_training_data"]
 
 REQUIRED = object()
 """Default of a parameter every cell must give."""
@@ -173,13 +178,22 @@ def _first(data: Mapping, keys: tuple[str, ...], fraction: float, samples: int |
 _ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint_options")
 
 
+_POSES = {"region": "ik", "full_range": "ik_full"}
+
+
 def _fit_ik(p: dict) -> tuple[LearnedIK, int]:
     """A ``learned_ik`` cell's model, trained or reused (:func:`fit_cached`), and the number of
     training samples it saw."""
+    if p["poses"] not in _POSES:
+        raise ParamsError(f"poses must be one of {', '.join(_POSES)}, got {p['poses']!r}")
     study, directory, models = _study_data(p)
+    if p["poses"] == "full_range" and not study.ik_full_range:
+        raise ParamsError(f"{p['study_file']}: poses: full_range, but the study declares no poses over "
+                          f"the full joint ranges (ik.full_range)")
     robot = study.robot
-    train = datasets.load(directory / "ik_train.npz", robot, study)
-    val = datasets.load(directory / "ik_val.npz", robot, study)
+    kind = _POSES[p["poses"]]
+    train = datasets.load(directory / f"{kind}_train.npz", robot, study)
+    val = datasets.load(directory / f"{kind}_val.npz", robot, study)
     options = {k: p[k] for k in ("encoding", *_ANFIS_KEYS) if p[k] is not None}
     if p["study_sizes"]:
         options = study.chosen_ik(options)
@@ -188,7 +202,7 @@ def _fit_ik(p: dict) -> tuple[LearnedIK, int]:
     subset = _first(train, ("T", "q"), p["fraction"], p["samples"])
     model = LearnedIK(**options, random_state=p["seed"])
     where = _options_dir(models, "ik", {**model.get_params(), "fraction": p["fraction"],
-                                        "samples": p["samples"]})
+                                        "samples": p["samples"], "poses": p["poses"]})
     return fit_cached(model, robot, subset, val, where)[0], len(subset["q"])
 
 
@@ -210,12 +224,29 @@ def ik_model(params: Mapping[str, Any]) -> LearnedIK:
 def _fit_id(p: dict) -> tuple[LearnedID, dict]:
     """A ``learned_id`` cell's model, trained or reused (:func:`fit_cached`), and its data."""
     study, directory, models = _study_data(p)
-    states = ("q", "qd", "qdd")
-    data = {split: _id_split(p, study, directory, split) for split in ("train", "val")}
-    data["train"] = _first(data["train"], (*states, "tau"), p["fraction"], None, p["stride"])
+    data = _id_data(p, study, directory)
     model, where = _id_model(p, models)
     model, _ = fit_cached(model, study.robot, data["train"], data["val"], where)
     return model, data
+
+
+def _id_data(p: dict, study, directory: Path) -> dict:
+    """A ``learned_id`` cell's training states (its share, every ``stride``-th; or as many made
+    the seed's way) and validation states."""
+    states = ("q", "qd", "qdd")
+    data = {split: _id_split(p, study, directory, split) for split in ("train", "val")}
+    data["train"] = _first(data["train"], (*states, "tau"), p["fraction"], None, p["stride"])
+    if p["seed_like"] is not None:
+        data["train"] = _seed_like_split(p, study, len(data["train"]["q"]))
+    return data
+
+
+def id_training_data(params: Mapping[str, Any]) -> dict:
+    """The training states ``q, qd, qdd, tau`` a ``learned_id`` cell trains on (``params``: the
+    cell's parameters): a chapter shows what a cell's model saw."""
+    p = JOBS["learned_id"].complete(params)
+    study, directory, _ = _study_data(p)
+    return _id_data(p, study, directory)["train"]
 
 
 def learned_id(p: dict) -> dict:
@@ -227,12 +258,45 @@ def learned_id(p: dict) -> dict:
             "parameters": n_parameters(model), "train_samples": int(len(data["train"]["q"]))}
 
 
+_SEED_LIKE = ("duration_s", "dt_s", "seed")
+
+
+def _seed_like_split(p: dict, study, states: int) -> dict:
+    """``states`` training states on trajectories made the dissertation's program's way (cubics
+    from rest to rest, sampled every ``dt_s``), with their rigid-body torques; drawn from
+    ``seed_like["seed"]`` and the cell's seed. The states, not the trajectories, are matched to
+    the study's (its training set at the cell's fraction and stride): with as many trajectories
+    as the study's, 31 coarse states each, the 8-rule affine model had fewer than twice as many
+    states as parameters and its least squares fell back to the orthogonal solver (195 s against
+    about 50 s), which measured the count of states, not the kind of trajectory."""
+    given = p["seed_like"]
+    if not isinstance(given, Mapping) or set(given) != set(_SEED_LIKE):
+        raise ParamsError(f"seed_like must be null or a mapping of {', '.join(_SEED_LIKE)}, got {given!r}")
+    duration, dt, seed = (given[k] for k in _SEED_LIKE)
+    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (duration, dt)) \
+            or not 0 < dt <= duration <= 600 or duration / dt > 10_000:
+        raise ParamsError(f"seed_like: duration_s and dt_s must be numbers with 0 < dt_s <= duration_s <= 600 "
+                          f"and at most 10 000 samples per trajectory, got {duration!r} and {dt!r}")
+    if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < 2**32):
+        raise ParamsError(f"seed_like: seed must be an integer in [0, 2^32), got {seed!r}")
+    if p["torques"] != "rigid":
+        raise ParamsError("seed_like: trajectories made the seed's way have rigid-body torques only "
+                          "(torques: rigid)")
+    per = int(round(duration / dt)) + 1
+    made = datasets.seed_like_trajectories(study.robot, study.id, -(-states // per), [seed, p["seed"]],
+                                           duration=duration, dt=dt)
+    made = {k: made[k][:states] for k in ("q", "qd", "qdd", "trajectory")}
+    made["tau"] = rnea(study.robot, made["q"], made["qd"], made["qdd"])
+    return made
+
+
 def _id_model(p: dict, models: Path) -> tuple[LearnedID, Path]:
     """A ``learned_id`` cell's unfitted model and the directory its fitted one is kept in."""
     options = {k: p[k] for k in ("inputs", "residual", *_ANFIS_KEYS) if p[k] is not None}
     model = LearnedID(**options, random_state=p["seed"])
     return model, _options_dir(models, "id", {**model.get_params(), "fraction": p["fraction"],
-                                               "stride": p["stride"], "torques": p["torques"]})
+                                               "stride": p["stride"], "torques": p["torques"],
+                                               "seed_like": p["seed_like"]})
 
 
 def id_model(params: Mapping[str, Any]) -> LearnedID:
@@ -301,15 +365,16 @@ JOBS: dict[str, Job] = {
         doc="one ANFIS on a Jang benchmark"),
     "learned_ik": Job(
         learned_ik,
-        {**_STUDY, "samples": None, "encoding": "quat_xyz", **_ANFIS, "study_sizes": False,
-         "max_out_of_plane_deg": None},
+        {**_STUDY, "samples": None, "poses": "region", "encoding": "quat_xyz", **_ANFIS,
+         "study_sizes": False, "max_out_of_plane_deg": None},
         ("val_rmse_deg", "worst_deg", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned IK, one ANFIS per joint",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
     "learned_id": Job(
         learned_id,
-        {**_STUDY, "stride": 1, "torques": "rigid", "inputs": "own", "residual": False, **_ANFIS},
+        {**_STUDY, "stride": 1, "torques": "rigid", "seed_like": None, "inputs": "own", "residual": False,
+         **_ANFIS},
         ("val_rmse", "val_nrmse", "worst_nrmse", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned ID, one ANFIS per joint",

@@ -76,7 +76,7 @@ from .provenance import digest_files
 from .reading import ParamsError, Validator, json_ready, load_yaml, show
 
 __all__ = ["Sweep", "Cell", "CellResult", "Replicates", "SweepError", "load_sweep", "sweep_from_dict",
-           "run_sweep", "sweep_results", "by_configuration", "best_by",
+           "run_sweep", "run_sweeps", "sweep_results", "sweeps_results", "by_configuration", "best_by",
            "code_key", "record_metrics", "write_summary", "METRICS_MIME", "SWEEPS"]
 
 SWEEPS = PARAMS / "sweeps"
@@ -139,6 +139,18 @@ class Sweep:
     def select(self, keep: Callable[[Mapping[str, Any]], bool]) -> "Sweep":
         """The cells whose parameters ``keep`` accepts."""
         return replace(self, cells=tuple(c for c in self.cells if keep(c.params)))
+
+    def with_cells(self, params: Iterable[Mapping[str, Any]], name: str | None = None) -> "Sweep":
+        """The same sweep's job with these cells instead, each completed by the job's defaults
+        and checked as a file's cells are, and every metric the job returns: a chapter's cells
+        that no file lists (a model chosen on validation, trained over the seeds). ``name``: the
+        results' directory (default: this sweep's)."""
+        v = Validator(self.source)
+        if name is not None:
+            _check_sweep_name(v, name)
+        sweep = replace(self, name=self.name if name is None else name,
+                        metrics=JOBS[self.job].metrics if self.job else self.metrics)
+        return replace(sweep, cells=_make_cells(v, sweep, list(params), "with_cells(...)"))
 
 
 @dataclass(frozen=True)
@@ -311,14 +323,19 @@ def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str) 
     return tuple(cells.values())
 
 
+def _check_sweep_name(v: Validator, name: Any) -> str:
+    name = v.string(name, "name")
+    if not all(c.isalnum() or c in "-_." for c in name) or name.startswith("."):
+        v.fail("name", f"must be letters, digits, '-', '_' or '.' (a directory name), got {show(name)}")
+    return name
+
+
 def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -> Sweep:
     """Validate a sweep mapping (as read from YAML) and expand its cells; ``smoke`` applies its
     ``smoke`` section."""
     v = Validator(source)
     v.mapping(data, "", _TOP)
-    name = v.string(data["name"], "name")
-    if not all(c.isalnum() or c in "-_." for c in name) or name.startswith("."):
-        v.fail("name", f"must be letters, digits, '-', '_' or '.' (a directory name), got {show(name)}")
+    name = _check_sweep_name(v, data["name"])
     description = v.string(data.get("description", ""), "description", allow_empty=True)
     if ("job" in data) == ("notebook" in data):
         v.fail("", "must name either a job or a notebook")
@@ -695,48 +712,78 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
         prepare: do the job's shared work once, here, before the workers start
             (:attr:`nfarm.jobs.Job.prepare`: the data sets of the learned jobs).
     """
+    return run_sweeps([sweep], [out], scheduler=scheduler, workers=workers, client=client,
+                      progress=progress, summary=summary, timeout=timeout, prepare=prepare)[0]
+
+
+def run_sweeps(sweeps: Sequence[Sweep], outs: Sequence[str | os.PathLike | None] | None = None, *,
+               scheduler: str | None = None, workers: int | None = None, client=None,
+               progress: bool = False, summary: bool = True, timeout: float | None = 1800,
+               prepare: bool = True) -> list[list[CellResult]]:
+    """:func:`run_sweep` for several sweeps at once: the unfinished cells of all of them go to
+    one cluster, in the order given (Dask starts earlier submissions first), and each sweep's
+    results come back in its own order. One cluster for a chapter's sweeps keeps every worker
+    busy until the last cell instead of idling at the tail of each sweep, and starts once. A
+    cell listed twice (the same directory and key) runs once. ``outs``: one directory per
+    sweep (``None``: ``build/sweeps/<name>/``); the other arguments as :func:`run_sweep`'s."""
     from tqdm.auto import tqdm
 
-    out = project_path(out) if out is not None else BUILD / "sweeps" / sweep.name
+    outs = [None] * len(sweeps) if outs is None else list(outs)
+    if len(outs) != len(sweeps):
+        raise ValueError(f"give one directory per sweep: {len(sweeps)} sweeps, {len(outs)} directories")
     if workers is not None and workers < 0:
         raise ValueError(f"workers must be >= 0, got {workers}")
-    out.mkdir(parents=True, exist_ok=True)
-    code = code_key(sweep)
-    results: dict[str, CellResult] = {}
-    pending = []
-    for cell in sweep.cells:
-        done = _finished(out, cell, code, sweep.metrics)
-        if done:
-            results[cell.key] = done
-        else:
-            pending.append(cell)
-    bar = tqdm(total=len(sweep.cells), initial=len(results), unit="cell", disable=not progress,
-               desc=sweep.name, file=sys.stderr, dynamic_ncols=True)
+    dirs = [project_path(o) if o is not None else BUILD / "sweeps" / s.name for s, o in zip(sweeps, outs)]
+    codes = [code_key(s) for s in sweeps]
+    results: dict[tuple[Path, str], CellResult] = {}
+    pending: dict[tuple[Path, str], tuple[int, Cell]] = {}
+    for i, (sweep, out) in enumerate(zip(sweeps, dirs)):
+        out.mkdir(parents=True, exist_ok=True)
+        for cell in sweep.cells:
+            where = (out, cell.key)
+            if where in results or where in pending:
+                continue
+            done = _finished(out, cell, codes[i], sweep.metrics)
+            if done:
+                results[where] = done
+            else:
+                pending[where] = (i, cell)
+    bar = tqdm(total=len(results) + len(pending), initial=len(results), unit="cell",
+               disable=not progress, desc=", ".join(dict.fromkeys(s.name for s in sweeps)),
+               file=sys.stderr, dynamic_ncols=True)
 
-    def finish(cell: Cell, record: dict) -> None:
-        _write_cell(out, sweep, cell, record, code)
-        results[cell.key] = CellResult(cell, record["status"], record["metrics"],
-                                       record["seconds"], record["worker"], record.get("error", ""))
+    def finish(i: int, cell: Cell, record: dict) -> None:
+        sweep = sweeps[i]
+        _write_cell(dirs[i], sweep, cell, record, codes[i])
+        results[(dirs[i], cell.key)] = CellResult(cell, record["status"], record["metrics"],
+                                                  record["seconds"], record["worker"],
+                                                  record.get("error", ""))
         bar.update()
         if record["status"] != "ok":
             bar.write(f"{sweep.name}: cell {cell.key} failed: {_error_line(record['error'])}",
                       file=sys.stderr)
 
+    todo = list(pending.values())
     try:
-        if pending and prepare and sweep.job and JOBS[sweep.job].prepare:
-            _prepare(JOBS[sweep.job], pending)
-        if pending and workers == 0 and not scheduler and client is None:
-            for cell in pending:
-                finish(cell, execute_cell(sweep.job, sweep.notebook, dict(cell.params),
-                                          sweep.metrics, timeout))
-        elif pending:
-            _run_on_dask(sweep, pending, scheduler, workers, client, timeout, finish)
+        if todo and prepare:
+            for job in dict.fromkeys(sweeps[i].job for i, _ in todo):
+                if job and JOBS[job].prepare:
+                    _prepare(JOBS[job], [c for i, c in todo if sweeps[i].job == job])
+        if todo and workers == 0 and not scheduler and client is None:
+            for i, cell in todo:
+                finish(i, cell, execute_cell(sweeps[i].job, sweeps[i].notebook, dict(cell.params),
+                                             sweeps[i].metrics, timeout))
+        elif todo:
+            _run_on_dask(sweeps, todo, scheduler, workers, client, timeout, finish)
     finally:
         bar.close()
-    ordered = [results[c.key] for c in sweep.cells if c.key in results]
-    if summary and len(ordered) == len(sweep.cells):
-        write_summary(out, sweep, ordered)
-    return ordered
+    every = []
+    for sweep, out in zip(sweeps, dirs):
+        ordered = [results[(out, c.key)] for c in sweep.cells if (out, c.key) in results]
+        if summary and len(ordered) == len(sweep.cells):
+            write_summary(out, sweep, ordered)
+        every.append(ordered)
+    return every
 
 
 def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
@@ -748,14 +795,22 @@ def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
     Raises:
         SweepError: a cell failed (its record is kept in its directory).
     """
+    return sweeps_results([sweep], sweeps_dir, workers=workers)[0]
+
+
+def sweeps_results(sweeps: Sequence[Sweep], sweeps_dir: str | os.PathLike | None = None, *,
+                   workers: int | None = None) -> list[list[CellResult]]:
+    """:func:`sweep_results` of several sweeps, their unfinished cells run on one cluster
+    (:func:`run_sweeps`): a chapter runs everything it will show first, then reads it back."""
     base = project_path(sweeps_dir) if sweeps_dir is not None else BUILD / "sweeps"
-    results = run_sweep(sweep, base / sweep.name, workers=workers, summary=False)
-    for r in results:
-        if not r.ok:
-            raise SweepError(f"sweep {sweep.name}: cell {r.cell.key} {dict(r.cell.params)} "
-                             f"failed: {_error_line(r.error)} (see "
-                             f"{shown_path(base / sweep.name / r.cell.key / 'error.txt')})")
-    return results
+    every = run_sweeps(sweeps, [base / s.name for s in sweeps], workers=workers, summary=False)
+    for sweep, results in zip(sweeps, every):
+        for r in results:
+            if not r.ok:
+                raise SweepError(f"sweep {sweep.name}: cell {r.cell.key} {dict(r.cell.params)} "
+                                 f"failed: {_error_line(r.error)} (see "
+                                 f"{shown_path(base / sweep.name / r.cell.key / 'error.txt')})")
+    return every
 
 
 def _prepare(job, cells: Sequence[Cell]) -> None:
@@ -770,28 +825,29 @@ def _prepare(job, cells: Sequence[Cell]) -> None:
                 job.prepare(dict(cell.params))
 
 
-def _run_on_dask(sweep: Sweep, pending: Sequence[Cell], scheduler: str | None,
+def _run_on_dask(sweeps: Sequence[Sweep], pending: Sequence[tuple[int, Cell]], scheduler: str | None,
                  workers: int | None, given, timeout: float | None,
-                 finish: Callable[[Cell, dict], None]) -> None:
+                 finish: Callable[[int, Cell, dict], None]) -> None:
     from distributed import as_completed
 
     client = given if given is not None else _client(scheduler, workers)
     try:
         futures = {}
-        for cell in pending:
+        for i, cell in pending:
+            sweep = sweeps[i]
             future = client.submit(execute_cell, sweep.job, sweep.notebook, dict(cell.params),
                                    list(sweep.metrics), timeout, key=f"nfarm-{sweep.name}-{cell.key}",
                                    pure=False, retries=0)
-            futures[future] = cell
+            futures[future] = (i, cell)
         for future in as_completed(futures):
-            cell = futures[future]
+            i, cell = futures[future]
             try:
                 record = future.result()
             except Exception as exc:  # noqa: BLE001 — a worker died, or the task was lost
                 record = {"status": "failed", "metrics": {}, "seconds": 0.0, "worker": "",
                           "log": "", "files": {},
                           "error": f"{type(exc).__name__}: the cell's worker failed ({exc})"}
-            finish(cell, record)
+            finish(i, cell, record)
     finally:
         if given is None:
             cluster = getattr(client, "cluster", None)
