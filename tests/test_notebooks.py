@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import ast
 import json
+import re
 
 import papermill
 import pytest
 
 from nfarm.paths import FIGURES, NOTEBOOKS, ROOT
-from nfarm.report import COURSE_TAGS, chapters, run_notebook
+from nfarm.report import COURSE_TAGS, _export_html, _title, chapters, run_notebook
 
 NOTEBOOK_FILES = chapters(NOTEBOOKS)
 
@@ -21,6 +22,31 @@ def run_chapter(notebook, output, parameters):
 
 
 REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
+
+
+def check_page(notebook, executed, where):
+    """The chapter's page as the report writes it reads as a page for a reader: a title, every
+    figure captioned (visibly and as alternative text), no path of the machine, no "1 times",
+    no prose number with more digits than a measurement supports, one parameters cell."""
+    page = where / f"{notebook.stem}.html"
+    _export_html(executed, page, title=_title(notebook))
+    text = page.read_text(encoding="utf-8")
+    assert "<title>Notebook</title>" not in text and f"<title>{_title(notebook)}" in text
+    images = re.findall(r"<img\b[^>]*>", text)
+    assert images, "the page shows its figures"
+    for image in images:
+        alt = re.search(r'\balt="([^"]*)"', image)
+        assert alt and alt.group(1).strip() and "No description" not in alt.group(1), \
+            f"a figure without a caption: {image[:120]}"
+    assert text.count("<figcaption") >= text.count('class="nfarm-figure"') > 0
+    assert str(ROOT) not in text, "a path of the checkout on the page"   # (the tests' own paths are parameters)
+    prose = " ".join(re.sub(r"<[^>]+>", " ", m) for m in re.findall(
+        r'<div class="jp-RenderedHTMLCommon jp-RenderedMarkdown[^"]*"[^>]*>(.*?)</div>', text, flags=re.S))
+    assert not re.search(r"(?<![\d.,])[01] times\b", prose), re.search(r".{60}(?<![\d.,])[01] times\b.{20}", prose)
+    for number in re.findall(r"(?<![\w.,])\d[\d,]*\.\d+|(?<![\w.,])\d{1,3}(?:,\d{3}){2,}", prose):
+        digits = number.replace(",", "").replace(".", "").lstrip("0").rstrip("0" if "." not in number else "")
+        assert len(digits) <= (5 if "." in number else 6), f"false precision in prose: {number}"
+    assert text.count("# Parameters") <= 1, "the parameters show once"
 
 
 def test_there_are_chapters():
@@ -97,6 +123,7 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
         ensure_models(shared, "params/studies/intelbot5.yaml", tmp_path)
     run_chapter(notebook, executed, parameters)
     assert str(ROOT) not in executed.read_text(), "no absolute path of the checkout"
+    check_page(notebook, executed, tmp_path)
     outputs = [o for c in json.loads(executed.read_text())["cells"] for o in c.get("outputs", [])]
     # No value or print shows a path of the machine that ran it (prose names its directories
     # deliberately, relative to the checkout when they lie in it).
@@ -138,6 +165,7 @@ def test_runs_for_another_shipped_robot_without_touching_figures(notebook, robot
             parameters[name] = str(tmp_path / name)
     run_chapter(notebook, tmp_path / notebook.name, parameters)
     assert robot in (tmp_path / notebook.name).read_text()
+    check_page(notebook, tmp_path / notebook.name, tmp_path)
     assert {p: p.stat().st_mtime_ns for p in FIGURES.rglob("*")} == before
 
 
@@ -164,6 +192,7 @@ def test_the_study_chapters_run_for_the_so101(notebook, so101_shared):
         ensure_models(so101_shared, "params/studies/so101.yaml", so101_shared)
     run_chapter(notebook, so101_shared / notebook.name, parameters)
     assert "so101" in (so101_shared / notebook.name).read_text()
+    check_page(notebook, so101_shared / notebook.name, so101_shared)
     assert sorted((so101_shared / f"out_{notebook.stem}").glob("*.png"))
 
 
@@ -180,6 +209,7 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
         "data_dirs": [str(d / "data_dir") for d in studies.values()],
         "models_dirs": [str(d / "models_dir") for d in studies.values()],
         "sweeps_dirs": [str(d / "sweeps_dir") for d in studies.values()]})
+    check_page(compare, tmp_path / compare.name, tmp_path)
     table = (tmp_path / "out" / "tables" / f"{compare.name[:2]}_arms.csv").read_text()
     assert table.splitlines()[0] == "quantity,intelbot5,so101"
     assert "learned IK, worst joint RMSE [deg]" in table

@@ -336,7 +336,9 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     assert verify_manifest(figures) == []
     assert "b/tables/01_given.csv" in (figures / "MANIFEST.sha256").read_text()
     page = (build / "report" / "b" / "01_robot.html").read_text()
-    assert "../mathjax/MathJax.js" in page and "../02_shared.html" in page   # the shared 02
+    assert "../mathjax/MathJax.js" in page and "../b/02_shared.html" in page   # the shared 02, in b's pages
+    shared_b = (build / "report" / "b" / "02_shared.html").read_text()          # its navigation stays in b
+    assert "../b/01_robot.html" in shared_b and "../b/03_study.html" in shared_b and "../01_robot.html" not in shared_b
     assert "<title>Chapter 01_robot · b</title>" in page                      # not "Notebook"
     assert "<title>Chapter 01_robot · a</title>" in (build / "report" / "01_robot.html").read_text()
     assert "<title>Chapter 02_shared</title>" in (build / "report" / "02_shared.html").read_text()

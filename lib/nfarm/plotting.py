@@ -31,16 +31,50 @@ __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_
 DPI = 110
 
 
-def save_figure(fig: Figure, out_dir: str | os.PathLike, name: str, caption: str = "") -> str:
+def save_figure(fig: Figure, out_dir: str | os.PathLike, name: str, caption: str = "", *,
+                show: bool | None = None) -> str:
     """Write ``fig`` to ``out_dir/name.png`` atomically and reproducibly; return the path.
 
     ``caption`` is stored in the PNG (its ``Description`` text chunk); the report's index
-    shows it under the figure."""
+    shows it under the figure. ``show`` (default: when an IPython kernel runs this, as in a
+    chapter) displays the saved PNG with the caption under it — visible, and as the image's
+    alternative text — and closes ``fig``: the page shows what was published, captioned, once
+    (a ``plt.show()`` after it shows nothing)."""
     path = os.path.join(out_dir, f"{name}.png")
     metadata = {"Software": None, **({"Description": caption} if caption else {})}
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=DPI, metadata=metadata)
+    if show if show is not None else _in_kernel():
+        _display_figure(path, caption)
+        plt.close(fig)
     return path
+
+
+def _in_kernel() -> bool:
+    """Whether this runs in an IPython kernel (a notebook), not a script or a terminal."""
+    try:
+        from IPython import get_ipython
+    except ImportError:             # pragma: no cover — IPython comes with the project
+        return False
+    return getattr(get_ipython(), "kernel", None) is not None
+
+
+def _display_figure(path: str, caption: str) -> None:
+    """A saved figure as a notebook output: HTML (the image, its alternative text and a visible
+    caption) for pages and JupyterLab, the PNG itself for other front ends."""
+    import base64
+    import html
+
+    from IPython.display import display
+
+    with open(path, "rb") as f:
+        data = base64.b64encode(f.read()).decode("ascii")
+    text = html.escape(caption or os.path.basename(path), quote=True)
+    figure = (f'<figure class="nfarm-figure" style="margin:.5em 0 1.5em">'
+              f'<img src="data:image/png;base64,{data}" alt="{text}" style="max-width:100%">'
+              f'<figcaption style="color:#444;font-size:.9em;margin-top:.3em"><b>Figure.</b> {text}'
+              f'</figcaption></figure>')
+    display({"text/html": figure, "image/png": data, "text/plain": f"Figure: {caption}"}, raw=True)
 
 
 def draw_arm(ax, robot: Robot, q: np.ndarray, *, color: str = "C0", label: str | None = None,

@@ -501,11 +501,62 @@ def _nav(links: dict[str, tuple[str, str] | None]) -> str:
             + "".join(parts) + "</nav>")
 
 
+def _merge_parameters(nb) -> None:
+    """One parameters cell on a page: the values papermill injected written into the chapter's
+    own parameters cell (its comments kept), and the injected cell dropped; a first comment
+    names the values this run changed. A reader sees the values the page was made with, once."""
+    import ast
+
+    tagged = lambda tag: [k for k, c in enumerate(nb.cells) if tag in c.metadata.get("tags", [])]  # noqa: E731
+    own, injected = tagged("parameters"), tagged("injected-parameters")
+    if len(own) != 1 or len(injected) != 1:
+        return
+    cell, given = nb.cells[own[0]], nb.cells[injected[0]].source
+    try:
+        values = {node.targets[0].id: ast.get_source_segment(given, node.value)
+                  for node in ast.parse(given).body
+                  if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name)}
+        tree = ast.parse(cell.source)
+    except SyntaxError:
+        return
+    lines = cell.source.split("\n")
+    changed = []
+    for node in sorted((n for n in tree.body if isinstance(n, ast.Assign) and len(n.targets) == 1
+                        and isinstance(n.targets[0], ast.Name) and n.targets[0].id in values),
+                       key=lambda n: n.lineno, reverse=True):
+        name = node.targets[0].id
+        if ast.get_source_segment(cell.source, node.value) == values[name]:
+            values.pop(name)
+            continue
+        rest = lines[node.end_lineno - 1][node.end_col_offset:]
+        lines[node.lineno - 1:node.end_lineno] = [f"{name} = {values.pop(name)}{rest}"]
+        changed.append(name)
+    lines += [f"{name} = {value}" for name, value in values.items()]
+    changed += list(values)
+    if changed:
+        lines.insert(0, f"# This page's run set: {', '.join(sorted(changed))}")
+    cell.source = "\n".join(lines)
+    del nb.cells[injected[0]]
+
+
+def _name_the_arm(nb, arm: str) -> None:
+    """The chapter's heading names the arm its page is for (an edition's pages look alike)."""
+    for cell in nb.cells:
+        if cell.cell_type == "markdown":
+            lines = cell.source.split("\n")
+            for k, line in enumerate(lines):
+                if line.startswith("# "):
+                    lines[k] = f"{line} · {arm}"
+                    cell.source = "\n".join(lines)
+                    return
+
+
 def _export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
-                 title: str = "") -> None:
+                 title: str = "", arm: str = "") -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
-    directory; a navigation bar between chapters."""
+    directory; a navigation bar between chapters; one parameters cell with the run's values
+    (:func:`_merge_parameters`); the heading naming ``arm`` when given."""
     import nbformat
     from nbconvert import HTMLExporter
     from nbconvert.preprocessors import TagRemovePreprocessor
@@ -518,13 +569,17 @@ def _export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MAT
     exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=mathjax,
                             require_js_url="", jquery_url="", widget_renderer_url="")
     exporter.register_preprocessor(TagRemovePreprocessor(config=config), enabled=True)
-    # The lab template has no alt text for output images; nbconvert fills in a generic one
-    # and warns once per page. The figures' captions are in the chapter's prose.
+    # Figures carry their captions as alternative text (nfarm.plotting.save_figure); an image
+    # shown without one gets nbconvert's generic text and a warning, which the check of the
+    # smoke report (tests/test_pages.py) turns into a failure.
     quiet = _DropMessage("Alternative text is missing")
     exporter.log.addFilter(quiet)
     try:
-        body, _ = exporter.from_notebook_node(
-            nbformat.read(executed, 4), resources={"metadata": {"name": title or executed.stem}})
+        nb = nbformat.read(executed, 4)
+        _merge_parameters(nb)
+        if arm:
+            _name_the_arm(nb, arm)
+        body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title or executed.stem}})
     finally:
         exporter.log.removeFilter(quiet)
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
@@ -990,14 +1045,17 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
             own = sorted(own + shared)
         pages[arm.name] = own
         up = "../" if arm.subdir else ""      # an edition's pages are one directory down
+        # A shared chapter is copied into the edition's directory with the edition's navigation,
+        # so that "previous" and "next" never leave the edition.
+        here = [f"{arm.subdir}/{Path(page).name}" if arm.subdir else page for _, _, page in own]
         for k, (prefix, title, page) in enumerate(own):
-            if arm.subdir and not page.startswith(arm.subdir + "/"):
-                continue                      # a shared page, written with the primary's
             links = {"index": (up + "index.html", "all chapters"),
-                     "previous": (up + own[k - 1][2], own[k - 1][1]) if k > 0 else None,
-                     "next": (up + own[k + 1][2], own[k + 1][1]) if k + 1 < len(own) else None}
+                     "previous": (up + here[k - 1], own[k - 1][1]) if k > 0 else None,
+                     "next": (up + here[k + 1], own[k + 1][1]) if k + 1 < len(own) else None}
             executed = base / "notebooks" / page.replace(".html", ".ipynb")
+            page = here[k]
             _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
-                         title=f"{title} · {arm.name}" if prefix in per_arm else title)
+                         title=f"{title} · {arm.name}" if prefix in per_arm else title,
+                         arm=arm.name if prefix in per_arm else "")
     _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
                  compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)

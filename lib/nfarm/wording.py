@@ -1,0 +1,71 @@
+"""Words for numbers in the chapters' computed prose: a sentence built from a value must read
+well for every value it can take.
+
+The chapters' result sentences are f-strings over measured values; a ratio of 0.996 printed as
+"0.996–1 times", a wall-clock rate printed to seven digits, or "1 times" read as errors. These
+helpers choose the words and the precision from the value:
+
+>>> times(1.04)
+'about the same as'
+>>> times(3.14159)
+'3.1 times'
+>>> times_range(0.996, 1.0)
+'about the same as'
+>>> times_range(1.2, 52.0)
+'1.2–52 times'
+>>> about(1_436_799)
+'about 1,400,000'
+>>> span(0.125, 0.125)
+'0.125'
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["times", "times_range", "about", "span"]
+
+#: Ratios within this of 1 read as "about the same": measured ratios of timings and errors
+#: move by several per cent between runs and seeds.
+SAME = 0.1
+
+
+def _ratio(r: float, digits: int = 2) -> str:
+    """A ratio to ``digits`` significant digits, but never in exponent form."""
+    if not math.isfinite(r):
+        raise ValueError(f"a ratio must be finite, got {r!r}")
+    if r == 0:
+        return "0"
+    rounded = float(f"{r:.{digits}g}")
+    return f"{rounded:,.{max(0, digits - 1 - math.floor(math.log10(abs(rounded))))}f}"
+
+
+def times(r: float, *, same: float = SAME) -> str:
+    """``r`` as the words before "that of …" or a noun: "about the same as" within ``same`` of
+    1, else "2.3 times", "0.41 times", "52 times" (two significant digits)."""
+    if abs(r - 1) <= same + 1e-12:         # (1.1 - 1 is 0.10000000000000009)
+        return "about the same as"
+    return f"{_ratio(r)} times"
+
+
+def times_range(lo: float, hi: float, *, same: float = SAME) -> str:
+    """A range of ratios, before a noun as :func:`times`: "about the same as" when both ends
+    are within ``same`` of 1, one ratio when both ends read alike, else "1.2–52 times"."""
+    if lo > hi:
+        lo, hi = hi, lo
+    if abs(lo - 1) <= same + 1e-12 and abs(hi - 1) <= same + 1e-12:
+        return "about the same as"
+    a, b = _ratio(lo), _ratio(hi)
+    return f"{a} times" if a == b else f"{a}–{b} times"
+
+
+def about(x: float, digits: int = 2) -> str:
+    """A wall-clock figure (a rate, a time) to ``digits`` significant digits, with "about":
+    the machine's load moves it by more than the digits printed."""
+    return f"about {_ratio(x, digits)}"
+
+
+def span(lo: float, hi: float, fmt: str = ".3g") -> str:
+    """"lo–hi", or one value when both print alike."""
+    a, b = format(lo, fmt), format(hi, fmt)
+    return a if a == b else f"{a}–{b}"
