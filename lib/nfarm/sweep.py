@@ -662,7 +662,7 @@ def write_summary(out: Path, sweep: Sweep, results: Sequence[CellResult]) -> lis
         values = {m: [r.metrics.get(m) if r.ok and isinstance(r.metrics.get(m), (int, float))
                       else math.nan for r in results] for m in scalar}
         fig = plot_sweep(labels, values, title=f"Sweep {sweep.name}: {sweep.target}")
-        written.append(Path(save_figure(fig, out, "summary", show=False,
+        written.append(Path(save_figure(fig, out, "summary",
                                         caption=f"Metrics of each cell of sweep {sweep.name}")))
         import matplotlib.pyplot as plt
         plt.close(fig)
