@@ -231,3 +231,28 @@ def test_chapter_06_never_reads_a_test_split():
             if isinstance(node, ast.Name) and node.id.endswith("_test"):
                 named.append((k, node.id))
     assert not named, named
+
+
+@pytest.mark.parametrize("notebook", NOTEBOOK_FILES, ids=lambda p: p.stem)
+def test_visible_code_uses_no_name_defined_only_in_hidden_cells(notebook):
+    """A reader of a page sees the code of every cell but the prose cells (``remove-input``):
+    a visible cell must not use a name that only a hidden cell defines."""
+    hidden, visible, problems = set(), set(), []
+    for k, cell in enumerate(json.loads(notebook.read_text(encoding="utf-8"))["cells"]):
+        tags = set(cell["metadata"].get("tags", []))
+        if cell["cell_type"] != "code" or tags & set(COURSE_TAGS):
+            continue
+        defined, used = set(), set()
+        for node in ast.walk(ast.parse("".join(cell["source"]))):
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                defined.add(node.name)
+            elif isinstance(node, ast.arg):
+                defined.add(node.arg)
+            elif isinstance(node, ast.Name):
+                (defined if isinstance(node.ctx, ast.Store) else used).add(node.id)
+        if tags & {"remove-input", "remove-cell"}:
+            hidden |= defined - visible
+        else:
+            problems += [(k, name) for name in sorted((used - defined) & (hidden - visible))]
+            visible |= defined
+    assert not problems, f"visible cells use names defined in hidden ones: {problems}"
