@@ -408,3 +408,69 @@ def test_the_deviations_table_chapter_05_shows_is_in_the_study_document():
     rows = [line for line in text.splitlines() if line.startswith("| ") and not line.startswith("| element")]
     assert len(rows) >= 10 and all(line.count(" | ") == 3 for line in rows)
     assert any("(seed, line" in line for line in rows) and any("not in the seed" in line for line in rows)
+
+
+@pytest.mark.parametrize("name", ["../outside.png", "../../../etc/hostname", "/etc/hostname", "tables/../../x.csv"])
+def test_verify_refuses_manifest_entries_outside_the_figures_directory(tmp_path, name):
+    figures = tmp_path / "figures"
+    figures.mkdir()
+    (tmp_path / "outside.png").write_bytes(b"o")
+    (figures / "a.png").write_bytes(b"a")
+    write_manifest(figures)
+    digest = "0" * 64
+    with (figures / "MANIFEST.sha256").open("a") as f:
+        f.write(f"{digest}  {name}\n")
+    problems = verify_manifest(figures)
+    assert len(problems) == 1 and "lies outside the figures directory: not checked" in problems[0]
+
+
+def test_verify_hashes_in_chunks(tmp_path, monkeypatch):
+    from nfarm import report
+    (tmp_path / "big.png").write_bytes(bytes(range(256)) * 9000)      # 2.3 MB: three chunks of 1 MiB
+    write_manifest(tmp_path)
+    monkeypatch.setattr(report.Path, "read_bytes", lambda self: pytest.fail("read whole"))
+    assert verify_manifest(tmp_path) == []
+
+
+@pytest.mark.parametrize("value, message", [("0", "positive number"), ("-1", "positive number"),
+                                            ("nan", "positive number"), ("inf", "positive number"),
+                                            ("soon", "a number of seconds or 'none'")])
+def test_cell_timeout_takes_a_positive_number_of_seconds(value, message, capsys):
+    from nfarm.__main__ import main
+    with pytest.raises(SystemExit) as exit_:
+        main(["report", "--cell-timeout", value])
+    assert exit_.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_cell_timeout_none_is_no_limit(monkeypatch):
+    from nfarm import __main__, report
+    seen = {}
+    monkeypatch.setattr(report, "build_report", lambda **kw: seen.update(kw) or 0)
+    assert __main__.main(["report", "--cell-timeout", "none"]) == 0 and seen["cell_timeout"] is None
+    assert __main__.main(["report", "--cell-timeout", "600.5"]) == 0 and seen["cell_timeout"] == 600.5
+
+
+@pytest.mark.parametrize("out, message", [("FILE", "exists and is not a directory"), ("/proc/x", "system directory"),
+                                          ("/dev/null", "exists and is not a directory")])
+@pytest.mark.parametrize("command", [["sweep", "params/sweeps/smoke.yaml"], ["datasets", "params/studies/intelbot5.yaml"]])
+def test_an_out_directory_that_cannot_be_one_is_one_line(tmp_path, capsys, out, message, command):
+    from nfarm.__main__ import main
+    if out == "FILE":
+        out = str(tmp_path / "file")
+        (tmp_path / "file").write_text("x")
+    assert main([*command, "--out", out]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and "Traceback" not in err[0]
+
+
+def test_a_read_only_build_directory_is_one_line(project, capsys, monkeypatch):
+    """(Simulated: the tests may run as a user who may write anywhere.)"""
+    from nfarm import report
+    _, dirs = project
+
+    def refuse(report_dir):
+        raise PermissionError(13, "Permission denied", str(report_dir / "mathjax"))
+    monkeypatch.setattr(report, "_install_mathjax", refuse)
+    assert build_report(only=["01"], **dirs) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"report: cannot write {dirs['build_dir'] / 'report' / 'mathjax'}: Permission denied"]

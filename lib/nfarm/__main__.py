@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+import os
 import sys
 import warnings
 
@@ -69,8 +71,9 @@ def main(argv: list[str] | None = None) -> int:
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
     report.add_argument("--force", action="store_true",
                         help="run chapters whose inputs are unchanged since their last run too")
-    report.add_argument("--cell-timeout", type=float, default=1800, metavar="SECONDS",
-                        help="fail a cell that runs longer (default 1800)")
+    report.add_argument("--cell-timeout", type=_seconds, default=1800, metavar="SECONDS",
+                        help="fail a cell that runs longer (default 1800; a positive number of "
+                             "seconds, or 'none' for no limit)")
     datasets = sub.add_parser("datasets", help="build a study's training and test data sets")
     datasets.add_argument("study", metavar="STUDY", help="params/studies/<robot>.yaml")
     datasets.add_argument("--out", default=None, metavar="DIR",
@@ -111,10 +114,46 @@ def main(argv: list[str] | None = None) -> int:
                         force=args.force)
 
 
+def _seconds(text: str) -> float | None:
+    """``--cell-timeout``: a positive, finite number of seconds, or ``none`` (no limit)."""
+    if text.strip().lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds or 'none', got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds (or 'none' for no "
+                                         f"limit), got {text!r}")
+    return value
+
+
+def _output_directory(option: str, out: str | None) -> str | None:
+    """The one line owed for an ``--out`` that cannot be a results directory, or None."""
+    if out is None:
+        return None
+    from pathlib import Path
+
+    path = Path(out).resolve()
+    if path.exists() and not path.is_dir():
+        return f"{option}: {out} exists and is not a directory"
+    system = next((root for root in ("/proc", "/sys", "/dev") if path == Path(root) or Path(root) in path.parents), None)
+    if system:
+        return f"{option}: {out} lies in {system}, a system directory: give a directory of your own"
+    parent = next((p for p in (path, *path.parents) if p.exists()), None)
+    if parent is None or not os.access(parent, os.W_OK | os.X_OK):
+        return f"{option}: {out} cannot be written (no permission in {parent})"
+    return None
+
+
 def make_datasets(study_file: str, out: str | None, force: bool) -> int:
     """Build (or reuse) every data set of a study; one line per file."""
     from .datasets import build_datasets, load_study
 
+    problem = _output_directory("--out", out)
+    if problem:
+        print(problem, file=sys.stderr)
+        return 2
     try:
         study = load_study(study_file)
     except ParamsError as exc:
@@ -136,6 +175,15 @@ def run_sweep_file(path: str, scheduler: str | None, workers: int | None, out: s
 
     if workers is not None and workers < 0:
         print(f"--workers: must be >= 0, got {workers}", file=sys.stderr)
+        return 2
+    cores = os.cpu_count() or 1
+    if workers is not None and workers > cores:
+        print(f"--workers: {workers} asked for, {cores} cores here: running {cores} (one cell per core; a "
+              f"cluster of more machines takes --scheduler)", file=sys.stderr)
+        workers = cores
+    problem = _output_directory("--out", out)
+    if problem:
+        print(problem, file=sys.stderr)
         return 2
     if scheduler and workers is not None:
         print("--workers: the scheduler's cluster has its own workers; give one or the other",

@@ -353,12 +353,20 @@ def _published_files(figures_dir: Path) -> list[Path]:
                   if p.is_file() and p.suffix in (".png", ".csv", ".md"))
 
 
+def _file_sha256(path: Path, chunk: int = 1 << 20) -> str:
+    """SHA-256 of a file read in chunks of ``chunk`` bytes (memory bounded whatever its size)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        while block := f.read(chunk):
+            h.update(block)
+    return h.hexdigest()
+
+
 def write_manifest(figures_dir: Path = FIGURES) -> Path:
     """Write ``MANIFEST.sha256`` (``sha256sum -c`` format, paths relative to ``figures_dir``)."""
     lines = []
     for path in _published_files(figures_dir):
-        digest = hashlib.sha256(path.read_bytes()).hexdigest()
-        lines.append(f"{digest}  {path.relative_to(figures_dir).as_posix()}\n")
+        lines.append(f"{_file_sha256(path)}  {path.relative_to(figures_dir).as_posix()}\n")
     manifest = figures_dir / "MANIFEST.sha256"
     with atomic_path(manifest) as tmp:
         tmp.write_text("".join(lines), encoding="utf-8")
@@ -372,16 +380,20 @@ def verify_manifest(figures_dir: Path = FIGURES) -> list[str]:
     if not manifest.is_file():
         return [f"{manifest}: missing"]
     problems, listed = [], set()
+    root = figures_dir.resolve()
     for number, line in enumerate(manifest.read_text(encoding="utf-8").splitlines(), 1):
         digest, sep, name = line.partition("  ")
         if not sep or not re.fullmatch(r"[0-9a-f]{64}", digest):
             problems.append(f"{manifest}:{number}: not a 'sha256  path' line")
             continue
-        listed.add(name)
         path = figures_dir / name
+        if Path(name).is_absolute() or not path.resolve().is_relative_to(root):
+            problems.append(f"{manifest}:{number}: {name!r} lies outside the figures directory: not checked")
+            continue
+        listed.add(name)
         if not path.is_file():
             problems.append(f"{name}: listed but missing")
-        elif hashlib.sha256(path.read_bytes()).hexdigest() != digest:
+        elif _file_sha256(path) != digest:
             problems.append(f"{name}: differs from the manifest")
     for path in _published_files(figures_dir):
         if path.relative_to(figures_dir).as_posix() not in listed:
@@ -1013,6 +1025,10 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         print(f"report: interrupted; {shown_path(figures_dir)} holds the chapters published "
               f"before (its manifest matches)", file=sys.stderr)
         return 130
+    except OSError as exc:                        # a read-only or full build directory, …
+        where = f" {shown_path(Path(exc.filename))}" if exc.filename else ""
+        print(f"report: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     print(f"report: {shown_path(report_dir / 'index.html')}; figures in "
           f"{shown_path(figures_dir)}", file=sys.stderr)
     return 0
