@@ -257,19 +257,38 @@ def plot_profiles(t: np.ndarray, profiles: Mapping[str, np.ndarray], joint_names
 
 
 def plot_per_joint(t: np.ndarray, series: Mapping[str, np.ndarray], joint_names, *,
-                   ylabel: str) -> Figure:
-    """One panel per joint, one line per named series ``(K, n)`` against time ``t (K,)``."""
+                   ylabel: str, focus: float | None = None) -> Figure:
+    """One panel per joint, one line per named series ``(K, n)`` against time ``t (K,)``; the
+    legend below the panels, where it hides no data.
+
+    ``focus``: each panel's y range is the first series' (the reference's) range widened
+    ``focus`` times about its middle, so that a prediction far off does not flatten the others;
+    a series that leaves a panel's range is named so in the legend."""
     n = len(joint_names)
-    fig, axes = plt.subplots(1, n, figsize=(2.9 * n, 3.0), layout="constrained", sharex=True)
+    fig, axes = plt.subplots(1, n, figsize=(2.9 * n, 3.3), layout="constrained", sharex=True)
+    axes = np.atleast_1d(axes)
     for k, (label, values) in enumerate(series.items()):
         for j, ax in enumerate(axes):
             ax.plot(t, values[:, j], color=f"C{k}", lw=1.5 if k else 2.2, label=label,
                     ls="-" if k == 0 else "--")
+    leaves = set()
+    if focus is not None:
+        reference = np.asarray(next(iter(series.values())))
+        for j, ax in enumerate(axes):
+            lo, hi = float(reference[:, j].min()), float(reference[:, j].max())
+            middle = (lo + hi) / 2
+            half = focus * max((hi - lo) / 2, 1e-3 * max(abs(lo), abs(hi)), 1e-12)
+            ax.set_ylim(middle - half, middle + half)
+            leaves |= {label for label, values in series.items()
+                       if np.any(np.abs(np.asarray(values)[:, j] - middle) > half)}
     for ax, name in zip(axes, joint_names):
         ax.set(title=name, xlabel="t [s]")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel(ylabel)
-    axes[0].legend(fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    labels = [f"{label} (leaves the axes)" if label in leaves else label for label in labels]
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3), fontsize=8,
+               frameon=False)
     return fig
 
 
