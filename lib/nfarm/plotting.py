@@ -595,9 +595,12 @@ def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label:
     axes[0, 0].set_ylabel(label)
     axes[0, 0].legend(fontsize=8)
     lo, hi = axes[0, 0].get_ylim()
-    if hi / lo < 30:     # less than about a decade and a half: label the minor ticks too
-        for which in (axes[0, 0].yaxis.set_major_formatter, axes[0, 0].yaxis.set_minor_formatter):
-            which(mticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
+    if hi / lo < 30:     # less than about a decade and a half: ticks at 1, 1.5, 2, 3, 5 and 7 of each decade
+        axis = axes[0, 0].yaxis
+        axis.set_major_locator(mticker.LogLocator(base=10, subs=(1.0, 1.5, 2.0, 3.0, 5.0, 7.0)))
+        axis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
+        axis.set_minor_locator(mticker.LogLocator(base=10, subs=tuple(range(1, 10))))
+        axis.set_minor_formatter(mticker.NullFormatter())
     return fig
 
 
