@@ -554,7 +554,11 @@ def plot_error_map(points: np.ndarray, error: np.ndarray, *, label: str, title: 
     from matplotlib.colors import LogNorm
     order = np.argsort(error)
     r = np.hypot(points[order, 0], points[order, 1])
-    fig, ax = plt.subplots(figsize=(6.5, 4.5), layout="constrained")
+    # The figure's width follows the side view's aspect (equal axes), so no width is left blank.
+    span_r = float(np.ptp(r)) or 1.0
+    span_z = float(np.ptp(points[:, 2])) or 1.0
+    fig, ax = plt.subplots(figsize=(float(np.clip(4.0 * span_r / span_z + 2.0, 3.6, 10.0)), 4.5),
+                           layout="constrained")
     floor = max(float(np.percentile(error, 1)), 1e-12)
     sc = ax.scatter(r, points[order, 2], c=np.maximum(error[order], floor), s=3, cmap="viridis",
                     norm=LogNorm(vmin=floor, vmax=max(float(error.max()), floor * 10)))
