@@ -612,7 +612,8 @@ def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mappin
                        *, targets_mm: tuple[float, float] = (2.0, 10.0), bins: int = 60) -> Figure:
     """Two arms side by side. Left, the side view of each workspace: the outline of the cells
     (distance from the base axis, height) that tool positions ``side[name] (N, 2)`` [m] reach.
-    Right, the distribution of each arm's learned-IK tool position error
+    An outline's inner curves bound places the tool cannot reach. Right, the distribution of
+    each arm's learned-IK tool position error
     ``position_error_mm[name] (M,)`` [mm] (a cumulative curve, logarithmic axis) beside the
     ``targets_mm`` for its median and its 95th percentile."""
     fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), layout="constrained")
@@ -631,7 +632,9 @@ def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mappin
     left.set(xlabel="distance from the base axis [m]", ylabel="height z [m]", aspect="equal",
              title="Workspaces, side view")
     left.grid(alpha=0.3)
-    left.legend(fontsize=8, loc="lower left")
+    # Below the panel: inside it the legend would hide part of an outline (the outlines hold the
+    # inner boundaries too: places near the base axis the tool cannot reach).
+    left.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     for k, (name, e) in enumerate(position_error_mm.items()):
         e = np.sort(np.asarray(e, dtype=float))
         right.plot(np.maximum(e, 1e-6), np.arange(1, len(e) + 1) / len(e), color=f"C{k}", lw=2,
