@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import nfarm.wording
-from nfarm.wording import about, span, times, times_range
+from nfarm.wording import about, sig, span, times, times_range
 
 
 def test_the_examples_hold():
@@ -52,3 +52,7 @@ def test_no_ratio_reads_as_one_times_or_in_exponent_form(ratio):
 def test_a_ratio_must_be_finite():
     with pytest.raises(ValueError, match="finite"):
         times(float("nan"))
+
+
+def test_timings_in_tables_have_three_significant_digits():
+    assert sig(186704.3) == "187,000" and sig(191.94) == "192" and sig(0.0012345) == "0.00123" and sig(5211.2) == "5,210"

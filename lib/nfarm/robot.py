@@ -185,7 +185,7 @@ def load_robot(path: str | Path) -> Robot:
     data = load_yaml(path, what="robot file")
     if isinstance(data, dict) and "urdf" in data and "joints" not in data:
         return _from_described_urdf(data, path)
-    return robot_from_dict(data, source=str(path))
+    return robot_from_dict(data, source=shown_path(path))     # messages name it relative to the checkout
 
 
 def _from_described_urdf(data: dict, path: Path) -> Robot:
@@ -203,7 +203,7 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
             v.fail("lock", f"must map joint names to positions, got {show(data['lock'])}")
         lock = {str(k): v.number(x, f"lock.{k}") for k, x in data["lock"].items()}
     robot = _READERS[urdf.suffix.lower()](urdf, tip=tip, lock=lock, name=name)
-    changes: dict[str, Any] = {"source": str(path)}
+    changes: dict[str, Any] = {"source": shown_path(path)}
     if data.get("gravity") is not None:
         changes["gravity"] = np.array(v.vector(data["gravity"], "gravity", 3))
     if "description" in data:

@@ -15,6 +15,8 @@ helpers choose the words and the precision from the value:
 '1.2–52 times'
 >>> about(1_436_799)
 'about 1,400,000'
+>>> sig(186704.3)
+'187,000'
 >>> span(0.125, 0.125)
 '0.125'
 """
@@ -23,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["times", "times_range", "about", "span"]
+__all__ = ["times", "times_range", "about", "sig", "span"]
 
 #: Ratios within this of 1 read as "about the same": measured ratios of timings and errors
 #: move by several per cent between runs and seeds.
@@ -57,6 +59,12 @@ def times_range(lo: float, hi: float, *, same: float = SAME) -> str:
         return "about the same as"
     a, b = _ratio(lo), _ratio(hi)
     return f"{a} times" if a == b else f"{a}–{b} times"
+
+
+def sig(x: float, digits: int = 3) -> str:
+    """``x`` to ``digits`` significant digits in plain notation: ``sig(186704.3) == '187,000'``,
+    ``sig(0.0012345) == '0.00123'`` (a timing in a table, not a value to seven digits)."""
+    return _ratio(x, digits)
 
 
 def about(x: float, digits: int = 2) -> str:
