@@ -381,3 +381,23 @@ def test_a_learned_ik_cell_trains_on_the_poses_it_names(smoke_cell):
     assert region["worst_deg"] != full["worst_deg"]
     with pytest.raises(ParamsError, match="poses must be one of region, full_range, got 'all'"):
         job.function(job.complete({**cell, "poses": "all"}))
+
+
+def test_a_chapter_reads_a_cells_model_without_training_it_again(smoke_cell, monkeypatch):
+    """The cell trains with one BLAS thread and caches on that environment; a chapter whose
+    kernel has the machine's thread count gets the same model, not a second training."""
+    from nfarm.jobs import JOBS, ik_model
+    from nfarm.sweep import execute_cell
+    cell = {**smoke_cell, "encoding": "arm_plane", "n_mfs": [1, 2, 2, 2, 2, 1], "epochs": 1,
+            "max_out_of_plane_deg": 0.5, "seed": 3}
+    record = execute_cell("learned_ik", None, JOBS["learned_ik"].complete(cell), ["worst_deg"], None)
+    assert record["status"] == "ok", record.get("error")
+    stamps = sorted(Path(smoke_cell["models_dir"]).rglob("inputs.sha256"))
+    before = {p: p.stat().st_mtime_ns for p in stamps}
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    model = ik_model(cell)
+    assert {p: p.stat().st_mtime_ns for p in stamps} == before        # reused, not retrained
+    import numpy as np
+    assert np.degrees(max(m.val_loss_curve_[m.best_epoch_] for m in model.models_)) == pytest.approx(
+        record["metrics"]["worst_deg"], rel=1e-12)

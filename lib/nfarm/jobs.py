@@ -39,9 +39,11 @@ cell run again after a change to the code retrains nothing whose inputs are unch
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
+import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -64,6 +66,31 @@ __all__ = ["Job", "JOBS", "REQUIRED", "id_model", "ik_model", "id_training_data"
 
 REQUIRED = object()
 """Default of a parameter every cell must give."""
+
+#: Thread counts a cell runs with, whatever the machine's defaults (:mod:`nfarm.sweep`).
+CELL_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+@contextlib.contextmanager
+def cell_threads():
+    """One BLAS/OpenMP thread, and the environment saying so (model caches key on it:
+    :func:`nfarm.learned.fit_cached`), restored afterwards: how a sweep cell runs, and how a
+    chapter reads a cell's model (:func:`ik_model`, :func:`id_model`). A chapter's kernel with
+    the machine's thread count would otherwise not match the cell's cache key and train the
+    model again, serially, in the kernel."""
+    from threadpoolctl import threadpool_limits
+
+    saved = {k: os.environ.get(k) for k in CELL_ENV}
+    os.environ.update(CELL_ENV)
+    try:
+        with threadpool_limits(1):
+            yield
+    finally:
+        for k, value in saved.items():
+            if value is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = value
 
 
 @dataclass(frozen=True)
@@ -218,7 +245,8 @@ def ik_model(params: Mapping[str, Any]) -> LearnedIK:
     """The model a ``learned_ik`` cell trains (``params``: the cell's parameters), reused from
     where the cell keeps it (trained now if it is not there or was made by other code): a
     chapter takes a sweep cell's model as its chosen one instead of training another."""
-    return _fit_ik(JOBS["learned_ik"].complete(params))[0]
+    with cell_threads():
+        return _fit_ik(JOBS["learned_ik"].complete(params))[0]
 
 
 def _fit_id(p: dict) -> tuple[LearnedID, dict]:
@@ -303,7 +331,8 @@ def id_model(params: Mapping[str, Any]) -> LearnedID:
     """The model a ``learned_id`` cell trains (``params``: the cell's parameters), reused from
     where the cell keeps it (trained now if it is not there or was made by other code): a
     chapter takes a sweep cell's model as its chosen one instead of training another."""
-    return _fit_id(JOBS["learned_id"].complete(params))[0]
+    with cell_threads():
+        return _fit_id(JOBS["learned_id"].complete(params))[0]
 
 
 def _id_split(p: dict, study, directory: Path, split: str) -> dict:

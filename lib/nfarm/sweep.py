@@ -69,7 +69,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from .jobs import JOBS
+from .jobs import CELL_ENV, JOBS
+from .jobs import cell_threads as _cell_threads
 from .paths import BUILD, NOTEBOOKS, PARAMS, ROOT, atomic_path, project_path, shown_path
 from . import provenance
 from .provenance import digest_files
@@ -82,8 +83,6 @@ __all__ = ["Sweep", "Cell", "CellResult", "Replicates", "SweepError", "load_swee
 SWEEPS = PARAMS / "sweeps"
 METRICS_MIME = "application/vnd.nfarm.metrics+json"
 MAX_CELLS = 100_000
-#: Thread counts a cell runs with, whatever the machine's defaults (see the module docstring).
-CELL_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 _TOP = {"name": True, "description": False, "job": False, "notebook": False, "fixed": False,
         "grid": False, "cells": False, "seeds": False, "metrics": True, "smoke": False}
@@ -484,25 +483,6 @@ def _metric(name: str, value: Any) -> Any:
         raise TypeError(f"metric {name!r} must be a number, a text or a list of numbers, "
                         f"got {show(value)}")
     return value
-
-
-@contextlib.contextmanager
-def _cell_threads():
-    """One BLAS/OpenMP thread for the cell, and its environment saying so (model caches key on
-    it), restored afterwards."""
-    from threadpoolctl import threadpool_limits
-
-    saved = {k: os.environ.get(k) for k in CELL_ENV}
-    os.environ.update(CELL_ENV)
-    try:
-        with threadpool_limits(1):
-            yield
-    finally:
-        for k, value in saved.items():
-            if value is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = value
 
 
 def _worker_name() -> str:
