@@ -118,6 +118,41 @@ def test_determinism_with_random_state():
     np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_fcm_memberships_match_scikit_fuzzy_with_the_centres_held(seed):
+    from skfuzzy.cluster import cmeans_predict
+    from nfarm.fuzzy import fcm_memberships
+    rng = np.random.default_rng(seed)
+    data, centres = rng.normal(size=(300, 4)), rng.normal(size=(6, 4))
+    data[7] = centres[2]                                   # a sample on a centre belongs to it alone
+    u = fcm_memberships(data, centres)
+    assert u.shape == (6, 300) and np.allclose(u.sum(axis=0), 1.0)
+    np.testing.assert_array_equal(u[:, 7], np.eye(6)[2])
+    ref = cmeans_predict(np.delete(data, 7, axis=0).T, centres, 2.0, error=1e-12, maxiter=3, seed=seed)[0]
+    np.testing.assert_allclose(np.delete(u, 7, axis=1), ref, rtol=1e-10, atol=1e-14)
+
+
+def test_fcm_on_a_subsample_is_the_full_clustering_when_the_data_are_fewer():
+    X, y, Xc, yc = jang.three_input_data()
+    full = ANFIS(partition="fcm", n_rules=4, epochs=3, random_state=1, fcm_samples=None).fit(X, y)
+    same = ANFIS(partition="fcm", n_rules=4, epochs=3, random_state=1, fcm_samples=len(X)).fit(X, y)
+    np.testing.assert_array_equal(same.predict(Xc), full.predict(Xc))
+
+
+def test_fcm_on_a_subsample_learns_as_well_as_on_all_samples():
+    rng = np.random.default_rng(4)
+    X = rng.uniform(-1, 1, size=(4000, 2))
+    y = np.sin(2 * X[:, 0]) * np.cos(X[:, 1]) + 0.3 * X[:, 1] ** 2
+    Xv = rng.uniform(-1, 1, size=(1000, 2))
+    yv = np.sin(2 * Xv[:, 0]) * np.cos(Xv[:, 1]) + 0.3 * Xv[:, 1] ** 2
+    errors = {}
+    for samples in (None, 600):
+        model = ANFIS(partition="fcm", n_rules=6, mf="gauss", epochs=5, random_state=0,
+                      fcm_samples=samples).fit(X, y)
+        errors[samples] = float(np.sqrt(np.mean((model.predict(Xv) - yv) ** 2)))
+    assert errors[None] < 0.1 * yv.std() and errors[600] < 1.2 * errors[None]
+
+
 def test_estimator_conventions():
     model = ANFIS(n_mfs=3, epochs=7)
     params = model.get_params()
@@ -179,6 +214,9 @@ X3, Y3, *_ = jang.three_input_data()
     ((X3, Y3), dict(solver="qr"), r"solver must be one of normal, lstsq"),
     ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_tolerance=0.0), r"fcm_tolerance must be a positive number"),
     ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_max_iter=0), r"fcm_max_iter must be an integer >= 1"),
+    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_samples=1), r"fcm_samples must be an integer >= 2 or None, got 1"),
+    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_samples=True), r"fcm_samples must be an integer >= 2 or None"),
+    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_samples=500.0), r"fcm_samples must be an integer >= 2 or None"),
 ])
 def test_bad_input_is_refused_before_any_work(args, kwargs, message):
     with pytest.raises(ValueError, match=message):

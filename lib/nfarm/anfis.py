@@ -51,8 +51,8 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from .fuzzy import (MF_TYPES, cluster_params, grid_params, mf_gradients, mf_rows, mf_values,
-                    subtractive_clustering)
+from .fuzzy import (MF_TYPES, cluster_params, fcm_memberships, grid_params, mf_gradients,
+                    mf_rows, mf_values, subtractive_clustering)
 from .paths import atomic_path
 from .reading import Validator, json_ready, load_json, show
 
@@ -89,6 +89,14 @@ class ANFIS:
             with 20 clusters: 1e-3 stops after 373 iterations and 1e-6 after 757, with the
             objective equal to 7 digits (94.33377 against 94.33375): the default halves the
             partition's cost, which dominated an fcm model's training.
+        fcm_samples: fuzzy c-means places its centres on at most this many samples, drawn
+            without replacement with ``random_state`` (``None``: all); the memberships and the
+            clusters' spreads are then computed on every sample from those centres. The
+            iterations cost O(samples × clusters) each. Measured on intelbot5's 20 000
+            arm-plane training poses, 20 clusters, 10 epochs, seeds 0–2, one thread: the
+            worst joint's validation RMSE is 1.40–1.50° from 3 000 samples against 1.40–1.41°
+            from all (1.44–1.62° from 1 000, 1.37–1.54° from 5 000), and the fit takes 13–18 s
+            against 92–102 s.
         radius: cluster radius for ``"subtractive"``, in the unit hypercube of the data.
         epochs: training epochs.
         step_size, step_increase, step_decrease: Jang's step size k and its factors.
@@ -112,6 +120,7 @@ class ANFIS:
     def __init__(self, n_mfs: int | Sequence[int] = 2, mf: str = "gbell", partition: str = "grid",
                  n_rules: int | None = None, radius: float = 0.5, epochs: int = 10,
                  fcm_tolerance: float = 1e-3, fcm_max_iter: int = 1000,
+                 fcm_samples: int | None = 3000,
                  step_size: float = 0.01, step_increase: float = 1.1, step_decrease: float = 0.9,
                  error_goal: float = 0.0, solver: str = "normal", ridge: float = 1e-12,
                  memory_budget: float = 2e9, random_state: int | None = None,
@@ -125,6 +134,7 @@ class ANFIS:
         self.epochs = epochs
         self.fcm_tolerance = fcm_tolerance
         self.fcm_max_iter = fcm_max_iter
+        self.fcm_samples = fcm_samples
         self.step_size = step_size
         self.step_increase = step_increase
         self.step_decrease = step_decrease
@@ -176,6 +186,10 @@ class ANFIS:
         if not (isinstance(self.fcm_max_iter, (int, np.integer)) and not isinstance(self.fcm_max_iter, bool)
                 and self.fcm_max_iter >= 1):
             raise ValueError(f"fcm_max_iter must be an integer >= 1, got {self.fcm_max_iter!r}")
+        if self.fcm_samples is not None and not (
+                isinstance(self.fcm_samples, (int, np.integer)) and not isinstance(self.fcm_samples, bool)
+                and self.fcm_samples >= 2):
+            raise ValueError(f"fcm_samples must be an integer >= 2 or None, got {self.fcm_samples!r}")
         if not (isinstance(self.epochs, (int, np.integer)) and self.epochs >= 1):
             raise ValueError(f"epochs must be an integer >= 1, got {self.epochs!r}")
         if not (math.isfinite(self.error_goal) and self.error_goal >= 0):
@@ -246,9 +260,15 @@ class ANFIS:
         data = np.column_stack([X, y])
         if self.partition == "fcm":
             from skfuzzy.cluster import cmeans
-            centres, u, *_ = cmeans(data.T, c=self.n_rules, m=2.0, error=self.fcm_tolerance,
+            sample = data
+            if self.fcm_samples is not None and len(data) > self.fcm_samples:
+                rng = np.random.default_rng(self.random_state)
+                sample = data[np.sort(rng.choice(len(data), self.fcm_samples, replace=False))]
+            centres, u, *_ = cmeans(sample.T, c=self.n_rules, m=2.0, error=self.fcm_tolerance,
                                     maxiter=self.fcm_max_iter,
                                     seed=self.random_state)
+            if sample is not data:
+                u = fcm_memberships(data, centres)
             um = u**2                                               # (c, N), fuzzifier m = 2
             spread = (um[:, :, None] * (X[None] - centres[:, None, :-1]) ** 2).sum(1) / um.sum(1)[:, None]
             sigmas = np.sqrt(np.maximum(spread, 1e-12 * (hi - lo) ** 2))      # (c, n)

@@ -13,7 +13,7 @@ from scipy.spatial.distance import cdist
 from skfuzzy import gaussmf, gbellmf
 
 __all__ = ["MF_TYPES", "mf_values", "mf_rows", "mf_gradients", "grid_params", "cluster_params",
-           "subtractive_clustering"]
+           "fcm_memberships", "subtractive_clustering"]
 
 MF_TYPES = ("gbell", "gauss")
 
@@ -87,6 +87,21 @@ def cluster_params(kind: str, centres: np.ndarray, sigmas: np.ndarray) -> np.nda
     if kind == "gauss":
         return np.column_stack([sigmas, centres])
     return np.column_stack([sigmas * math.sqrt(2 * math.log(2)), np.full_like(sigmas, 2.0), centres])
+
+
+def fcm_memberships(data: np.ndarray, centres: np.ndarray, m: float = 2.0) -> np.ndarray:
+    """Fuzzy c-means memberships ``u (c, N)`` of ``data (N, d)`` in fixed ``centres (c, d)``:
+    ``u_ij = 1 / Σ_k (‖x_j − v_i‖ / ‖x_j − v_k‖)^(2/(m−1))`` (Bezdek 1981, the update of
+    scikit-fuzzy's ``cmeans`` and ``cmeans_predict`` with the centres held). A sample on a
+    centre belongs to it alone."""
+    d2 = ((data[None, :, :] - centres[:, None, :]) ** 2).sum(axis=2)         # (c, N)
+    on_centre = d2 <= np.finfo(float).tiny
+    inv = np.where(on_centre, 0.0, 1.0 / np.where(on_centre, 1.0, d2)) ** (1.0 / (m - 1.0))
+    u = inv / inv.sum(axis=0, keepdims=True).clip(min=np.finfo(float).tiny)
+    hit = on_centre.any(axis=0)
+    if hit.any():
+        u[:, hit] = on_centre[:, hit] / on_centre[:, hit].sum(axis=0)
+    return u
 
 
 def subtractive_clustering(data: np.ndarray, radius: float, *, squash: float = 1.25,
