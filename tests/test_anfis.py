@@ -179,6 +179,21 @@ def test_describe_and_plot():
     assert len(fig.axes) == 3
 
 
+def test_joint_curves_take_a_scale_per_joint_and_draw_the_noise():
+    from nfarm.plotting import plot_joint_curves
+    X, y, Xc, yc = jang.three_input_data()
+    models = [ANFIS(epochs=3).fit(X, k * y, Xc, k * yc) for k in (1.0, 10.0)]
+    fig = plot_joint_curves(models, ["a", "b"], scale=[2.0, 0.1], unit="%", quantity="NRMSE", symbol="τ",
+                            noise=[0.5, 0.25])
+    ax = fig.axes[0]
+    lines = {line.get_label(): line for line in ax.get_lines()}
+    np.testing.assert_allclose(lines["τ1 a"].get_ydata(), 2.0 * np.asarray(models[0].loss_curve_))
+    np.testing.assert_allclose(lines["τ2 b"].get_ydata(), 0.1 * np.asarray(models[1].loss_curve_))
+    assert [line.get_ydata()[0] for line in ax.get_lines() if line.get_linestyle() == ":" and len(line.get_ydata())] == [0.5, 0.25]
+    assert ax.get_ylabel() == "NRMSE [%]"
+    assert "sensor noise σ" in [t.get_text() for t in ax.get_legend().get_texts()]
+
+
 def test_multi_output_fits_one_model_per_column(tmp_path):
     X, y, Xc, yc = jang.three_input_data()
     Y = np.column_stack([y, np.sqrt(y)])

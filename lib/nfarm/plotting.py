@@ -446,26 +446,37 @@ def plot_torque_distributions(tau: np.ndarray, joint_names) -> Figure:
     return fig
 
 
-def plot_joint_curves(models: list, joint_names, *, joints=None, scale: float = 180 / np.pi,
-                      unit: str = "deg") -> Figure:
-    """Training (solid) and validation (dashed) RMSE per epoch of one fitted ANFIS per joint,
-    in ``unit`` (the models' errors times ``scale``), the kept epoch marked; ``joints``: the
-    indices of the joints to show (default all)."""
+def plot_joint_curves(models: list, joint_names, *, joints=None, scale=180 / np.pi,
+                      unit: str = "deg", quantity: str = "RMSE", symbol: str = "q",
+                      noise=None) -> Figure:
+    """Training (solid) and validation (dashed) error per epoch of one fitted ANFIS per joint,
+    in ``unit`` (the models' RMSE times ``scale``: a number, or one per joint, e.g. 100 over
+    each joint's spread for an NRMSE in %), the kept epoch marked; ``joints``: the indices of
+    the joints to show (default all), labelled ``symbol<number> name``; ``noise``: one value
+    per joint (in ``unit``), drawn as a dotted line in the joint's colour: the error no model
+    can go below (a sensor's noise)."""
     fig, ax = plt.subplots(figsize=(7.5, 4), layout="constrained")
+    scales = np.broadcast_to(np.asarray(scale, dtype=float), (len(models),))
     for j in (range(len(models)) if joints is None else joints):
         model, name = models[j], joint_names[j]
         epochs = np.arange(1, len(model.loss_curve_) + 1)
-        ax.plot(epochs, np.asarray(model.loss_curve_) * scale, color=f"C{j}", lw=1.4,
-                label=f"q{j + 1} {name}")
+        ax.plot(epochs, np.asarray(model.loss_curve_) * scales[j], color=f"C{j}", lw=1.4,
+                label=f"{symbol}{j + 1} {name}")
         if model.val_loss_curve_:
-            ax.plot(epochs, np.asarray(model.val_loss_curve_) * scale, color=f"C{j}", ls="--", lw=1.2)
-            ax.plot(model.best_epoch_ + 1, model.val_loss_curve_[model.best_epoch_] * scale, "o",
+            ax.plot(epochs, np.asarray(model.val_loss_curve_) * scales[j], color=f"C{j}", ls="--", lw=1.2)
+            ax.plot(model.best_epoch_ + 1, model.val_loss_curve_[model.best_epoch_] * scales[j], "o",
                     color=f"C{j}", ms=5)
+        if noise is not None:
+            ax.axhline(float(np.asarray(noise)[j]), color=f"C{j}", ls=":", lw=1.0)
     ax.set_yscale("log")
     ax.set_xlabel("epoch")
-    ax.set_ylabel(f"RMSE [{unit}]")
+    ax.set_ylabel(f"{quantity} [{unit}]")
+    epochs = max(len(models[j].loss_curve_) for j in (range(len(models)) if joints is None else joints))
+    ax.xaxis.set_major_locator(mticker.MaxNLocator(integer=True, nbins=min(epochs, 10)))
     ax.plot([], [], color="0.3", lw=1.4, label="training")
     ax.plot([], [], color="0.3", ls="--", lw=1.2, label="validation (○ kept epoch)")
+    if noise is not None:
+        ax.plot([], [], color="0.3", ls=":", lw=1.0, label="sensor noise σ")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, which="both")
     return fig
