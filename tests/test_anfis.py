@@ -194,6 +194,17 @@ def test_joint_curves_take_a_scale_per_joint_and_draw_the_noise():
     assert "sensor noise σ" in [t.get_text() for t in ax.get_legend().get_texts()]
 
 
+def test_predicted_vs_true_shows_the_errors_at_their_own_scale():
+    from nfarm.plotting import plot_predicted_vs_true
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-1, 1, (500, 3))
+    error = np.column_stack([np.zeros(500), 0.004 * rng.normal(size=500), np.zeros(500)])
+    fig = plot_predicted_vs_true(q, q + error, ["a", "b", "c"])
+    bottom = fig.axes[3:]
+    np.testing.assert_allclose(bottom[1].get_lines()[0].get_ydata(), np.degrees(error[:, 1]), atol=1e-12)
+    assert [t.get_text().startswith("exact to rounding") for ax in bottom for t in ax.texts] == [True, True]
+
+
 def test_multi_output_fits_one_model_per_column(tmp_path):
     X, y, Xc, yc = jang.three_input_data()
     Y = np.column_stack([y, np.sqrt(y)])

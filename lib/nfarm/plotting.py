@@ -542,20 +542,36 @@ def plot_sweep(labels, metrics: Mapping[str, list], *, title: str = "", max_cell
 
 
 def plot_predicted_vs_true(q_true: np.ndarray, q_pred: np.ndarray, joint_names, *,
-                           max_points: int = 4000) -> Figure:
-    """Predicted against true joint angle [deg], one panel per joint, with the diagonal."""
+                           max_points: int = 4000, exact: float = 1e-9) -> Figure:
+    """One column per joint: predicted against true joint angle [deg] with the diagonal (top),
+    and the error, predicted minus true [deg], against the true angle (bottom: errors far
+    smaller than the joint's range, invisible on the diagonal, at their own scale). A joint
+    whose errors are all below ``exact`` [deg] is marked as exact to rounding instead."""
     n = q_true.shape[1]
     k = np.linspace(0, len(q_true) - 1, min(max_points, len(q_true))).astype(int)
-    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 2.9), layout="constrained", squeeze=False)
-    for j, ax in enumerate(axes[0]):
+    fig, axes = plt.subplots(2, n, figsize=(2.6 * n, 5.2), layout="constrained", squeeze=False,
+                             sharex="col")
+    for j in range(n):
+        top, bottom = axes[0, j], axes[1, j]
         t, p = np.degrees(q_true[k, j]), np.degrees(q_pred[k, j])
-        ax.plot(t, p, ".", ms=1.5, alpha=0.5, color=f"C{j}")
+        top.plot(t, p, ".", ms=1.5, alpha=0.5, color=f"C{j}")
         lo, hi = float(min(t.min(), p.min())), float(max(t.max(), p.max()))
-        ax.plot([lo, hi], [lo, hi], color="0.3", lw=0.8)
-        ax.set_title(f"q{j + 1} {joint_names[j]}", fontsize=9)
-        ax.set_xlabel("true [deg]", fontsize=8)
-        ax.tick_params(labelsize=7)
+        top.plot([lo, hi], [lo, hi], color="0.3", lw=0.8)
+        top.set_title(f"q{j + 1} {joint_names[j]}", fontsize=9)
+        error = p - t
+        if np.abs(error).max() < exact:
+            bottom.text(0.5, 0.5, f"exact to rounding\n(|error| < {exact:.0e}°)", ha="center", va="center",
+                        transform=bottom.transAxes, fontsize=8)
+            bottom.set_yticks([])
+        else:
+            bottom.plot(t, error, ".", ms=1.5, alpha=0.5, color=f"C{j}")
+            bottom.axhline(0.0, color="0.3", lw=0.8)
+        bottom.set_xlabel("true [deg]", fontsize=8)
+        for ax in (top, bottom):
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("predicted [deg]", fontsize=8)
+    axes[1, 0].set_ylabel("predicted − true [deg]", fontsize=8)
     return fig
 
 
