@@ -9,7 +9,7 @@ import pytest
 
 from nfarm import jang
 from nfarm.anfis import ANFIS, ANFISMulti, ANFISWarning, load
-from nfarm.reading import ParamsError
+from nfarm.reading import ParamsError, with_content_digest
 from nfarm.fuzzy import mf_gradients, mf_rows, mf_values
 
 
@@ -151,6 +151,15 @@ def test_fcm_on_a_subsample_learns_as_well_as_on_all_samples():
                       fcm_samples=samples).fit(X, y)
         errors[samples] = float(np.sqrt(np.mean((model.predict(Xv) - yv) ** 2)))
     assert errors[None] < 0.1 * yv.std() and errors[600] < 1.2 * errors[None]
+
+
+@pytest.mark.parametrize("budget", [2e5, 3e4, 1.0])
+def test_prediction_in_blocks_bounded_by_the_memory_budget_is_the_same(budget):
+    X, y, Xc, yc = jang.three_input_data()
+    model = ANFIS(n_mfs=[3, 3, 2], epochs=2).fit(X, y)
+    whole = model.predict(Xc)
+    model.set_params(memory_budget=budget)          # 18 rules: 2e5 → 28 rows a block, 1.0 → one row
+    np.testing.assert_allclose(model.predict(Xc), whole, rtol=1e-13, atol=1e-15)
 
 
 def test_estimator_conventions():
@@ -296,7 +305,7 @@ def test_load_validates_an_edited_model(tmp_path, path, value, message):
     file and the field, never a silently different model."""
     _, data = _saved(tmp_path)
     _edit(data, path, value)
-    (tmp_path / "x.json").write_text(json.dumps(data))
+    (tmp_path / "x.json").write_text(json.dumps(with_content_digest(data)))     # an edit that re-hashes
     with pytest.raises(ParamsError, match=message):
         load(tmp_path / "x.json")
 
@@ -312,9 +321,9 @@ def test_load_refuses_nan_consequents(tmp_path):
 @pytest.mark.parametrize("content, message", [
     ('{"format": "other"}', r"x.json: class: must be 'ANFIS' or 'ANFISMulti'"),
     ("[1, 2]", r"x.json: must be 'ANFIS' or 'ANFISMulti' \(an nfarm ANFIS model\), got \[1, 2\]"),
-    ('{"format": "nfarm-anfis-1", "class": "ANFIS", "params": {}}', r"x.json: state: required field"),
-    ('{"format": "nfarm-anfis-1", "class": "ANFISMulti", "params": {}, "models": []}',
-     r"x.json: models: must be a list of 1 to 10000 items, got 0"),
+    ('{"format": "nfarm-anfis-1", "class": "ANFIS", "params": {}}', r"x.json: content_sha256: missing"),
+    ('{"format": "nfarm-anfis-1", "class": "ANFISMulti", "params": {}, "models": [], "content_sha256": "x"}',
+     r"x.json: content_sha256: does not match the file's content"),
     ("[" * 5000 + "]" * 5000, r"x.json: nested deeper than 32 levels"),
     ("{", r"x.json:1:2: not valid JSON"),
     (b"\x89PNG\r\n\x1a\n\x00\xff", r"x.json: not UTF-8 text \(byte 0"),
