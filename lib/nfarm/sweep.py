@@ -302,7 +302,11 @@ def _check_name(v: Validator, sweep: Sweep, allowed, name: str, where: str) -> N
                                   f"{', '.join(allowed)})")
 
 
-def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str) -> tuple[Cell, ...]:
+def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str,
+                origin: Callable[[int, str], str] | None = None) -> tuple[Cell, ...]:
+    """The cells of these parameter mappings, each completed by its job (:meth:`Job.complete`:
+    defaults, kinds, normal form); equal completed parameters make one cell. ``origin(k,
+    name)``: where in the file cell k's parameter ``name`` was given, for messages."""
     allowed = _allowed(v, sweep)
     cells: dict[str, Cell] = {}
     for k, given in enumerate(params):
@@ -314,6 +318,9 @@ def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str) 
                 complete = JOBS[sweep.job].complete(given)
             except KeyError as exc:
                 v.fail(where, f"{sweep.target} needs the parameter(s) {exc.args[0]}")
+            except ParamsError as exc:          # "<name>: <rule>", a value of the wrong kind
+                name, rule = str(exc).split(": ", 1)
+                v.fail(origin(k, name) if origin and name in given else f"{where}.{name}", rule)
         else:
             complete = dict(given)
         target = {"job": sweep.job} if sweep.job else {"notebook": sweep.notebook}
@@ -397,7 +404,19 @@ def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -
                         else at("seeds"))
     points = [{**fixed, **cell, **dict(zip(axes, values))}
               for cell in own for values in itertools.product(*axes.values())]
-    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if "cells" in fields else at("grid")))
+    per_cell = math.prod(len(x) for x in axes.values())
+
+    def origin(k: int, name: str) -> str:
+        if name in fixed:
+            return f"{at('fixed')}.{name}"
+        if name == "seed" and "seeds" in fields:
+            return at("seeds")
+        if name in axes:
+            return f"{at('grid')}.{name}"
+        return f"{at('cells')}[{k // per_cell}].{name}"
+
+    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if "cells" in fields else at("grid"),
+                                            origin))
 
 
 def load_sweep(path: str | os.PathLike, *, smoke: bool = False) -> Sweep:
@@ -795,13 +814,16 @@ def sweeps_results(sweeps: Sequence[Sweep], sweeps_dir: str | os.PathLike | None
 
 def _prepare(job, cells: Sequence[Cell]) -> None:
     """The job's shared work, once per distinct value of its ``shared`` parameters; a cell whose
-    parameters it refuses fails later with that error, recorded with its parameters."""
+    parameters it fails on (any exception) fails later with that error, recorded with its
+    parameters, and the other cells go on."""
     seen = set()
     for cell in cells:
         key = _canonical([cell.params[k] for k in job.shared])
         if key not in seen:
             seen.add(key)
-            with contextlib.suppress(ParamsError):
+            # Whatever it raises (a path that is no study file, a region the arm cannot reach):
+            # the cells of these parameters fail with it, recorded, and the others run.
+            with contextlib.suppress(Exception):
                 job.prepare(dict(cell.params))
 
 
