@@ -10,7 +10,7 @@ import pytest
 from nfarm.paths import ROOT
 
 LAYERS = {
-    "model": ["reading", "paths", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
+    "model": ["reading", "paths", "limits", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
               "fuzzy", "trajectory", "workspace"],
     "solvers": ["ik", "geometric_ik", "tool_paths", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
     "io": ["urdf", "recording", "plotting", "wording", "report", "statistics", "summary", "pinocchio_ref", "jobs", "sweep", "course",

@@ -446,3 +446,43 @@ def test_a_cell_whose_shared_preparation_fails_is_recorded_and_the_others_run(tm
     assert [r.status for r in results] == ["ok", "failed", "ok"]
     assert "TypeError: unsupported operand" in results[1].error
     assert (tmp_path / "results.csv").is_file()
+
+
+def test_a_cell_over_its_time_limit_fails_alone_and_the_others_run(tmp_path):
+    """epochs: 10 000 000 would train for days: the cell stops at its first epoch past the
+    sweep file's cell_timeout_s, recorded as failed; its neighbours finish."""
+    sweep = sweep_from_dict(small(grid={"epochs": [2, 10_000_000]}, fixed={"problem": "sinc"}, seeds=[0],
+                                  cell_timeout_s=1.5))
+    assert sweep.timeout == 1.5
+    start = time.perf_counter()
+    results = run_sweep(sweep, tmp_path, workers=0)
+    assert time.perf_counter() - start < 60
+    assert [r.status for r in results] == ["ok", "failed"]
+    assert "TimeLimitError: ANFIS training, epoch" in results[1].error and "over the time limit of 1.5 s" in results[1].error
+
+
+@pytest.mark.parametrize("value, message", [(0, "must be > 0"), (-5, "must be > 0"), ("soon", "must be a number"),
+                                            (1e9, "must be <= 604800")])
+def test_a_cell_time_limit_is_a_positive_number_of_seconds(value, message):
+    with pytest.raises(ParamsError, match=rf"cell_timeout_s: {message}"):
+        sweep_from_dict(small(cell_timeout_s=value))
+
+
+def test_time_limits_nest_and_stay_in_their_thread():
+    import threading
+
+    from nfarm.limits import TimeLimitError, check_time, time_limit
+    with time_limit(0.05):
+        time.sleep(0.08)
+        seen = []
+        thread = threading.Thread(target=lambda: seen.append(check_time("elsewhere")))
+        thread.start()
+        thread.join()
+        assert seen == [None]                         # another thread: no deadline
+        with time_limit(100.0):                      # an inner, later limit does not extend it
+            with pytest.raises(TimeLimitError, match=r"here: over the time limit of 0.05 s"):
+                check_time("here")
+    check_time("after")                              # the block is over
+    with pytest.raises(ValueError, match=r"a time limit must be a positive number of seconds"):
+        with time_limit(0):
+            pass

@@ -53,6 +53,7 @@ import scipy.linalg
 
 from .fuzzy import (MF_TYPES, cluster_params, fcm_memberships, grid_params, mf_gradients,
                     mf_rows, mf_values, subtractive_clustering)
+from .limits import check_time
 from .paths import atomic_path
 from .reading import Validator, checked_content, json_ready, load_json, show, with_content_digest
 
@@ -415,6 +416,7 @@ class ANFIS:
             from tqdm.auto import tqdm
             epochs = tqdm(epochs, desc="ANFIS epochs", leave=False)
         for epoch in epochs:
+            check_time(f"ANFIS training, epoch {epoch + 1} of {self.epochs}")     # a caller's time limit
             mu, factors, w, total, w_bar = self._layers(Xp, mfs, rules)
             theta = self._consequents(w_bar, X, y).reshape(R, n + 1)
             f = self._rule_outputs(X, theta)

@@ -643,6 +643,86 @@ _MEASURED = {"viscous": True, "coulomb": True, "coulomb_velocity_deg_s": True, "
              "load_coefficient": False, "encoder_counts": False, "filter_window": False}
 
 
+# --------------------------------------------------------------------------------------------
+# Work estimates
+
+
+def memory_budget() -> float:
+    """Bytes the making of one data set may take: ``NFARM_MEMORY_GB`` (GiB, for a bigger or
+    shared machine) if set, else half of this machine's physical memory."""
+    given = os.environ.get("NFARM_MEMORY_GB")
+    if given:
+        try:
+            value = float(given)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and value > 0):
+            raise ParamsError(f"NFARM_MEMORY_GB: must be a positive number of GiB, got {given!r}")
+        return value * 2 ** 30
+    return 0.5 * os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+
+
+#: Peak bytes per IK pose while a data set is made (drawn, filtered by the region, checked,
+#: written): 365 traced by ``tracemalloc`` for 200 000 of intelbot5's poses, 580 by the
+#: process's peak memory for 5 million; the larger, rounded up.
+IK_BYTES_PER_SAMPLE = 600.0
+
+
+def _id_samples(segment, via: int, dt: float, vmax: np.ndarray, amax: np.ndarray, widest: float) -> float:
+    """An estimate of one trajectory's samples (:func:`random_trajectories`): each segment
+    lasts its mean nominal time or what its largest joint move needs within the bounds (the
+    largest of a segment's moves is about 0.6 of the widest range), and the whole is slowed
+    down by about 1.2. Measured on intelbot5's study: 1 340 estimated against 962 drawn per
+    trajectory (200 trajectories)."""
+    move = 0.6 * widest
+    needed = max(1.875 * move / float(vmax.min()), math.sqrt(5.7735 * move / float(amax.min())))
+    return 1.2 * (via - 1) * max(0.5 * (segment[0] + segment[1]), needed) / dt
+
+
+def work_estimates(study_fields: Mapping[str, Any], robot: Robot) -> list[tuple[str, float, str]]:
+    """``(field, bytes, what)`` of the largest pieces of work a study file asks for (the
+    making of its largest data set of each kind, chapter 05's solution check), from its
+    validated fields: ``ik_sizes``, ``trajectories``, ``via``, ``segment``, ``dt``, ``vmax``,
+    ``amax``, ``check_targets``, ``check_starts``."""
+    f = study_fields
+    n = robot.n
+    out = []
+    split = max(SPLITS, key=lambda k: f["ik_sizes"][k])
+    out.append((f"ik.sizes.{split}", IK_BYTES_PER_SAMPLE * f["ik_sizes"][split],
+                f"{f['ik_sizes'][split]:,} IK poses"))
+    widest = float(np.max(robot.qlim[:, 1] - robot.qlim[:, 0]))
+    per_trajectory = _id_samples(f["segment"], f["via"], f["dt"], f["vmax"], f["amax"], widest)
+    # 739 bytes a sample at the peak, measured without a measured arm's arrays: 3 × 8 × (2 + 8n)
+    # (1 008 for five joints) covers them.
+    split = max(SPLITS, key=lambda k: f["trajectories"][k])
+    count = f["trajectories"][split]
+    samples = count * per_trajectory
+    # the states and torques (and their measured copies), three times over; the 129-point
+    # check of every segment of every trajectory at once (q, q̇, q̈)
+    peak = max(3 * 8.0 * (2 + 8 * n) * samples, 3 * 8.0 * 129 * count * (f["via"] - 1) * n)
+    out.append((f"id.trajectories.{split}", peak,
+                f"{count:,} trajectories of about {per_trajectory:,.0f} samples each"))
+    if not in_class(robot):       # LM from every start at once; the closed form goes in batches
+        out.append(("ik.check.targets", 3 * 8.0 * n * f["check_targets"] * f["check_starts"],
+                    f"{f['check_targets']:,} targets × {f['check_starts']} starts"))
+    return out
+
+
+def _gib(size: float) -> str:
+    gib = size / 2 ** 30
+    return f"{gib:,.0f}" if gib >= 100 else f"{gib:.3g}"
+
+
+def _check_work(v: Validator, fields: Mapping[str, Any], robot: Robot) -> None:
+    budget = memory_budget()
+    source = "NFARM_MEMORY_GB" if os.environ.get("NFARM_MEMORY_GB") else \
+        "half this machine's memory; NFARM_MEMORY_GB sets another"
+    for field_, need, what in work_estimates(fields, robot):
+        if need > budget:
+            v.fail(field_, f"{what} would take about {_gib(need)} GiB while made, over the memory budget of "
+                           f"{_gib(budget)} GiB ({source})")
+
+
 def load_study(path: str | os.PathLike) -> Study:
     """Load and validate a study file; every broken rule is one :class:`ParamsError` line
     naming the file and the field."""
@@ -660,12 +740,18 @@ def _bounds(v: Validator, value: Any, at: str, *, positive: bool = False) -> tup
     return out
 
 
+#: The largest per-joint drive, noise, speed or acceleration value a study may give: every
+#: plausible one is far below, and 1.7e308 would turn the data sets' torques into inf.
+PER_JOINT_MAX = 1e6
+
+
 def _per_joint(v: Validator, value: Any, at: str, n: int, *, zero: bool = False) -> np.ndarray:
-    """One number for every joint, or one per joint; > 0 (``>= 0`` with ``zero``)."""
+    """One number for every joint, or one per joint; > 0 (``>= 0`` with ``zero``), at most
+    :data:`PER_JOINT_MAX`."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        values = [v.number(value, at, lo=0.0, lo_open=not zero)] * n
+        values = [v.number(value, at, lo=0.0, lo_open=not zero, hi=PER_JOINT_MAX)] * n
     else:
-        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=not zero)
+        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=not zero, hi=PER_JOINT_MAX)
                   for k, x in enumerate(v.sequence(value, at, min_len=n, max_len=n))]
     return np.array(values, dtype=float)
 
@@ -748,6 +834,9 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
                                 f"({math.degrees(narrowest):.6g} deg), got {math.degrees(margin):.6g}")
     vmax = np.radians(_per_joint(v, idd["max_velocity_deg_s"], "id.max_velocity_deg_s", n))
     amax = np.radians(_per_joint(v, idd["max_acceleration_deg_s2"], "id.max_acceleration_deg_s2", n))
+    _check_work(v, {"ik_sizes": ik_sizes, "trajectories": trajectories, "via": via, "segment": segment,
+                    "dt": dt, "vmax": vmax, "amax": amax, "check_targets": check_targets,
+                    "check_starts": check_starts}, robot)
     measured = noise = encoder_counts = None
     friction, filter_window = {}, 7
     if idd.get("measured") is not None:
