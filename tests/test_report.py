@@ -294,6 +294,35 @@ def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path):
     assert target.read_text() == "second" and not left.exists() and alive.exists() and other.exists()
 
 
+def test_ctrl_c_stops_a_running_notebook_in_one_line(tmp_path):
+    """SIGINT while a cell runs: run_notebook raises KeyboardInterrupt (the caller's one line),
+    the kernel is shut down, and nothing else reaches the terminal."""
+    import signal
+    import subprocess
+    import sys
+
+    notebook = tmp_path / "slow.ipynb"
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell("seconds = 60", metadata={"tags": ["parameters"]}),
+                nbformat.v4.new_code_cell("import time\ntime.sleep(seconds)")]
+    nbformat.write(nb, notebook)
+    out = tmp_path / "out.ipynb"
+    code = ("import sys\nfrom nfarm.report import run_notebook\n"
+            "try:\n    run_notebook(sys.argv[1], sys.argv[2], {})\n    print('finished', file=sys.stderr)\n"
+            "except KeyboardInterrupt:\n    print('interrupted', file=sys.stderr)\n    sys.exit(130)\n")
+    run = subprocess.Popen([sys.executable, "-c", code, str(notebook), str(out)], stderr=subprocess.PIPE, text=True)
+    for _ in range(600):                      # until the sleeping cell runs
+        if out.exists() and '"time.sleep' in out.read_text():
+            break
+        time.sleep(0.1)
+    time.sleep(2.0)
+    start = time.monotonic()
+    run.send_signal(signal.SIGINT)
+    _, err = run.communicate(timeout=60)
+    assert run.returncode == 130 and time.monotonic() - start < 30
+    assert err.strip() == "interrupted", err
+
+
 def test_executed_notebook_json_is_plain(tmp_path):
     """The helper that cleans executed notebooks drops widget state and absolute paths."""
     nb = new_notebook(cells=[new_code_cell("1")])

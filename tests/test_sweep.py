@@ -486,3 +486,19 @@ def test_time_limits_nest_and_stay_in_their_thread():
     with pytest.raises(ValueError, match=r"a time limit must be a positive number of seconds"):
         with time_limit(0):
             pass
+
+
+def test_ctrl_c_stops_a_sweep_on_a_cluster_in_one_line(tmp_path):
+    """SIGINT to the terminal's whole process group (the client, the nannies, the workers):
+    the client says so in one line and exits 130; no worker prints its traceback."""
+    import signal
+
+    sweep_file = write(tmp_path, {"name": "slow", "job": "idle", "fixed": {"seconds": 60.0},
+                                  "grid": {"value": [1, 2]}, "metrics": ["value"]})
+    run = subprocess.Popen([sys.executable, "-m", "nfarm", "sweep", str(sweep_file), "--workers", "2",
+                            "--out", str(tmp_path / "out")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, start_new_session=True, cwd=ROOT)
+    time.sleep(15)                      # the cluster is up and both cells sleep
+    os.killpg(run.pid, signal.SIGINT)
+    _, err = run.communicate(timeout=90)
+    assert run.returncode == 130 and err.strip() == "nfarm: interrupted", err
