@@ -267,6 +267,8 @@ def bad(path, value):
     (("ik", "region", "radial_m"), [-0.1, None], r"ik.region.radial_m\[0\]: must be >= 0"),
     (("ik", "region", "height_m"), [0.3, 0.1], r"ik.region.height_m: must satisfy lo < hi"),
     (("ik", "region", "reach_m"), [0.2, 0.1], r"ik.region.reach_m: must satisfy lo < hi"),
+    (("ik", "region", "reach_m"), [50, 60], r"ik.region: no pose of 8,192 drawn in the joint box passes its task-space filters"),
+    (("ik", "region", "height_m"), [-9.0, -8.0], r"ik.region: no pose of 8,192 drawn .* the arm cannot reach it"),
     (("ik", "region", "approach"), {"axis": [0, 0, 0], "max_angle_deg": 30}, r"approach.axis: must not be the zero vector"),
     (("ik", "region", "approach"), {"axis": [0, 0, -1], "max_angle_deg": 0}, r"approach.max_angle_deg: must be > 0"),
     (("ik", "region", "approach"), {"axis": [0, 0, -1]}, r"approach.max_angle_deg: required field is missing"),
@@ -453,3 +455,17 @@ def test_the_memory_budget_is_half_the_machine_or_what_nfarm_memory_gb_says(monk
     with pytest.raises(ParamsError, match=r"intelbot5.yaml: ik.sizes.train: 20,000 IK poses would take about "
                                           r"0.0112 GiB while made, over the memory budget of 0.01 GiB"):
         load_study(PARAMS / "studies" / "intelbot5.yaml")
+
+
+def test_a_region_too_narrow_for_its_size_is_refused_once_a_million_draws_say_so():
+    """The filters' acceptance after a million draws predicts the draws a size needs: a size
+    out of reach is refused then, not after max_draws."""
+    import time
+
+    study = load_study(STUDY)
+    region = study.ik_region
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=r"accepted [\d,]+ of 1,04\d,\d+ draws, too few for the 50,000,000 asked "
+                                         r"for within 100,000,000 draws: widen them"):
+        region.sample(50_000_000, 0)
+    assert time.perf_counter() - start < 60

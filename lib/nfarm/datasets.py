@@ -183,7 +183,7 @@ class IKRegion:
         sobol = qmc.Sobol(self.robot.n, scramble=True, seed=rng) if method == "sobol" else None
         parts, accepted, drawn = [], 0, 0
         while accepted < n:
-            want = max(n - accepted, 1024)
+            want = min(max(n - accepted, 1024), 1 << 20)     # batches of at most 2²⁰: bounded memory
             if sobol is not None:            # powers of two keep Sobol's balance properties
                 u = sobol.random(1 << int(math.ceil(math.log2(want))))
             else:
@@ -194,9 +194,11 @@ class IKRegion:
                 q = q[self.contains_pose(fk(self.robot, q), q)]
             parts.append(q)
             accepted += len(q)
-            if accepted < n and drawn >= max_draws:
-                raise ValueError(f"the region's task-space filters accepted {accepted} of "
-                                 f"{drawn} draws, fewer than the {n} asked for: widen them")
+            # Stop as soon as the acceptance so far says max_draws will not do (after a million
+            # draws: an unreachable region is refused in a second, not after 10⁸ draws).
+            if accepted < n and (drawn >= max_draws or drawn >= 1_000_000 and accepted * max_draws < n * drawn):
+                raise ValueError(f"the region's task-space filters accepted {accepted:,} of {drawn:,} draws, "
+                                 f"too few for the {n:,} asked for within {max_draws:,} draws: widen them")
         return np.concatenate(parts)[:n]
 
     def describe(self) -> list[tuple[str, str]]:
@@ -809,6 +811,13 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
         axis = axis / norm
         angle = math.radians(v.number(approach["max_angle_deg"], "ik.region.approach.max_angle_deg",
                                       lo=0.0, hi=180.0, lo_open=True))
+    region_ = IKRegion(robot, box, radial, height, axis, angle, reach)
+    if region_.has_filters:        # 8 192 draws (a few ms): a region no pose of the box reaches
+        q_try = region_.box[:, 0] + (region_.box[:, 1] - region_.box[:, 0]) * \
+            np.random.default_rng(seed).random((8192, n))
+        if not region_.contains_pose(fk(robot, q_try), q_try).any():
+            v.fail("ik.region", "no pose of 8,192 drawn in the joint box passes its task-space filters "
+                                "(radial_m, height_m, reach_m, approach): the arm cannot reach it")
     sampler = v.choice(ik.get("sampler", "sobol"), "ik.sampler", ("sobol", "uniform"))
     sizes = v.mapping(ik["sizes"], "ik.sizes", _SIZES)
     ik_sizes = {k: v.integer(sizes[k], f"ik.sizes.{k}", lo=1, hi=50_000_000) for k in SPLITS}
@@ -888,7 +897,7 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
 
     return Study(
         source=source, name=name, robot_file=robot_file, robot=robot, seed=seed,
-        ik_region=IKRegion(robot, box, radial, height, axis, angle, reach), ik_sampler=sampler,
+        ik_region=region_, ik_sampler=sampler,
         ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
         check_starts=check_starts,
         id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax, measured, noise, friction,
