@@ -9,7 +9,7 @@ import pytest
 
 from nfarm import jang
 from nfarm.anfis import ANFIS, ANFISMulti, ANFISWarning, load
-from nfarm.reading import ParamsError
+from nfarm.reading import ParamsError, with_content_digest
 from nfarm.fuzzy import mf_gradients, mf_rows, mf_values
 
 
@@ -153,6 +153,15 @@ def test_fcm_on_a_subsample_learns_as_well_as_on_all_samples():
     assert errors[None] < 0.1 * yv.std() and errors[600] < 1.2 * errors[None]
 
 
+@pytest.mark.parametrize("budget", [2e5, 3e4, 1.0])
+def test_prediction_in_blocks_bounded_by_the_memory_budget_is_the_same(budget):
+    X, y, Xc, yc = jang.three_input_data()
+    model = ANFIS(n_mfs=[3, 3, 2], epochs=2).fit(X, y)
+    whole = model.predict(Xc)
+    model.set_params(memory_budget=budget)          # 18 rules: 2e5 → 28 rows a block, 1.0 → one row
+    np.testing.assert_allclose(model.predict(Xc), whole, rtol=1e-13, atol=1e-15)
+
+
 def test_estimator_conventions():
     model = ANFIS(n_mfs=3, epochs=7)
     params = model.get_params()
@@ -177,6 +186,32 @@ def test_describe_and_plot():
     assert text.count("\n") == 7 and text.startswith("Rule 1: IF x is MF1 AND y is MF1 AND z is MF1 THEN y = ")
     fig = model.plot_mfs()
     assert len(fig.axes) == 3
+
+
+def test_joint_curves_take_a_scale_per_joint_and_draw_the_noise():
+    from nfarm.plotting import plot_joint_curves
+    X, y, Xc, yc = jang.three_input_data()
+    models = [ANFIS(epochs=3).fit(X, k * y, Xc, k * yc) for k in (1.0, 10.0)]
+    fig = plot_joint_curves(models, ["a", "b"], scale=[2.0, 0.1], unit="%", quantity="NRMSE", symbol="τ",
+                            noise=[0.5, 0.25])
+    ax = fig.axes[0]
+    lines = {line.get_label(): line for line in ax.get_lines()}
+    np.testing.assert_allclose(lines["τ1 a"].get_ydata(), 2.0 * np.asarray(models[0].loss_curve_))
+    np.testing.assert_allclose(lines["τ2 b"].get_ydata(), 0.1 * np.asarray(models[1].loss_curve_))
+    assert [line.get_ydata()[0] for line in ax.get_lines() if line.get_linestyle() == ":" and len(line.get_ydata())] == [0.5, 0.25]
+    assert ax.get_ylabel() == "NRMSE [%]"
+    assert "sensor noise σ" in [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_predicted_vs_true_shows_the_errors_at_their_own_scale():
+    from nfarm.plotting import plot_predicted_vs_true
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-1, 1, (500, 3))
+    error = np.column_stack([np.zeros(500), 0.004 * rng.normal(size=500), np.zeros(500)])
+    fig = plot_predicted_vs_true(q, q + error, ["a", "b", "c"])
+    bottom = fig.axes[3:]
+    np.testing.assert_allclose(bottom[1].get_lines()[0].get_ydata(), np.degrees(error[:, 1]), atol=1e-12)
+    assert [t.get_text().startswith("exact to rounding") for ax in bottom for t in ax.texts] == [True, True]
 
 
 def test_multi_output_fits_one_model_per_column(tmp_path):
@@ -270,7 +305,7 @@ def test_load_validates_an_edited_model(tmp_path, path, value, message):
     file and the field, never a silently different model."""
     _, data = _saved(tmp_path)
     _edit(data, path, value)
-    (tmp_path / "x.json").write_text(json.dumps(data))
+    (tmp_path / "x.json").write_text(json.dumps(with_content_digest(data)))     # an edit that re-hashes
     with pytest.raises(ParamsError, match=message):
         load(tmp_path / "x.json")
 
@@ -286,9 +321,9 @@ def test_load_refuses_nan_consequents(tmp_path):
 @pytest.mark.parametrize("content, message", [
     ('{"format": "other"}', r"x.json: class: must be 'ANFIS' or 'ANFISMulti'"),
     ("[1, 2]", r"x.json: must be 'ANFIS' or 'ANFISMulti' \(an nfarm ANFIS model\), got \[1, 2\]"),
-    ('{"format": "nfarm-anfis-1", "class": "ANFIS", "params": {}}', r"x.json: state: required field"),
-    ('{"format": "nfarm-anfis-1", "class": "ANFISMulti", "params": {}, "models": []}',
-     r"x.json: models: must be a list of 1 to 10000 items, got 0"),
+    ('{"format": "nfarm-anfis-1", "class": "ANFIS", "params": {}}', r"x.json: content_sha256: missing"),
+    ('{"format": "nfarm-anfis-1", "class": "ANFISMulti", "params": {}, "models": [], "content_sha256": "x"}',
+     r"x.json: content_sha256: does not match the file's content"),
     ("[" * 5000 + "]" * 5000, r"x.json: nested deeper than 32 levels"),
     ("{", r"x.json:1:2: not valid JSON"),
     (b"\x89PNG\r\n\x1a\n\x00\xff", r"x.json: not UTF-8 text \(byte 0"),

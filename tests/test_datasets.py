@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 
 import numpy as np
 import pytest
@@ -266,6 +267,8 @@ def bad(path, value):
     (("ik", "region", "radial_m"), [-0.1, None], r"ik.region.radial_m\[0\]: must be >= 0"),
     (("ik", "region", "height_m"), [0.3, 0.1], r"ik.region.height_m: must satisfy lo < hi"),
     (("ik", "region", "reach_m"), [0.2, 0.1], r"ik.region.reach_m: must satisfy lo < hi"),
+    (("ik", "region", "reach_m"), [50, 60], r"ik.region: no pose of 8,192 drawn in the joint box passes its task-space filters"),
+    (("ik", "region", "height_m"), [-9.0, -8.0], r"ik.region: no pose of 8,192 drawn .* the arm cannot reach it"),
     (("ik", "region", "approach"), {"axis": [0, 0, 0], "max_angle_deg": 30}, r"approach.axis: must not be the zero vector"),
     (("ik", "region", "approach"), {"axis": [0, 0, -1], "max_angle_deg": 0}, r"approach.max_angle_deg: must be > 0"),
     (("ik", "region", "approach"), {"axis": [0, 0, -1]}, r"approach.max_angle_deg: required field is missing"),
@@ -293,8 +296,21 @@ def bad(path, value):
     (("id", "measured", "load_coefficient"), 1.5, r"id.measured.load_coefficient: must be < 1"),
     (("id", "measured", "encoder_counts"), 8, r"id.measured.encoder_counts: must be >= 16"),
     (("id", "measured", "filter_window"), 8, r"id.measured.filter_window: must be an odd number of samples, got 8"),
+    # values that overflow the data sets, work the machine cannot hold (budget: 4 GiB, set below)
+    (("id", "measured", "noise_nm"), 1.7e308, r"id.measured.noise_nm: must be <= 1e\+06, got 1.7e\+308"),
+    (("id", "measured", "viscous"), [0.1, 0.1, 1e300, 0.1, 0.1], r"id.measured.viscous\[2\]: must be <= 1e\+06"),
+    (("ik", "sizes", "train"), 50_000_000, r"ik.sizes.train: 50,000,000 IK poses would take about 27.9 GiB while "
+                                           r"made, over the memory budget of 4 GiB"),
+    (("ik", "sizes", "test"), 8_000_000, r"ik.sizes.test: 8,000,000 IK poses would take about 4.47 GiB"),
+    (("id", "trajectories", "train"), 1_000_000, r"id.trajectories.train: 1,000,000 trajectories of about "
+                                                 r"[\d,]+ samples each would take about [\d,.]+ GiB"),
+    (("id", "dt_s"), 1e-9, r"id.trajectories.train: \d+ trajectories of about [\d,]+ samples each would take"),
+    (("id", "segment_time_s"), [1e6, 2e6], r"id.trajectories.train: .* over the memory budget"),
+    (("id", "max_velocity_deg_s"), 1e-9, r"id.trajectories.train: .* over the memory budget"),
+    (("id", "via_points"), 10_000, r"id.trajectories.train: .* over the memory budget"),
 ])
-def test_every_study_rule_has_a_bad_file(tmp_path, path, value, message):
+def test_every_study_rule_has_a_bad_file(tmp_path, path, value, message, monkeypatch):
+    monkeypatch.setenv("NFARM_MEMORY_GB", "4")
     file = tmp_path / "bad.yaml"
     file.write_text(yaml.safe_dump(bad(path, value)))
     with pytest.raises(ParamsError, match=message) as caught:
@@ -423,3 +439,33 @@ def test_a_redrawn_study_draws_new_training_data_and_keeps_the_test_set(built, t
     for bad in (-1, 1.5, True):
         with pytest.raises(ValueError, match="draw must be a non-negative integer"):
             redrawn(study, bad)
+
+
+def test_the_memory_budget_is_half_the_machine_or_what_nfarm_memory_gb_says(monkeypatch):
+    from nfarm.datasets import memory_budget
+    monkeypatch.delenv("NFARM_MEMORY_GB", raising=False)
+    assert memory_budget() == 0.5 * os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    monkeypatch.setenv("NFARM_MEMORY_GB", "0.25")
+    assert memory_budget() == 2 ** 28
+    for bad in ("lots", "-1", "0", "nan", "inf"):
+        monkeypatch.setenv("NFARM_MEMORY_GB", bad)
+        with pytest.raises(ParamsError, match=r"NFARM_MEMORY_GB: must be a positive number of GiB"):
+            memory_budget()
+    monkeypatch.setenv("NFARM_MEMORY_GB", "0.01")            # a small machine refuses the shipped study
+    with pytest.raises(ParamsError, match=r"intelbot5.yaml: ik.sizes.train: 20,000 IK poses would take about "
+                                          r"0.0112 GiB while made, over the memory budget of 0.01 GiB"):
+        load_study(PARAMS / "studies" / "intelbot5.yaml")
+
+
+def test_a_region_too_narrow_for_its_size_is_refused_once_a_million_draws_say_so():
+    """The filters' acceptance after a million draws predicts the draws a size needs: a size
+    out of reach is refused then, not after max_draws."""
+    import time
+
+    study = load_study(STUDY)
+    region = study.ik_region
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=r"accepted [\d,]+ of 1,04\d,\d+ draws, too few for the 50,000,000 asked "
+                                         r"for within 100,000,000 draws: widen them"):
+        region.sample(50_000_000, 0)
+    assert time.perf_counter() - start < 60

@@ -10,9 +10,9 @@ import pytest
 from nfarm.paths import ROOT
 
 LAYERS = {
-    "model": ["reading", "paths", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
+    "model": ["reading", "paths", "limits", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
               "fuzzy", "trajectory", "workspace"],
-    "solvers": ["ik", "geometric_ik", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
+    "solvers": ["ik", "geometric_ik", "tool_paths", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
     "io": ["urdf", "recording", "plotting", "wording", "report", "statistics", "summary", "pinocchio_ref", "jobs", "sweep", "course",
            "answers", "__main__"],
 }

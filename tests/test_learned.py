@@ -14,7 +14,7 @@ from nfarm.datasets import ik_samples, load_study
 from nfarm.kinematics import fk
 from nfarm.learned import ENCODINGS, LearnedIK, encode, out_of_plane
 from nfarm.paths import PARAMS
-from nfarm.reading import ParamsError
+from nfarm.reading import ParamsError, with_content_digest
 from nfarm.robot import load_robot
 from nfarm.rotations import quat_to_matrix
 
@@ -179,7 +179,13 @@ def test_loading_for_another_robot_is_refused(fitted, tmp_path):
     ("format", "nfarm-anfis-1", r"format: must be 'nfarm-learned-ik-1'"),
     ("encoding", "euler", r"encoding: must be one of quat_xyz, axes_xyz, arm_plane"),
     ("n_joints", 4, r"n_joints: must be 5 for intelbot5, got 4"),
-    ("input_span", [1, 1, 0, 1, 1, 1], r"input_span: must hold positive numbers"),
+    ("input_span", [1, 1, 0, 1, 1, 1], r"input_span: must hold spans in \(1e-12, 1e\+06\]"),
+    ("input_span", [1, 1, 1e-300, 1, 1, 1], r"input_span: must hold spans in \(1e-12, 1e\+06\]"),
+    ("input_lo", [1e308, 0, 0, 0, 0, 0], r"input_lo: must hold numbers within ±1e\+06"),
+    ("angle_centre", [40.0, 0.0], r"angle_centre: must hold angles within \[-2π, 2π\] rad"),
+    ("chart", [np.diag([2.0, 1, 1, 1]).tolist(), np.eye(4).tolist()], r"chart\[0\]: must be a rigid transform"),
+    ("chart", [np.eye(4).tolist(), np.diag([1.0, 1, -1, 1]).tolist()], r"chart\[1\]: must be a rigid transform"),
+    ("max_out_of_plane", 7.0, r"max_out_of_plane: must be <= 3.14"),
     ("input_lo", [0, 0, 0], r"input_lo: must be a list of 6 numbers"),
     ("angle_centre", [0.0], r"angle_centre: must be a list of 2 numbers"),
     ("joint_options", [{}] * 3, r"joint_options: must be a list of 5 items"),
@@ -188,10 +194,28 @@ def test_loading_for_another_robot_is_refused(fitted, tmp_path):
     ("extra", 1, r"extra: unknown field"),
 ])
 def test_an_edited_model_file_is_one_clear_error(fitted, tmp_path, field, value, message):
+    """Every field is validated, even in a file whose content hash was recomputed after the
+    edit (as a determined user could)."""
     data = fitted.to_dict()
     data[field] = value
-    (tmp_path / "learned_ik.json").write_text(json.dumps(data))
+    (tmp_path / "learned_ik.json").write_text(json.dumps(with_content_digest(data)))
     with pytest.raises(ParamsError, match=message):
+        LearnedIK.load(tmp_path, ROBOT)
+
+
+@pytest.mark.parametrize("edit", [
+    lambda d: d["input_lo"].__setitem__(0, d["input_lo"][0] + 1e-9),
+    lambda d: d["models"][2]["state"]["consequents"][0].__setitem__(0, 0.0),
+    lambda d: d.__setitem__("max_out_of_plane", 0.5),
+    lambda d: d.pop("content_sha256"),
+    lambda d: d.__setitem__("content_sha256", "0" * 64),
+])
+def test_a_model_edited_after_it_was_saved_is_refused(fitted, tmp_path, edit):
+    path = fitted.save(tmp_path)
+    data = json.loads(path.read_text())
+    edit(data)
+    path.write_text(json.dumps(data))
+    with pytest.raises(ParamsError, match=r"learned_ik.json: content_sha256: (does not match the file's content|missing)"):
         LearnedIK.load(tmp_path, ROBOT)
 
 
@@ -377,6 +401,9 @@ def test_id_save_load_batching_and_bad_input(id_data, tmp_path):
     data = json.loads(path.read_text())
     data["input_lo"] = data["input_lo"][:2]
     path.write_text(json.dumps(data))
+    with pytest.raises(ParamsError, match=r"content_sha256: does not match"):
+        LearnedID.load(tmp_path, ROBOT)
+    path.write_text(json.dumps(with_content_digest(data)))
     with pytest.raises(ParamsError, match=r"input_lo: must be a list of 5 items|input_lo: .*5"):
         LearnedID.load(tmp_path, ROBOT)
     with pytest.raises(ValueError, match=r"qd must have shape \(\.\.\., 5\)"):
@@ -463,3 +490,50 @@ def test_the_arm_chart_describes_an_arm_whose_tool_is_off_its_roll_axis(tmp_path
     np.testing.assert_array_equal(again.predict(data["T"]), model.predict(data["T"]))
     with pytest.raises(ValueError, match="leave it by up to"):
         LearnedIK(**{**SMALL, "epochs": 2}).fit(so101, data)
+
+
+# -- inputs that cannot be right ---------------------------------------------------------------
+
+
+def test_poses_far_outside_the_training_data_are_predicted_with_a_warning(fitted, data):
+    from nfarm.learned import OutsideTrainingWarning
+    import warnings
+    T = data["test"]["T"][:3].copy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", OutsideTrainingWarning)
+        inside = fitted.predict(T)                       # the region's own test poses: no warning
+    T[1, :3, 3] += [1e3, 0.0, 0.0]
+    with pytest.warns(OutsideTrainingWarning, match=r"1 of 3 poses lie beyond the training data's input range by "
+                                                    r"more than 0.5 of it \(up to .*; first: pose 1\)"):
+        far = fitted.predict(T)
+    np.testing.assert_array_equal(far[[0, 2]], inside[[0, 2]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", OutsideTrainingWarning)
+        fitted.predict(T, far=np.inf)
+    for bad in (-1.0, float("nan"), True, "0.5"):
+        with pytest.raises(ValueError, match=r"far must be a number >= 0"):
+            fitted.predict(T, far=bad)
+    with pytest.raises(ValueError, match=r"got complex numbers"):
+        fitted.predict(T.astype(complex))
+
+
+def test_states_far_outside_the_training_data_warn_and_overflowing_ones_are_refused(id_data):
+    from nfarm.learned import OutsideTrainingWarning
+    import warnings
+    d = id_data["val"]
+    model = LearnedID(inputs="affine_generic", n_mfs=1, epochs=1).fit(ROBOT, id_data["train"])   # products of q̇
+    q, qd, qdd = d["q"][:4].copy(), d["qd"][:4].copy(), d["qdd"][:4].copy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", OutsideTrainingWarning)
+        model.predict(q, qd, qdd)
+    qd[2] = 10 * np.abs(d["qd"]).max(axis=0)          # ten times the fastest validation state
+    with pytest.warns(OutsideTrainingWarning, match=r"1 of 4 states lie beyond .*first: state 2\)"):
+        model.predict(q, qd, qdd)
+    qd[3] = 1e200
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                    # no RuntimeWarning from numpy either
+        with pytest.raises(ValueError, match=r"the torques of 1 of 4 states overflow \(first: state 3, its inputs "
+                                             r".* training ranges beyond"):
+            model.predict(q, qd, qdd)
+    with pytest.raises(ValueError, match=r"q, qd, qdd must be finite|must be real|complex"):
+        model.predict(q.astype(complex), qd, qdd)

@@ -35,7 +35,8 @@ def alias_bomb() -> str:
 
 @pytest.mark.parametrize("old, new, message", [
     # 1: a number too large for a float (was an OverflowError traceback)
-    ("    mass: 0.50", "    mass: 1" + "0" * 400, r"x.yaml: joints\[0\].mass: must be finite, got 1000"),
+    ("    mass: 0.50", "    mass: 1" + "0" * 400, r"x.yaml:16:11: an integer of 401 digits \(at most 100\)"),
+    ("    mass: 0.50", "    mass: 1" + "0" * 400 + ".0", r"x.yaml: joints\[0\].mass: must be finite, got inf"),
     # 2: deep nesting (was a RecursionError traceback)
     ("name: intelbot5", "name: " + "[" * 5000 + "]" * 5000, r"x.yaml:5:\d+: nested deeper than 32 levels"),
     # 3: an alias bomb, in three places (was 95 s and 3 GB, then MemoryError)
@@ -50,6 +51,11 @@ def alias_bomb() -> str:
     ("    mass: 0.50", "    mass: 1:30", r"x.yaml: joints\[0\].mass: must be a number, got '1:30'"),
     ("    mass: 0.50", "    mass: 0x10", r"x.yaml: joints\[0\].mass: must be a number, got '0x10'"),
     ("    mass: 0.50", "    mass: 010_0", r"joints\[0\].mass: must be a number, got '010_0'"),
+    ("    mass: 0.50", "    mass: 010", r"joints\[0\].mass: must be a number, got '010'"),
+    ("    mass: 0.50", "    mass: -007", r"joints\[0\].mass: must be a number, got '-007'"),
+    # 7: integers Python will not convert (a traceback)
+    ("    mass: 0.50", "    mass: " + "9" * 5000, r"x.yaml:16:11: an integer of 5,000 digits \(at most 100\)"),
+    ("gravity: [0.0, 0.0, -9.81]", "gravity: [0.0, 0.0, -" + "1" * 400 + "]", r"an integer of 400 digits"),
     ("    qlim: [-1.5707963267948966, 1.5707963267948966]", "    qlim: [-90, 90]",
      r"x.yaml: joints\[1\].qlim: must lie within \[-2π, 2π\] rad, got \[-90.0, 90.0\] \(degrees by mistake\?\)"),
     ("inertia: [5.1e-4, 1.0e-4, 5.1e-4, 0.0, 0.0, 0.0]", "inertia: [1e-20, 1e-20, 1e-20, 5e-20, 0, 0]",
@@ -149,6 +155,22 @@ def test_json_reader_limits(tmp_path):
         load_json(path)
     with pytest.raises(ParamsError, match=r"x.json: file is 80 bytes, over the limit of 10 for a JSON file"):
         load_json(path, max_bytes=10)
+
+
+@pytest.mark.parametrize("text, message", [
+    ('{"a": 1, "b": 2, "a": 3}', r"x.json: duplicate key 'a' in one object"),
+    ('{"m": [{"lo": 1}, {"lo": [1, 2], "x": 0, "lo": 5}]}', r"x.json: duplicate key 'lo' in one object"),
+    ('{"a": ' + "7" * 5000 + "}", r"x.json: an integer of 5,000 digits \(at most 100\)"),
+    ('{"a": [-' + "1" * 101 + "]}", r"x.json: an integer of 101 digits"),
+    ('{"a": 1.5e400}', r"x.json: 1.5e400 overflows a floating-point number"),
+    ('{"a": -2e308}', r"x.json: -2e308 overflows"),
+])
+def test_json_reader_refuses_what_json_would_read_silently(tmp_path, text, message):
+    path = tmp_path / "x.json"
+    path.write_text(text)
+    with pytest.raises(ParamsError, match=message) as caught:
+        load_json(path)
+    assert "\n" not in str(caught.value) and len(str(caught.value)) < 200
 
 
 def test_json_ready_converts_numpy_and_refuses_non_finite():

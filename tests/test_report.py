@@ -266,6 +266,63 @@ def test_atomic_path_leaves_no_half_written_file(tmp_path):
     assert list(tmp_path.iterdir()) == [target]
 
 
+def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path):
+    """SIGKILL runs no clean-up: the next write of the same path removes what a dead writer
+    left, and leaves a live writer's file and other paths' files alone."""
+    import signal
+    import subprocess
+    import sys
+
+    target = tmp_path / "id_val.npz"
+    code = ("import sys, time; from nfarm.paths import atomic_path\n"
+            "with atomic_path(sys.argv[1]) as tmp:\n"
+            "    tmp.write_bytes(b'x' * 1000); print(tmp, flush=True); time.sleep(60)")
+    writer = subprocess.Popen([sys.executable, "-c", code, str(target)], stdout=subprocess.PIPE, text=True)
+    left = tmp_path / os.path.basename(writer.stdout.readline().strip())
+    assert left.is_file() and left.name.startswith(f".id_val.npz.{writer.pid}.")
+    alive = tmp_path / f".id_val.npz.{os.getppid()}.abc.tmp"          # a live process's write
+    other = tmp_path / ".other.npz.999999999.abc.tmp"
+    alive.write_text("a")
+    other.write_text("o")
+    with atomic_path(target) as tmp:          # while the writer lives, its file stays
+        tmp.write_text("first")
+    assert left.is_file()
+    writer.send_signal(signal.SIGKILL)
+    writer.wait()
+    with atomic_path(target) as tmp:
+        tmp.write_text("second")
+    assert target.read_text() == "second" and not left.exists() and alive.exists() and other.exists()
+
+
+def test_ctrl_c_stops_a_running_notebook_in_one_line(tmp_path):
+    """SIGINT while a cell runs: run_notebook raises KeyboardInterrupt (the caller's one line),
+    the kernel is shut down, and nothing else reaches the terminal."""
+    import signal
+    import subprocess
+    import sys
+
+    notebook = tmp_path / "slow.ipynb"
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell("seconds = 60", metadata={"tags": ["parameters"]}),
+                nbformat.v4.new_code_cell("import time\ntime.sleep(seconds)")]
+    nbformat.write(nb, notebook)
+    out = tmp_path / "out.ipynb"
+    code = ("import sys\nfrom nfarm.report import run_notebook\n"
+            "try:\n    run_notebook(sys.argv[1], sys.argv[2], {})\n    print('finished', file=sys.stderr)\n"
+            "except KeyboardInterrupt:\n    print('interrupted', file=sys.stderr)\n    sys.exit(130)\n")
+    run = subprocess.Popen([sys.executable, "-c", code, str(notebook), str(out)], stderr=subprocess.PIPE, text=True)
+    for _ in range(600):                      # until the sleeping cell runs
+        if out.exists() and '"time.sleep' in out.read_text():
+            break
+        time.sleep(0.1)
+    time.sleep(2.0)
+    start = time.monotonic()
+    run.send_signal(signal.SIGINT)
+    _, err = run.communicate(timeout=60)
+    assert run.returncode == 130 and time.monotonic() - start < 30
+    assert err.strip() == "interrupted", err
+
+
 def test_executed_notebook_json_is_plain(tmp_path):
     """The helper that cleans executed notebooks drops widget state and absolute paths."""
     nb = new_notebook(cells=[new_code_cell("1")])

@@ -116,6 +116,12 @@ def test_the_smoke_section_replaces_its_fields():
      "makes 240,000 cells; at most 100,000"),
     ({"smoke": {"grid": {"n_mf": [2]}}}, "smoke.grid.n_mf: unknown parameter"),
     ({"smoke": {"metrics": ["rules"]}}, "smoke.metrics: unknown field"),
+    # a value of another kind than its parameter's is refused, not read as something else
+    ({"fixed": {"problem": "sinc", "epochs": 3.5}}, "fixed.epochs: must be a whole number, got 3.5"),
+    ({"fixed": {"problem": "sinc", "epochs": True}}, "fixed.epochs: must be a whole number, got True"),
+    ({"grid": {"step_size": [0.1, "fast"]}}, "grid.step_size: must be a number, got 'fast'"),
+    ({"cells": [{"mf": "gauss"}, {"mf": 3}]}, "cells[1].mf: must be a text, got 3"),
+    ({"seeds": [0, 1.5]}, "seeds[1]: must be a whole number"),
 ])
 def test_a_bad_sweep_file_gets_one_line(tmp_path, changes, message, capsys):
     path = write(tmp_path, small(**changes))
@@ -401,3 +407,98 @@ def test_a_chapter_reads_a_cells_model_without_training_it_again(smoke_cell, mon
     import numpy as np
     assert np.degrees(max(m.val_loss_curve_[m.best_epoch_] for m in model.models_)) == pytest.approx(
         record["metrics"]["worst_deg"], rel=1e-12)
+
+
+def test_equal_parameters_make_one_cell_whatever_their_spelling():
+    sweep = sweep_from_dict(small(grid={"n_mfs": [2, 2.0, 3]}, fixed={"problem": "sinc", "epochs": 3.0}, seeds=[0]))
+    assert [c.params["n_mfs"] for c in sweep.cells] == [2, 3]
+    assert all(isinstance(c.params["epochs"], int) for c in sweep.cells)
+    learned = sweep_from_dict({"name": "l", "job": "learned_id", "metrics": ["worst_nrmse"],
+                               "fixed": {"study_file": "params/studies/intelbot5.yaml"},
+                               "cells": [{"n_mfs": [1, 2.0, 2]}, {"n_mfs": [1.0, 2, 2]},
+                                         {"study_file": "./params/../params/studies/intelbot5.yaml", "n_mfs": [1, 2, 2]}]})
+    assert len(learned.cells) == 1 and learned.cells[0].params["n_mfs"] == [1, 2, 2]
+    with pytest.raises(ParamsError, match=r"fixed.smoke: must be true or false, got 'no'"):
+        sweep_from_dict({"name": "l", "job": "learned_ik", "metrics": ["worst_deg"],
+                         "fixed": {"study_file": "params/studies/intelbot5.yaml", "smoke": "no"}})
+    with pytest.raises(ParamsError, match=r"fixed.study_file: must be a path \(text\), got 5"):
+        sweep_from_dict({"name": "l", "job": "learned_ik", "metrics": ["worst_deg"], "fixed": {"study_file": 5}})
+
+
+def test_a_cell_whose_shared_preparation_fails_is_recorded_and_the_others_run(tmp_path, monkeypatch):
+    """Any exception of the job's shared preparation (not only a ParamsError) fails the cells of
+    those parameters, each recorded, and the sweep goes on with the others."""
+    from dataclasses import replace
+
+    from nfarm.jobs import JOBS
+
+    def prepare(p):
+        if p["value"] == 1:
+            raise TypeError("unsupported operand type(s)")     # what a bad study value raised
+
+    def function(p):
+        prepare(p)
+        return {"seconds": 0.0, "value": p["value"]}
+
+    monkeypatch.setitem(JOBS, "idle", replace(JOBS["idle"], function=function, prepare=prepare, shared=("value",)))
+    sweep = sweep_from_dict({"name": "p", "job": "idle", "grid": {"value": [0, 1, 2]}, "metrics": ["value"]})
+    results = run_sweep(sweep, tmp_path, workers=0)
+    assert [r.status for r in results] == ["ok", "failed", "ok"]
+    assert "TypeError: unsupported operand" in results[1].error
+    assert (tmp_path / "results.csv").is_file()
+
+
+def test_a_cell_over_its_time_limit_fails_alone_and_the_others_run(tmp_path):
+    """epochs: 10 000 000 would train for days: the cell stops at its first epoch past the
+    sweep file's cell_timeout_s, recorded as failed; its neighbours finish."""
+    sweep = sweep_from_dict(small(grid={"epochs": [2, 10_000_000]}, fixed={"problem": "sinc"}, seeds=[0],
+                                  cell_timeout_s=1.5))
+    assert sweep.timeout == 1.5
+    start = time.perf_counter()
+    results = run_sweep(sweep, tmp_path, workers=0)
+    assert time.perf_counter() - start < 60
+    assert [r.status for r in results] == ["ok", "failed"]
+    assert "TimeLimitError: ANFIS training, epoch" in results[1].error and "over the time limit of 1.5 s" in results[1].error
+
+
+@pytest.mark.parametrize("value, message", [(0, "must be > 0"), (-5, "must be > 0"), ("soon", "must be a number"),
+                                            (1e9, "must be <= 604800")])
+def test_a_cell_time_limit_is_a_positive_number_of_seconds(value, message):
+    with pytest.raises(ParamsError, match=rf"cell_timeout_s: {message}"):
+        sweep_from_dict(small(cell_timeout_s=value))
+
+
+def test_time_limits_nest_and_stay_in_their_thread():
+    import threading
+
+    from nfarm.limits import TimeLimitError, check_time, time_limit
+    with time_limit(0.05):
+        time.sleep(0.08)
+        seen = []
+        thread = threading.Thread(target=lambda: seen.append(check_time("elsewhere")))
+        thread.start()
+        thread.join()
+        assert seen == [None]                         # another thread: no deadline
+        with time_limit(100.0):                      # an inner, later limit does not extend it
+            with pytest.raises(TimeLimitError, match=r"here: over the time limit of 0.05 s"):
+                check_time("here")
+    check_time("after")                              # the block is over
+    with pytest.raises(ValueError, match=r"a time limit must be a positive number of seconds"):
+        with time_limit(0):
+            pass
+
+
+def test_ctrl_c_stops_a_sweep_on_a_cluster_in_one_line(tmp_path):
+    """SIGINT to the terminal's whole process group (the client, the nannies, the workers):
+    the client says so in one line and exits 130; no worker prints its traceback."""
+    import signal
+
+    sweep_file = write(tmp_path, {"name": "slow", "job": "idle", "fixed": {"seconds": 60.0},
+                                  "grid": {"value": [1, 2]}, "metrics": ["value"]})
+    run = subprocess.Popen([sys.executable, "-m", "nfarm", "sweep", str(sweep_file), "--workers", "2",
+                            "--out", str(tmp_path / "out")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, start_new_session=True, cwd=ROOT)
+    time.sleep(15)                      # the cluster is up and both cells sleep
+    os.killpg(run.pid, signal.SIGINT)
+    _, err = run.communicate(timeout=90)
+    assert run.returncode == 130 and err.strip() == "nfarm: interrupted", err

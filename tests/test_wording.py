@@ -56,3 +56,15 @@ def test_a_ratio_must_be_finite():
 
 def test_timings_in_tables_have_three_significant_digits():
     assert sig(186704.3) == "187,000" and sig(191.94) == "192" and sig(0.0012345) == "0.00123" and sig(5211.2) == "5,210"
+
+
+def test_torque_columns_mark_the_joints_below_the_sensor_noise():
+    from nfarm.wording import torque_columns
+    headers, note = torque_columns([2.0, 0.0001], [0.005, 0.005], ["base", "roll"])
+    assert headers == ["τ1 [%]", "τ2 [%] (below noise)"]
+    assert note.startswith(" The torque of τ2 (roll: spread 0.0001 N·m, sensor noise σ 0.005 N·m) is below")
+    assert " it, and its NRMSE" in note
+    headers, note = torque_columns([1e-4, 2e-4], [0.005, 0.005], ["a", "b"], unit="N·m")
+    assert headers == ["τ1 [N·m] (below noise)", "τ2 [N·m] (below noise)"] and " are below " in note and "them" in note
+    assert torque_columns([2.0, 3.0], [0.005, 0.005], ["a", "b"]) == (["τ1 [%]", "τ2 [%]"], "")
+    assert torque_columns([1e-9, 3.0], None, ["a", "b"]) == (["τ1 [%]", "τ2 [%]"], "")

@@ -160,9 +160,13 @@ def make_datasets(study_file: str, out: str | None, force: bool) -> int:
         print(exc, file=sys.stderr)
         return 2
     command = " ".join(["python -m nfarm datasets", study_file] + (["--out", out] if out else []))
-    for path, status in build_datasets(study, out, force=force, progress=sys.stderr.isatty(),
-                                       command=command):
-        print(f"{path}: {status}")
+    try:
+        for path, status in build_datasets(study, out, force=force, progress=sys.stderr.isatty(),
+                                           command=command):
+            print(f"{path}: {status}")
+    except ValueError as exc:          # e.g. a region whose filters accept too few poses
+        print(f"{study_file}: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 2
     return 0
 
 

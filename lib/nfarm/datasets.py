@@ -183,7 +183,7 @@ class IKRegion:
         sobol = qmc.Sobol(self.robot.n, scramble=True, seed=rng) if method == "sobol" else None
         parts, accepted, drawn = [], 0, 0
         while accepted < n:
-            want = max(n - accepted, 1024)
+            want = min(max(n - accepted, 1024), 1 << 20)     # batches of at most 2²⁰: bounded memory
             if sobol is not None:            # powers of two keep Sobol's balance properties
                 u = sobol.random(1 << int(math.ceil(math.log2(want))))
             else:
@@ -194,9 +194,11 @@ class IKRegion:
                 q = q[self.contains_pose(fk(self.robot, q), q)]
             parts.append(q)
             accepted += len(q)
-            if accepted < n and drawn >= max_draws:
-                raise ValueError(f"the region's task-space filters accepted {accepted} of "
-                                 f"{drawn} draws, fewer than the {n} asked for: widen them")
+            # Stop as soon as the acceptance so far says max_draws will not do (after a million
+            # draws: an unreachable region is refused in a second, not after 10⁸ draws).
+            if accepted < n and (drawn >= max_draws or drawn >= 1_000_000 and accepted * max_draws < n * drawn):
+                raise ValueError(f"the region's task-space filters accepted {accepted:,} of {drawn:,} draws, "
+                                 f"too few for the {n:,} asked for within {max_draws:,} draws: widen them")
         return np.concatenate(parts)[:n]
 
     def describe(self) -> list[tuple[str, str]]:
@@ -643,6 +645,86 @@ _MEASURED = {"viscous": True, "coulomb": True, "coulomb_velocity_deg_s": True, "
              "load_coefficient": False, "encoder_counts": False, "filter_window": False}
 
 
+# --------------------------------------------------------------------------------------------
+# Work estimates
+
+
+def memory_budget() -> float:
+    """Bytes the making of one data set may take: ``NFARM_MEMORY_GB`` (GiB, for a bigger or
+    shared machine) if set, else half of this machine's physical memory."""
+    given = os.environ.get("NFARM_MEMORY_GB")
+    if given:
+        try:
+            value = float(given)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and value > 0):
+            raise ParamsError(f"NFARM_MEMORY_GB: must be a positive number of GiB, got {given!r}")
+        return value * 2 ** 30
+    return 0.5 * os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+
+
+#: Peak bytes per IK pose while a data set is made (drawn, filtered by the region, checked,
+#: written): 365 traced by ``tracemalloc`` for 200 000 of intelbot5's poses, 580 by the
+#: process's peak memory for 5 million; the larger, rounded up.
+IK_BYTES_PER_SAMPLE = 600.0
+
+
+def _id_samples(segment, via: int, dt: float, vmax: np.ndarray, amax: np.ndarray, widest: float) -> float:
+    """An estimate of one trajectory's samples (:func:`random_trajectories`): each segment
+    lasts its mean nominal time or what its largest joint move needs within the bounds (the
+    largest of a segment's moves is about 0.6 of the widest range), and the whole is slowed
+    down by about 1.2. Measured on intelbot5's study: 1 340 estimated against 962 drawn per
+    trajectory (200 trajectories)."""
+    move = 0.6 * widest
+    needed = max(1.875 * move / float(vmax.min()), math.sqrt(5.7735 * move / float(amax.min())))
+    return 1.2 * (via - 1) * max(0.5 * (segment[0] + segment[1]), needed) / dt
+
+
+def work_estimates(study_fields: Mapping[str, Any], robot: Robot) -> list[tuple[str, float, str]]:
+    """``(field, bytes, what)`` of the largest pieces of work a study file asks for (the
+    making of its largest data set of each kind, chapter 05's solution check), from its
+    validated fields: ``ik_sizes``, ``trajectories``, ``via``, ``segment``, ``dt``, ``vmax``,
+    ``amax``, ``check_targets``, ``check_starts``."""
+    f = study_fields
+    n = robot.n
+    out = []
+    split = max(SPLITS, key=lambda k: f["ik_sizes"][k])
+    out.append((f"ik.sizes.{split}", IK_BYTES_PER_SAMPLE * f["ik_sizes"][split],
+                f"{f['ik_sizes'][split]:,} IK poses"))
+    widest = float(np.max(robot.qlim[:, 1] - robot.qlim[:, 0]))
+    per_trajectory = _id_samples(f["segment"], f["via"], f["dt"], f["vmax"], f["amax"], widest)
+    # 739 bytes a sample at the peak, measured without a measured arm's arrays: 3 × 8 × (2 + 8n)
+    # (1 008 for five joints) covers them.
+    split = max(SPLITS, key=lambda k: f["trajectories"][k])
+    count = f["trajectories"][split]
+    samples = count * per_trajectory
+    # the states and torques (and their measured copies), three times over; the 129-point
+    # check of every segment of every trajectory at once (q, q̇, q̈)
+    peak = max(3 * 8.0 * (2 + 8 * n) * samples, 3 * 8.0 * 129 * count * (f["via"] - 1) * n)
+    out.append((f"id.trajectories.{split}", peak,
+                f"{count:,} trajectories of about {per_trajectory:,.0f} samples each"))
+    if not in_class(robot):       # LM from every start at once; the closed form goes in batches
+        out.append(("ik.check.targets", 3 * 8.0 * n * f["check_targets"] * f["check_starts"],
+                    f"{f['check_targets']:,} targets × {f['check_starts']} starts"))
+    return out
+
+
+def _gib(size: float) -> str:
+    gib = size / 2 ** 30
+    return f"{gib:,.0f}" if gib >= 100 else f"{gib:.3g}"
+
+
+def _check_work(v: Validator, fields: Mapping[str, Any], robot: Robot) -> None:
+    budget = memory_budget()
+    source = "NFARM_MEMORY_GB" if os.environ.get("NFARM_MEMORY_GB") else \
+        "half this machine's memory; NFARM_MEMORY_GB sets another"
+    for field_, need, what in work_estimates(fields, robot):
+        if need > budget:
+            v.fail(field_, f"{what} would take about {_gib(need)} GiB while made, over the memory budget of "
+                           f"{_gib(budget)} GiB ({source})")
+
+
 def load_study(path: str | os.PathLike) -> Study:
     """Load and validate a study file; every broken rule is one :class:`ParamsError` line
     naming the file and the field."""
@@ -660,12 +742,18 @@ def _bounds(v: Validator, value: Any, at: str, *, positive: bool = False) -> tup
     return out
 
 
+#: The largest per-joint drive, noise, speed or acceleration value a study may give: every
+#: plausible one is far below, and 1.7e308 would turn the data sets' torques into inf.
+PER_JOINT_MAX = 1e6
+
+
 def _per_joint(v: Validator, value: Any, at: str, n: int, *, zero: bool = False) -> np.ndarray:
-    """One number for every joint, or one per joint; > 0 (``>= 0`` with ``zero``)."""
+    """One number for every joint, or one per joint; > 0 (``>= 0`` with ``zero``), at most
+    :data:`PER_JOINT_MAX`."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        values = [v.number(value, at, lo=0.0, lo_open=not zero)] * n
+        values = [v.number(value, at, lo=0.0, lo_open=not zero, hi=PER_JOINT_MAX)] * n
     else:
-        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=not zero)
+        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=not zero, hi=PER_JOINT_MAX)
                   for k, x in enumerate(v.sequence(value, at, min_len=n, max_len=n))]
     return np.array(values, dtype=float)
 
@@ -723,6 +811,13 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
         axis = axis / norm
         angle = math.radians(v.number(approach["max_angle_deg"], "ik.region.approach.max_angle_deg",
                                       lo=0.0, hi=180.0, lo_open=True))
+    region_ = IKRegion(robot, box, radial, height, axis, angle, reach)
+    if region_.has_filters:        # 8 192 draws (a few ms): a region no pose of the box reaches
+        q_try = region_.box[:, 0] + (region_.box[:, 1] - region_.box[:, 0]) * \
+            np.random.default_rng(seed).random((8192, n))
+        if not region_.contains_pose(fk(robot, q_try), q_try).any():
+            v.fail("ik.region", "no pose of 8,192 drawn in the joint box passes its task-space filters "
+                                "(radial_m, height_m, reach_m, approach): the arm cannot reach it")
     sampler = v.choice(ik.get("sampler", "sobol"), "ik.sampler", ("sobol", "uniform"))
     sizes = v.mapping(ik["sizes"], "ik.sizes", _SIZES)
     ik_sizes = {k: v.integer(sizes[k], f"ik.sizes.{k}", lo=1, hi=50_000_000) for k in SPLITS}
@@ -748,6 +843,9 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
                                 f"({math.degrees(narrowest):.6g} deg), got {math.degrees(margin):.6g}")
     vmax = np.radians(_per_joint(v, idd["max_velocity_deg_s"], "id.max_velocity_deg_s", n))
     amax = np.radians(_per_joint(v, idd["max_acceleration_deg_s2"], "id.max_acceleration_deg_s2", n))
+    _check_work(v, {"ik_sizes": ik_sizes, "trajectories": trajectories, "via": via, "segment": segment,
+                    "dt": dt, "vmax": vmax, "amax": amax, "check_targets": check_targets,
+                    "check_starts": check_starts}, robot)
     measured = noise = encoder_counts = None
     friction, filter_window = {}, 7
     if idd.get("measured") is not None:
@@ -799,7 +897,7 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
 
     return Study(
         source=source, name=name, robot_file=robot_file, robot=robot, seed=seed,
-        ik_region=IKRegion(robot, box, radial, height, axis, angle, reach), ik_sampler=sampler,
+        ik_region=region_, ik_sampler=sampler,
         ik_sizes=ik_sizes, ik_full_range=full_range, check_targets=check_targets,
         check_starts=check_starts,
         id=IDSettings(trajectories, via, segment, dt, margin, vmax, amax, measured, noise, friction,

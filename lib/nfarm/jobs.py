@@ -59,7 +59,7 @@ from .baselines import BaselineID
 from .dynamics import rnea
 from .learned import LearnedID, LearnedIK, fit_cached, n_parameters
 from .paths import BUILD, project_path, shown_path
-from .reading import ParamsError
+from .reading import ParamsError, show
 from .statistics import trajectory_maxima, trajectory_sums
 
 __all__ = ["Job", "JOBS", "REQUIRED", "id_model", "ik_model", "id_training_data"]
@@ -110,16 +110,70 @@ class Job:
     shared: tuple[str, ...] = ()
 
     def complete(self, given: Mapping[str, Any]) -> dict:
-        """``given`` with every default filled in and paths made project-relative; the names
-        of missing required parameters raise ``KeyError``."""
+        """``given`` with every default filled in, each value of the kind of its default and
+        in one normal form, paths made project-relative: equal parameters make equal cells
+        (``2`` and ``2.0``, one file by two paths).
+
+        The kinds: a parameter whose default is a boolean takes ``true`` or ``false`` only (a
+        text such as ``"no"`` is refused, not read as true); a whole-number default takes whole
+        numbers (``2.0`` becomes 2); a number default takes numbers (as floats); a text default
+        and a path take texts. A parameter without a default kind (``None``) takes any value,
+        its whole floats, at any depth, made integers.
+
+        Raises:
+            KeyError: the names of missing required parameters.
+            ParamsError: ``"<name>: <rule>"`` for the first value of the wrong kind.
+        """
         params = {k: given.get(k, default) for k, default in self.params.items()}
         missing = [k for k, v in params.items() if v is REQUIRED]
         if missing:
             raise KeyError(", ".join(missing))
+        for key, default in self.params.items():
+            params[key] = _of_kind(key, params[key], default, key in self.paths)
         for key in self.paths:
             if isinstance(params[key], str):
                 params[key] = shown_path(project_path(params[key]))
         return params
+
+
+def _whole(value: Any) -> Any:
+    """``value`` with every float that is a whole number (within ±2⁵³) made an int."""
+    if isinstance(value, float) and value.is_integer() and abs(value) <= 2 ** 53:
+        return int(value)
+    if isinstance(value, list):
+        return [_whole(x) for x in value]
+    if isinstance(value, dict):
+        return {k: _whole(x) for k, x in value.items()}
+    return value
+
+
+def _of_kind(name: str, value: Any, default: Any, path: bool) -> Any:
+    """A job parameter's value in its default's kind and normal form (:meth:`Job.complete`)."""
+    def refuse(kind: str) -> None:
+        raise ParamsError(f"{name}: must be {kind}, got {show(value)}")
+
+    if path or default is REQUIRED:
+        if value is not None and not isinstance(value, str):
+            refuse("a path (text)")
+        return value
+    if value is None or default is None:
+        return _whole(value)
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            refuse("true or false")
+        return value
+    if isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or isinstance(value, float) and not (value.is_integer() and abs(value) <= 2 ** 53):
+            refuse("a whole number")
+        return int(value)
+    if isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            refuse("a number")
+        return float(value)
+    if isinstance(default, str) and not isinstance(value, str):
+        refuse("a text")
+    return value
 
 
 # --------------------------------------------------------------------------------------------

@@ -69,6 +69,7 @@ import json
 import math
 import os
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -83,20 +84,51 @@ from .ik import check_targets
 from .kinematics import fk, fk_all
 from .provenance import code_digest
 from .paths import atomic_path
-from .reading import ParamsError, Validator, json_ready, load_json, show
+from .reading import ParamsError, Validator, checked_content, json_ready, load_json, show, with_content_digest
 from .robot import Robot, joint_array, robot_hash
 from .rotations import matrix_to_quat, pose_error
 
 __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
            "encode", "arm_chart", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "n_parameters",
            "ENCODINGS",
-           "ANGULAR", "FILE_NAME", "ID_FILE_NAME", "BASELINES"]
+           "ANGULAR", "FILE_NAME", "ID_FILE_NAME", "BASELINES", "OutsideTrainingWarning", "FAR"]
 
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
 #: Columns of each encoding that are angles [rad] (unwrapped about a centre).
 ANGULAR = {"quat_xyz": (), "axes_xyz": (), "arm_plane": (0, 5)}
 FILE_NAME = "learned_ik.json"
 _FORMAT = "nfarm-learned-ik-1"
+
+
+class OutsideTrainingWarning(UserWarning):
+    """A learned model was asked about inputs far outside the range it was trained on."""
+
+
+#: How far beyond its training range (in spans of that range) an input may lie before a
+#: prediction warns: an ANFIS extrapolates its consequents linearly, and its membership
+#: functions, fitted inside the range, say nothing about what lies beyond.
+FAR = 0.5
+
+
+def _check_far(far: Any) -> None:
+    if isinstance(far, bool) or not isinstance(far, (int, float)) or not far >= 0 or math.isnan(far):
+        raise ValueError(f"far must be a number >= 0 (spans of the training range; inf: never warn), got {far!r}")
+
+
+def _beyond(X: np.ndarray) -> np.ndarray:
+    """How far each row of scaled inputs ``X (N, d)`` (the training range is [0, 1]) lies
+    beyond that range, in spans: ``(N,)``, 0 inside."""
+    return np.maximum(np.maximum(-X, X - 1.0).max(axis=1), 0.0)
+
+
+def _warn_far(beyond: np.ndarray, far: float, what: str) -> None:
+    out = beyond > far
+    if out.any():
+        i = int(np.argmax(out))
+        warnings.warn(OutsideTrainingWarning(
+            f"{int(out.sum())} of {len(beyond)} {what} lie beyond the training data's input range by more "
+            f"than {far:g} of it (up to {beyond.max():.3g}; first: {what[:-1]} {i}): predicted by "
+            f"extrapolation"), stacklevel=3)
 _CHUNK = 16384
 
 
@@ -266,7 +298,7 @@ class LearnedIK:
             else np.zeros(0)
         X = _unwrap(X, columns, self.angle_centre_)
         self.input_lo_ = X.min(axis=0)
-        self.input_span_ = np.where(np.ptp(X, axis=0) > 0, np.ptp(X, axis=0), 1.0)
+        self.input_span_ = np.where(np.ptp(X, axis=0) > SPAN_MIN, np.ptp(X, axis=0), 1.0)
         return (X - self.input_lo_) / self.input_span_
 
     def _inputs(self, T: np.ndarray) -> np.ndarray:
@@ -321,9 +353,13 @@ class LearnedIK:
         if not hasattr(self, "models_"):
             raise ValueError("this LearnedIK is not fitted yet: call fit or load")
 
-    def predict(self, T_0e, *, threads: int | None = None) -> np.ndarray:
+    def predict(self, T_0e, *, threads: int | None = None, far: float = FAR) -> np.ndarray:
         """Joint angles ``(..., n)`` [rad] for tool poses ``T_0e (..., 4, 4)`` (a single pose
         is the ``()`` batch), in chunks of 16 384 poses.
+
+        Poses whose inputs lie more than ``far`` of their training range beyond it are
+        predicted (an ANFIS extrapolates its linear consequents) with an
+        :class:`OutsideTrainingWarning` naming how many, how far and the first.
 
         ``threads``: chunks predicted side by side (default: the CPUs this process may use, at
         most 8). NumPy releases the GIL in its loops, so threads share the work; each chunk's
@@ -342,18 +378,24 @@ class LearnedIK:
             raise ValueError(f"threads must be a whole number >= 1, got {threads!r}")
         size = np.size(T_0e) // 16 if isinstance(T_0e, np.ndarray) else 0
 
+        _check_far(far)
+
         def predict_all(map_chunks) -> np.ndarray:
             T = check_targets(T_0e, 1e-6, map_chunks=map_chunks)   # every pose, before any work
             flat = T.reshape(-1, 4, 4)
             out = np.empty((len(flat), self.n_joints_))
+            beyond = np.empty(len(flat))
 
             def chunk(start: int) -> None:
                 X = self._inputs(flat[start:start + _CHUNK])
+                beyond[start:start + _CHUNK] = _beyond(X)
                 for j, model in enumerate(self.models_):
                     out[start:start + _CHUNK, j] = model._predict_fast(X)[0]
 
-            for _ in map_chunks(chunk, range(0, len(flat), _CHUNK)):
-                pass
+            with np.errstate(over="ignore", invalid="ignore"):
+                for _ in map_chunks(chunk, range(0, len(flat), _CHUNK)):
+                    pass
+            _warn_far(beyond, far, "poses")
             return out.reshape(*T.shape[:-2], self.n_joints_)
 
         if threads == 1 or size < 2 * _CHUNK:
@@ -405,7 +447,7 @@ class LearnedIK:
         """
         path = Path(directory)
         path = path / FILE_NAME if path.is_dir() else path
-        data = load_json(path, what="learned IK model")
+        data = _checked_file(load_json(path, what="learned IK model"), str(path), _FORMAT, "learned IK")
         return cls.from_dict(data, robot, str(path))
 
     @classmethod
@@ -420,16 +462,25 @@ class LearnedIK:
             v, data, robot, source, [d] * robot.n, f"encoding {encoding!r}")
         lo = v.array(data["input_lo"], "input_lo", (d,))
         span = v.array(data["input_span"], "input_span", (d,))
-        if (span <= 0).any():
-            v.fail("input_span", "must hold positive numbers")
-        max_out = v.number(data["max_out_of_plane"], "max_out_of_plane", lo=0.0)
+        _check_scaling(v, lo, span, "input_lo", "input_span")
+        max_out = v.number(data["max_out_of_plane"], "max_out_of_plane", lo=0.0, hi=math.pi)
         centre = v.array(data["angle_centre"], "angle_centre", (len(ANGULAR[encoding]),))
+        if (np.abs(centre) > 2 * math.pi).any():
+            v.fail("angle_centre", f"must hold angles within [-2π, 2π] rad, got {show(centre.tolist())}")
         model = cls(encoding=encoding, joint_options=joint_options, max_out_of_plane=max_out,
                     **options)
         model.models_, model.fit_seconds_ = fitted, seconds
         model.angle_centre_, model.input_lo_, model.input_span_ = centre, lo, span
         model.chart_ = v.array(data["chart"], "chart", (2, 4, 4)) if data.get("chart") is not None \
             else None
+        if model.chart_ is not None:
+            for k, T in enumerate(model.chart_):
+                R = T[:3, :3]
+                if not (np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-12)
+                        and np.allclose(R @ R.T, np.eye(3), rtol=0.0, atol=1e-9)
+                        and np.linalg.det(R) > 0 and (np.abs(T[:3, 3]) <= PLAUSIBLE_INPUT).all()):
+                    v.fail(f"chart[{k}]", "must be a rigid transform (a rotation, a plausible position, last "
+                                          "row 0 0 0 1)")
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
         return model
@@ -440,9 +491,36 @@ _KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options"
          "input_lo", "input_span", "fit_seconds", "models")
 
 
+#: An input's span at or below this is a constant input (scaled by 1); a saved span must exceed
+#: it, and a saved input's lowest value and span must lie within ±PLAUSIBLE_INPUT: every input
+#: of the study (angles, metres, rad/s, rad/s² and their products) is far inside, and an edited
+#: 1e308 or 1e-300 would otherwise turn predictions into inf or 1e287.
+SPAN_MIN = 1e-12
+PLAUSIBLE_INPUT = 1e6
+
+
+def _check_scaling(v: Validator, lo: np.ndarray, span: np.ndarray, at_lo: str, at_span: str) -> None:
+    if (np.abs(lo) > PLAUSIBLE_INPUT).any():
+        v.fail(at_lo, f"must hold numbers within ±{PLAUSIBLE_INPUT:g}, got {show(lo.tolist())}")
+    if ((span <= SPAN_MIN) | (span > PLAUSIBLE_INPUT)).any():
+        v.fail(at_span, f"must hold spans in ({SPAN_MIN:g}, {PLAUSIBLE_INPUT:g}], got {show(span.tolist())}")
+
+
+def _checked_file(data: Any, source: str, form: str, what: str) -> dict:
+    """A saved model's content once it is an nfarm ``what`` model of format ``form`` whose
+    content hash matches (:func:`nfarm.reading.checked_content`): an edited file is refused
+    whatever the edit, before any field is read."""
+    v = Validator(source)
+    if not isinstance(data, dict):
+        v.fail("", f"must be a JSON object (an nfarm {what} model), got {show(data)}")
+    if data.get("format") != form:
+        v.fail("format", f"must be {form!r} (an nfarm {what} model), got {show(data.get('format'))}")
+    return checked_content(data, source)
+
+
 def _write_model(path: Path, data: dict) -> Path:
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(data), encoding="utf-8")
+        tmp.write_text(json.dumps(with_content_digest(data)), encoding="utf-8")
     return path
 
 
@@ -686,7 +764,7 @@ class LearnedID:
         for X in id_features(robot, q, qd, qdd, self.inputs):
             lo, span = X.min(axis=0), np.ptp(X, axis=0)
             self.input_lo_.append(lo)
-            self.input_span_.append(np.where(span > 0, span, 1.0))   # ANFIS refuses constants
+            self.input_span_.append(np.where(span > SPAN_MIN, span, 1.0))   # ANFIS refuses constants
         X = self._inputs(q, qd, qdd)
         Xv = self._inputs(vq, vqd, vqdd) if val_states is not None else [None] * n
         models, seconds = [], []
@@ -699,14 +777,17 @@ class LearnedID:
         self.models_, self.fit_seconds_ = models, seconds
         return self
 
-    def predict(self, q, qd, qdd) -> np.ndarray:
+    def predict(self, q, qd, qdd, *, far: float = FAR) -> np.ndarray:
         """Joint torques ``(..., n)`` [N·m] for states ``q, qd, qdd (..., n)`` (batch shapes
         broadcast; one state is the ``()`` batch). A residual model adds ``rnea`` of the robot
-        it was fitted or loaded with.
+        it was fitted or loaded with. States whose inputs lie more than ``far`` of their
+        training range beyond it are predicted with an :class:`OutsideTrainingWarning`.
 
         Raises:
-            ValueError: states that are not real ``(..., n)`` arrays, or NaN, before any work.
+            ValueError: states that are not real ``(..., n)`` arrays, or NaN, before any work;
+                states so far outside the training data that a torque overflows (named).
         """
+        _check_far(far)
         self._check_fitted()
         robot = self.robot_
         arrays = [joint_array(robot, x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
@@ -720,13 +801,23 @@ class LearnedID:
         if not all(np.isfinite(a).all() for a in flat):
             raise ValueError("q, qd, qdd must be finite (NaN or inf found)")
         tau = np.empty((len(flat[0]), robot.n))
-        for start in range(0, len(tau), _CHUNK):
-            part = [a[start:start + _CHUNK] for a in flat]
-            X = self._inputs(*part)
-            for j, model in enumerate(self.models_):
-                tau[start:start + _CHUNK, j] = model._predict_fast(X[j])[0]
-        if self.residual:
-            tau += rnea(robot, *flat)
+        beyond = np.empty(len(tau))
+        with np.errstate(over="ignore", invalid="ignore"):
+            for start in range(0, len(tau), _CHUNK):
+                part = [a[start:start + _CHUNK] for a in flat]
+                X = self._inputs(*part)
+                beyond[start:start + _CHUNK] = np.max([_beyond(x) for x in X], axis=0)
+                for j, model in enumerate(self.models_):
+                    tau[start:start + _CHUNK, j] = model._predict_fast(X[j])[0]
+            if self.residual:
+                tau += rnea(robot, *flat)
+        bad = ~np.isfinite(tau).all(axis=1)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(f"the torques of {int(bad.sum())} of {len(tau)} states overflow (first: state {i}, "
+                             f"its inputs {beyond[i]:.3g} training ranges beyond the training states'): "
+                             f"q, qd, qdd far outside the data the model learned from")
+        _warn_far(beyond, far, "states")
         return tau.reshape(*batch, robot.n)
 
     def describe(self) -> str:
@@ -758,7 +849,8 @@ class LearnedID:
         file and the field for a missing, damaged, edited or other robot's file)."""
         path = Path(directory)
         path = path / ID_FILE_NAME if path.is_dir() else path
-        return cls.from_dict(load_json(path, what="learned ID model"), robot, str(path))
+        data = _checked_file(load_json(path, what="learned ID model"), str(path), _ID_FORMAT, "learned ID")
+        return cls.from_dict(data, robot, str(path))
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedID":
@@ -776,8 +868,8 @@ class LearnedID:
         span = [v.array(x, f"input_span[{j}]", (d,)) for j, (x, d) in
                 enumerate(zip(v.sequence(data["input_span"], "input_span", min_len=n, max_len=n),
                               widths))]
-        if any((x <= 0).any() for x in span):
-            v.fail("input_span", "must hold positive numbers")
+        for j, (lo_j, span_j) in enumerate(zip(lo, span)):
+            _check_scaling(v, lo_j, span_j, f"input_lo[{j}]", f"input_span[{j}]")
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
         model.input_lo_, model.input_span_ = list(lo), list(span)

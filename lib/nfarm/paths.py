@@ -8,6 +8,7 @@ so a notebook finds ``params/robots/intelbot5.yaml`` whatever its working direct
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import tempfile
 from collections.abc import Iterator
@@ -43,11 +44,15 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success rename it onto ``path``.
 
     A reader never sees a half-written file: on an exception the temporary file is removed
-    and ``path`` is left as it was. Parent directories are created.
+    and ``path`` is left as it was. Parent directories are created. The temporary file's name
+    holds the writer's process id (``.<name>.<pid>.<random>.tmp``): one a killed writer left
+    (SIGKILL runs no clean-up) is removed by the next write of the same path, once no process
+    of that id is alive on this machine.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    _remove_leftovers(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
@@ -56,3 +61,17 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def _remove_leftovers(path: Path) -> None:
+    """Remove the temporary files of writes of ``path`` whose process is gone (:func:`atomic_path`)."""
+    for old in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        pid = old.name[len(path.name) + 2:].split(".", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            os.kill(int(pid), 0)            # alive (or another user's): leave its file alone
+        except ProcessLookupError:
+            old.unlink(missing_ok=True)
+        except (PermissionError, OverflowError):
+            continue

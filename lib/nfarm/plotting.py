@@ -446,26 +446,37 @@ def plot_torque_distributions(tau: np.ndarray, joint_names) -> Figure:
     return fig
 
 
-def plot_joint_curves(models: list, joint_names, *, joints=None, scale: float = 180 / np.pi,
-                      unit: str = "deg") -> Figure:
-    """Training (solid) and validation (dashed) RMSE per epoch of one fitted ANFIS per joint,
-    in ``unit`` (the models' errors times ``scale``), the kept epoch marked; ``joints``: the
-    indices of the joints to show (default all)."""
+def plot_joint_curves(models: list, joint_names, *, joints=None, scale=180 / np.pi,
+                      unit: str = "deg", quantity: str = "RMSE", symbol: str = "q",
+                      noise=None) -> Figure:
+    """Training (solid) and validation (dashed) error per epoch of one fitted ANFIS per joint,
+    in ``unit`` (the models' RMSE times ``scale``: a number, or one per joint, e.g. 100 over
+    each joint's spread for an NRMSE in %), the kept epoch marked; ``joints``: the indices of
+    the joints to show (default all), labelled ``symbol<number> name``; ``noise``: one value
+    per joint (in ``unit``), drawn as a dotted line in the joint's colour: the error no model
+    can go below (a sensor's noise)."""
     fig, ax = plt.subplots(figsize=(7.5, 4), layout="constrained")
+    scales = np.broadcast_to(np.asarray(scale, dtype=float), (len(models),))
     for j in (range(len(models)) if joints is None else joints):
         model, name = models[j], joint_names[j]
         epochs = np.arange(1, len(model.loss_curve_) + 1)
-        ax.plot(epochs, np.asarray(model.loss_curve_) * scale, color=f"C{j}", lw=1.4,
-                label=f"q{j + 1} {name}")
+        ax.plot(epochs, np.asarray(model.loss_curve_) * scales[j], color=f"C{j}", lw=1.4,
+                label=f"{symbol}{j + 1} {name}")
         if model.val_loss_curve_:
-            ax.plot(epochs, np.asarray(model.val_loss_curve_) * scale, color=f"C{j}", ls="--", lw=1.2)
-            ax.plot(model.best_epoch_ + 1, model.val_loss_curve_[model.best_epoch_] * scale, "o",
+            ax.plot(epochs, np.asarray(model.val_loss_curve_) * scales[j], color=f"C{j}", ls="--", lw=1.2)
+            ax.plot(model.best_epoch_ + 1, model.val_loss_curve_[model.best_epoch_] * scales[j], "o",
                     color=f"C{j}", ms=5)
+        if noise is not None:
+            ax.axhline(float(np.asarray(noise)[j]), color=f"C{j}", ls=":", lw=1.0)
     ax.set_yscale("log")
     ax.set_xlabel("epoch")
-    ax.set_ylabel(f"RMSE [{unit}]")
+    ax.set_ylabel(f"{quantity} [{unit}]")
+    epochs = max(len(models[j].loss_curve_) for j in (range(len(models)) if joints is None else joints))
+    ax.xaxis.set_major_locator(mticker.MaxNLocator(integer=True, nbins=min(epochs, 10)))
     ax.plot([], [], color="0.3", lw=1.4, label="training")
     ax.plot([], [], color="0.3", ls="--", lw=1.2, label="validation (○ kept epoch)")
+    if noise is not None:
+        ax.plot([], [], color="0.3", ls=":", lw=1.0, label="sensor noise σ")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, which="both")
     return fig
@@ -531,20 +542,36 @@ def plot_sweep(labels, metrics: Mapping[str, list], *, title: str = "", max_cell
 
 
 def plot_predicted_vs_true(q_true: np.ndarray, q_pred: np.ndarray, joint_names, *,
-                           max_points: int = 4000) -> Figure:
-    """Predicted against true joint angle [deg], one panel per joint, with the diagonal."""
+                           max_points: int = 4000, exact: float = 1e-9) -> Figure:
+    """One column per joint: predicted against true joint angle [deg] with the diagonal (top),
+    and the error, predicted minus true [deg], against the true angle (bottom: errors far
+    smaller than the joint's range, invisible on the diagonal, at their own scale). A joint
+    whose errors are all below ``exact`` [deg] is marked as exact to rounding instead."""
     n = q_true.shape[1]
     k = np.linspace(0, len(q_true) - 1, min(max_points, len(q_true))).astype(int)
-    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 2.9), layout="constrained", squeeze=False)
-    for j, ax in enumerate(axes[0]):
+    fig, axes = plt.subplots(2, n, figsize=(2.6 * n, 5.2), layout="constrained", squeeze=False,
+                             sharex="col")
+    for j in range(n):
+        top, bottom = axes[0, j], axes[1, j]
         t, p = np.degrees(q_true[k, j]), np.degrees(q_pred[k, j])
-        ax.plot(t, p, ".", ms=1.5, alpha=0.5, color=f"C{j}")
+        top.plot(t, p, ".", ms=1.5, alpha=0.5, color=f"C{j}")
         lo, hi = float(min(t.min(), p.min())), float(max(t.max(), p.max()))
-        ax.plot([lo, hi], [lo, hi], color="0.3", lw=0.8)
-        ax.set_title(f"q{j + 1} {joint_names[j]}", fontsize=9)
-        ax.set_xlabel("true [deg]", fontsize=8)
-        ax.tick_params(labelsize=7)
+        top.plot([lo, hi], [lo, hi], color="0.3", lw=0.8)
+        top.set_title(f"q{j + 1} {joint_names[j]}", fontsize=9)
+        error = p - t
+        if np.abs(error).max() < exact:
+            bottom.text(0.5, 0.5, f"exact to rounding\n(|error| < {exact:.0e}°)", ha="center", va="center",
+                        transform=bottom.transAxes, fontsize=8)
+            bottom.set_yticks([])
+        else:
+            bottom.plot(t, error, ".", ms=1.5, alpha=0.5, color=f"C{j}")
+            bottom.axhline(0.0, color="0.3", lw=0.8)
+        bottom.set_xlabel("true [deg]", fontsize=8)
+        for ax in (top, bottom):
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("predicted [deg]", fontsize=8)
+    axes[1, 0].set_ylabel("predicted − true [deg]", fontsize=8)
     return fig
 
 

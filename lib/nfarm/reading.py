@@ -22,6 +22,7 @@ mean. Duplicate keys are errors (PyYAML silently keeps the last).
 from __future__ import annotations
 
 import difflib
+import hashlib
 import json
 import math
 import os
@@ -36,7 +37,8 @@ import numpy as np
 import yaml
 
 __all__ = ["ParamsError", "ParamsWarning", "read_bytes", "load_yaml", "load_json", "Validator",
-           "show", "json_ready", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES"]
+           "show", "json_ready", "with_content_digest", "checked_content", "MAX_BYTES", "MAX_DEPTH",
+           "MAX_NODES", "MAX_DIGITS"]
 
 MAX_BYTES = 1 << 20        # 1 MiB: a robot file is ~2 KB, a saved 128-rule model ~100 KB
 MAX_DEPTH = 32             # nesting levels (a robot file uses 4)
@@ -115,7 +117,7 @@ def _text(path: Path, data: bytes) -> str:
 # YAML
 
 
-_INT = re.compile(r"^[-+]?[0-9]+$")
+_INT = re.compile(r"^[-+]?(?:0|[1-9][0-9]*)$")      # no leading zeros: YAML 1.1 reads 010 as 8
 _FLOAT = re.compile(r"""^(?:[-+]?(?:[0-9]+\.[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?
                         |[-+]?[0-9]+[eE][-+]?[0-9]+
                         |[-+]?\.(?:inf|Inf|INF)
@@ -199,8 +201,18 @@ _Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456
 _Loader.add_implicit_resolver("tag:yaml.org,2002:null", _NULL, ["~", "n", "N", ""])
 
 
+#: Digits a number in a parameter file or a saved model may have: every plausible value has far
+#: fewer, and Python refuses to convert integers of more than 4 300 digits with a long message.
+MAX_DIGITS = 100
+
+
 def _construct_int(loader, node):
-    return int(loader.construct_scalar(node))
+    text = loader.construct_scalar(node)
+    if len(text.lstrip("+-")) > MAX_DIGITS:
+        raise yaml.constructor.ConstructorError(
+            None, None, f"an integer of {len(text.lstrip('+-')):,} digits (at most {MAX_DIGITS})",
+            node.start_mark)
+    return int(text)
 
 
 def _construct_float(loader, node):
@@ -228,7 +240,7 @@ def load_yaml(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES, what: str 
         where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         if problem.startswith(("duplicate key", "nested deeper", "more than", "merge keys",
-                               "a key must")):
+                               "a key must", "an integer of")):
             raise ParamsError(f"{where}: {problem}") from None
         raise ParamsError(f"{where}: YAML syntax error: {problem}") from None
     except RecursionError:  # pragma: no cover — the depth bound comes first
@@ -241,6 +253,29 @@ def load_yaml(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES, what: str 
 
 def _json_constant(name: str):
     raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _json_int(text: str) -> int:
+    if len(text.lstrip("-")) > MAX_DIGITS:
+        raise ValueError(f"an integer of {len(text.lstrip('-')):,} digits (at most {MAX_DIGITS})")
+    return int(text)
+
+
+def _json_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text[:24]}{'…' if len(text) > 24 else ''} overflows a floating-point number")
+    return value
+
+
+def _json_object(pairs: list) -> dict:
+    """A JSON object whose keys are distinct (``json`` keeps the last of a duplicate key)."""
+    out: dict = {}
+    for key, value in pairs:
+        if key in out:
+            raise ValueError(f"duplicate key {show(key)} in one object")
+        out[key] = value
+    return out
 
 
 def _json_depth(value: Any, limit: int) -> None:
@@ -258,11 +293,13 @@ def _json_depth(value: Any, limit: int) -> None:
 def load_json(path: str | os.PathLike, *, max_bytes: int = 64 << 20, max_depth: int = MAX_DEPTH,
               what: str = "JSON file") -> Any:
     """Parse a JSON file (regular, at most ``max_bytes``, nesting at most ``max_depth``;
-    ``NaN``/``Infinity`` refused)."""
+    ``NaN``/``Infinity``, numbers that overflow a float, duplicate keys in an object and
+    integers of more than :data:`MAX_DIGITS` digits refused)."""
     path = Path(path)
     text = _text(path, read_bytes(path, max_bytes=max_bytes, what=what))
     try:
-        data = json.loads(text, parse_constant=_json_constant)
+        data = json.loads(text, parse_constant=_json_constant, parse_int=_json_int, parse_float=_json_float,
+                          object_pairs_hook=_json_object)
         _json_depth(data, max_depth)
     except json.JSONDecodeError as exc:
         raise ParamsError(f"{path}:{exc.lineno}:{exc.colno}: not valid JSON: {exc.msg}") from None
@@ -271,6 +308,44 @@ def load_json(path: str | os.PathLike, *, max_bytes: int = 64 << 20, max_depth: 
     except ValueError as exc:
         raise ParamsError(f"{path}: {exc}") from None
     return data
+
+
+#: The field of a saved model that holds the SHA-256 of the rest of its content.
+CONTENT_FIELD = "content_sha256"
+
+
+def _content_digest(data: Mapping) -> str:
+    body = {k: v for k, v in data.items() if k != CONTENT_FIELD}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def with_content_digest(data: Mapping) -> dict:
+    """``data`` with :data:`CONTENT_FIELD`: the SHA-256 of its canonical JSON (sorted keys,
+    no spaces) without that field. JSON floats round-trip exactly, so a file written from it
+    and read back hashes the same; any edit of a value, a key or the structure does not."""
+    return {**data, CONTENT_FIELD: _content_digest(data)}
+
+
+def checked_content(data: Any, source: str) -> dict:
+    """``data`` read from a saved model, without :data:`CONTENT_FIELD`, once the field's hash
+    matches the content.
+
+    Raises:
+        ParamsError: not a JSON object, no hash (not written by nfarm's ``save``), or a hash
+            that does not match: an edited or damaged file, named in one line.
+    """
+    v = Validator(source)
+    if not isinstance(data, dict):
+        v.fail("", f"must be a JSON object (a saved nfarm model), got {show(data)}")
+    stored = data.get(CONTENT_FIELD)
+    if not isinstance(stored, str):
+        v.fail(CONTENT_FIELD, "missing: the file was not written by this version of nfarm's save (models "
+                              "carry a hash of their content since 0.1.0): train the model again")
+    if stored != _content_digest(data):
+        v.fail(CONTENT_FIELD, "does not match the file's content: the model was edited or damaged after it "
+                              "was saved; train it again or restore the saved file")
+    return {k: val for k, val in data.items() if k != CONTENT_FIELD}
 
 
 # --------------------------------------------------------------------------------------------

@@ -27,6 +27,7 @@ the checkout and no widget state; their HTML pages load MathJax from ``build/rep
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import ctypes
 import ctypes.util
@@ -39,9 +40,11 @@ import logging
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -208,7 +211,25 @@ def _ipc_kernel_manager(directory: str):
             self.transport = "ipc"
             self.ip = os.path.join(directory, "kernel")
 
+        async def _async_launch_kernel(self, kernel_cmd, **kw):
+            # The kernel's own log (not the notebook's outputs, which come by message) goes to
+            # a file: an interrupted run's shutdown otherwise prints the kernel's tracebacks
+            # into the terminal. ``kernel_log(directory)`` reads it.
+            kw["stderr"] = open(os.path.join(directory, "kernel.err"), "ab")   # noqa: SIM115 — the kernel's
+            await super()._async_launch_kernel(kernel_cmd, **kw)
+
     return IPCKernelManager
+
+
+def _last_line(path: Path) -> str:
+    """The last non-empty line of a kernel's log (at most 200 characters), or ""."""
+    try:
+        with open(path, "rb") as f:
+            f.seek(max(0, f.seek(0, os.SEEK_END) - 4096))
+            lines = [line.strip() for line in f.read().decode("utf-8", "replace").splitlines() if line.strip()]
+    except OSError:
+        return ""
+    return lines[-1][:200] if lines else ""
 
 
 def _source_cell(executed: Path, index: int) -> int:
@@ -262,6 +283,26 @@ def _clean_executed(executed: Path, source: Path) -> None:
         nbformat.write(nb, tmp)
 
 
+@contextlib.contextmanager
+def _interruptible():
+    """SIGINT (Ctrl-C) raises ``KeyboardInterrupt`` while a notebook runs, so that the run stops
+    and its caller says so in one line. Measured: with Python's own handler the interrupt was
+    lost inside the execution's event loop and the report ran on to its end; a handler that
+    raises it reaches the caller, and papermill's clean-up shuts the kernel down."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupted(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, interrupted)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, parameters: dict,
                  *, progress: bool = False, cell_timeout: float | None = 1800,
                  remove_tags: Sequence[str] = ()) -> None:
@@ -302,7 +343,7 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
             nbformat.write(nb, tmp)
     quiet = _DropMessage("Kernel died")      # reported below, in one line
     logging.getLogger("papermill").addFilter(quiet)
-    with tempfile.TemporaryDirectory(prefix="nfarm-kernel-") as sockets:
+    with tempfile.TemporaryDirectory(prefix="nfarm-kernel-") as sockets, _interruptible():
         try:
             papermill.execute_notebook(
                 str(to_run), str(output), parameters=parameters, kernel_name=KERNEL_NAME,
@@ -325,8 +366,9 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
                 "lost its kernel (it died: a crash, os._exit or out of memory)" \
                 if isinstance(exc, DeadKernelError) or "dead" in str(exc).lower() else \
                 f"failed: {type(exc).__name__}: {str(exc).strip().splitlines()[0][:200]}"
-            raise ReportError(f"{notebook.name} {what}{at}; the executed notebook is kept at "
-                              f"{output}") from None
+            said = _last_line(Path(sockets) / "kernel.err") if isinstance(exc, DeadKernelError) else ""
+            raise ReportError(f"{notebook.name} {what}{at}{f' (its last words: {said!r})' if said else ''}; "
+                              f"the executed notebook is kept at {output}") from None
         finally:
             logging.getLogger("papermill").removeFilter(quiet)
             if to_run != notebook:

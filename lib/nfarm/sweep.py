@@ -71,6 +71,7 @@ from typing import Any
 
 from .jobs import CELL_ENV, JOBS
 from .jobs import cell_threads as _cell_threads
+from .limits import time_limit
 from .paths import BUILD, NOTEBOOKS, PARAMS, ROOT, atomic_path, project_path, shown_path
 from . import provenance
 from .provenance import digest_files
@@ -85,7 +86,8 @@ METRICS_MIME = "application/vnd.nfarm.metrics+json"
 MAX_CELLS = 100_000
 
 _TOP = {"name": True, "description": False, "job": False, "notebook": False, "fixed": False,
-        "grid": False, "cells": False, "seeds": False, "metrics": True, "smoke": False}
+        "grid": False, "cells": False, "seeds": False, "metrics": True, "smoke": False,
+        "cell_timeout_s": False}
 _SMOKE = {"fixed": False, "grid": False, "cells": False, "seeds": False}
 _RUNNER_SET = ("out_dir",)      # a notebook's parameters the runner sets itself
 
@@ -113,6 +115,8 @@ class Sweep:
     metrics: tuple[str, ...]
     cells: tuple[Cell, ...]
     description: str = ""
+    #: Seconds each cell may run (the file's ``cell_timeout_s``); ``None``: the runner's.
+    timeout: float | None = None
 
     @property
     def target(self) -> str:
@@ -302,7 +306,11 @@ def _check_name(v: Validator, sweep: Sweep, allowed, name: str, where: str) -> N
                                   f"{', '.join(allowed)})")
 
 
-def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str) -> tuple[Cell, ...]:
+def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str,
+                origin: Callable[[int, str], str] | None = None) -> tuple[Cell, ...]:
+    """The cells of these parameter mappings, each completed by its job (:meth:`Job.complete`:
+    defaults, kinds, normal form); equal completed parameters make one cell. ``origin(k,
+    name)``: where in the file cell k's parameter ``name`` was given, for messages."""
     allowed = _allowed(v, sweep)
     cells: dict[str, Cell] = {}
     for k, given in enumerate(params):
@@ -314,6 +322,9 @@ def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str) 
                 complete = JOBS[sweep.job].complete(given)
             except KeyError as exc:
                 v.fail(where, f"{sweep.target} needs the parameter(s) {exc.args[0]}")
+            except ParamsError as exc:          # "<name>: <rule>", a value of the wrong kind
+                name, rule = str(exc).split(": ", 1)
+                v.fail(origin(k, name) if origin and name in given else f"{where}.{name}", rule)
         else:
             complete = dict(given)
         target = {"job": sweep.job} if sweep.job else {"notebook": sweep.notebook}
@@ -388,7 +399,10 @@ def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -
     count = len(own) * math.prod(len(x) for x in axes.values())
     if count > MAX_CELLS:
         v.fail(at("grid"), f"makes {count:,} cells; at most {MAX_CELLS:,}")
-    sweep = Sweep(name, source, job, notebook, tuple(metrics), (), description)
+    timeout = None
+    if data.get("cell_timeout_s") is not None:
+        timeout = v.number(data["cell_timeout_s"], "cell_timeout_s", lo=0.0, lo_open=True, hi=7 * 24 * 3600.0)
+    sweep = Sweep(name, source, job, notebook, tuple(metrics), (), description, timeout)
     allowed = _allowed(v, sweep)
     for where, names in [(at("fixed"), fixed), (at("grid"), axes),
                          *((f"{at('cells')}[{k}]", cell) for k, cell in enumerate(own))]:
@@ -397,7 +411,19 @@ def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -
                         else at("seeds"))
     points = [{**fixed, **cell, **dict(zip(axes, values))}
               for cell in own for values in itertools.product(*axes.values())]
-    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if "cells" in fields else at("grid")))
+    per_cell = math.prod(len(x) for x in axes.values())
+
+    def origin(k: int, name: str) -> str:
+        if name in fixed:
+            return f"{at('fixed')}.{name}"
+        if name == "seed" and "seeds" in fields:
+            return at("seeds")
+        if name in axes:
+            return f"{at('grid')}.{name}"
+        return f"{at('cells')}[{k // per_cell}].{name}"
+
+    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if "cells" in fields else at("grid"),
+                                            origin))
 
 
 def load_sweep(path: str | os.PathLike, *, smoke: bool = False) -> Sweep:
@@ -513,7 +539,8 @@ def execute_cell(job: str | None, notebook: str | None, params: dict, metrics: S
             warnings.simplefilter("always")
             try:
                 if job:
-                    values = JOBS[job].function(dict(params))
+                    with time_limit(timeout):       # the library's long loops check it
+                        values = JOBS[job].function(dict(params))
                 else:
                     values, record["files"] = _run_notebook_cell(notebook, params, timeout)
             finally:
@@ -688,7 +715,9 @@ def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: 
         progress: a progress bar of finished cells on standard error.
         summary: write ``results.csv``, ``summary.md`` and ``summary.png`` (a chapter that runs
             part of a sweep skips them: the files describe the whole sweep's run).
-        timeout: seconds a notebook cell may run (per notebook cell).
+        timeout: seconds a cell may run: a job's whole cell (its training stops at the next
+            epoch past it, :mod:`nfarm.limits`), each code cell of a notebook's; ``None``: no
+            limit. A sweep file's ``cell_timeout_s`` takes its place for that sweep's cells.
         prepare: do the job's shared work once, here, before the workers start
             (:attr:`nfarm.jobs.Job.prepare`: the data sets of the learned jobs).
     """
@@ -752,7 +781,7 @@ def run_sweeps(sweeps: Sequence[Sweep], outs: Sequence[str | os.PathLike | None]
         if todo and workers == 0 and not scheduler and client is None:
             for i, cell in todo:
                 finish(i, cell, execute_cell(sweeps[i].job, sweeps[i].notebook, dict(cell.params),
-                                             sweeps[i].metrics, timeout))
+                                             sweeps[i].metrics, _timeout(sweeps[i], timeout)))
         elif todo:
             _run_on_dask(sweeps, todo, scheduler, workers, client, timeout, finish)
     finally:
@@ -793,15 +822,23 @@ def sweeps_results(sweeps: Sequence[Sweep], sweeps_dir: str | os.PathLike | None
     return every
 
 
+def _timeout(sweep: Sweep, given: float | None) -> float | None:
+    """A cell's time limit: its sweep file's ``cell_timeout_s``, else the runner's."""
+    return sweep.timeout if sweep.timeout is not None else given
+
+
 def _prepare(job, cells: Sequence[Cell]) -> None:
     """The job's shared work, once per distinct value of its ``shared`` parameters; a cell whose
-    parameters it refuses fails later with that error, recorded with its parameters."""
+    parameters it fails on (any exception) fails later with that error, recorded with its
+    parameters, and the other cells go on."""
     seen = set()
     for cell in cells:
         key = _canonical([cell.params[k] for k in job.shared])
         if key not in seen:
             seen.add(key)
-            with contextlib.suppress(ParamsError):
+            # Whatever it raises (a path that is no study file, a region the arm cannot reach):
+            # the cells of these parameters fail with it, recorded, and the others run.
+            with contextlib.suppress(Exception):
                 job.prepare(dict(cell.params))
 
 
@@ -816,8 +853,8 @@ def _run_on_dask(sweeps: Sequence[Sweep], pending: Sequence[tuple[int, Cell]], s
         for i, cell in pending:
             sweep = sweeps[i]
             future = client.submit(execute_cell, sweep.job, sweep.notebook, dict(cell.params),
-                                   list(sweep.metrics), timeout, key=f"nfarm-{sweep.name}-{cell.key}",
-                                   pure=False, retries=0)
+                                   list(sweep.metrics), _timeout(sweep, timeout),
+                                   key=f"nfarm-{sweep.name}-{cell.key}", pure=False, retries=0)
             futures[future] = (i, cell)
         for future in as_completed(futures):
             i, cell = futures[future]

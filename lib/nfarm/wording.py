@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["times", "times_range", "about", "sig", "span"]
+__all__ = ["times", "times_range", "about", "sig", "span", "torque_columns"]
 
 #: Ratios within this of 1 read as "about the same": measured ratios of timings and errors
 #: move by several per cent between runs and seeds.
@@ -77,3 +77,25 @@ def span(lo: float, hi: float, fmt: str = ".3g") -> str:
     """"lo–hi", or one value when both print alike."""
     a, b = format(lo, fmt), format(hi, fmt)
     return a if a == b else f"{a}–{b}"
+
+
+def torque_columns(spread, noise, joint_names, unit: str = "%") -> tuple[list[str], str]:
+    """Headers ``τj [unit]`` for a table's torque columns, and the sentence its caption adds.
+
+    A joint whose torque spread (``spread (n,)``, the standard deviation the NRMSE divides by
+    [N·m]) is below its sensor's noise σ (``noise (n,)`` [N·m], or ``None``: no sensor
+    declared) has a torque no sensor of the measured arm resolves: its header is marked
+    "(below noise)" and the sentence names it with both values, so its NRMSE is read as what
+    it is, not as evidence for or against a model. The sentence is "" when no joint is.
+    """
+    n = len(joint_names)
+    below = [False] * n if noise is None else [float(s) < float(e) for s, e in zip(spread, noise)]
+    headers = [f"τ{j + 1} [{unit}]" + (" (below noise)" if below[j] else "") for j in range(n)]
+    parts = [f"τ{j + 1} ({joint_names[j]}: spread {float(spread[j]):.2g} N·m, sensor noise σ "
+             f"{float(noise[j]):.2g} N·m)" for j in range(n) if below[j]]
+    if not parts:
+        return headers, ""
+    verb = "is" if len(parts) == 1 else "are"
+    return headers, (f" The torque of {' and '.join(parts)} {verb} below the noise of the measured arm's sensors: "
+                     f"no sensor would resolve {'it' if len(parts) == 1 else 'them'}, and {'its' if len(parts) == 1 else 'their'} "
+                     f"NRMSE is shown but is not evidence for or against a model.")
