@@ -1,5 +1,5 @@
 """Command line: ``python -m nfarm check-params FILE...``, ``report``, ``datasets``, ``sweep``,
-``course`` and ``verify``."""
+``course``, ``verify`` and ``panel``."""
 
 from __future__ import annotations
 
@@ -97,7 +97,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="the student build and the index only (nothing executed)")
     verify = sub.add_parser("verify", help="check figures/ against figures/MANIFEST.sha256")
     verify.add_argument("--figures", default=None, metavar="DIR")
+    panel = sub.add_parser("panel", help="serve the arm panel as a local web page (Voilà)")
+    panel.add_argument("--port", type=int, default=8866, metavar="PORT", help="default 8866")
     args = parser.parse_args(argv)
+    if args.command == "panel":
+        from .panel_server import serve
+        return serve(args.port)
     if args.command == "check-params":
         return check_params(args.files)
     if args.command == "verify":

@@ -24,14 +24,32 @@ from __future__ import annotations
 
 import functools
 import html
+import sys
 import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 import ipywidgets as w
 import numpy as np
-from ipympl.backend_nbagg import Canvas, FigureManager
 from matplotlib.figure import Figure
+
+
+def _ipympl_canvas_classes():
+    """ipympl's canvas widget and figure manager, without ipympl's import side effect: its
+    ``__init__`` makes itself pyplot's backend when matplotlib is loaded, and switching pyplot's
+    backend closes every open figure (a chapter's, a test's). The panel draws on canvases it
+    makes itself and needs no pyplot backend."""
+    if "ipympl" not in sys.modules:
+        loaded = sys.modules.pop("matplotlib")
+        try:
+            import ipympl  # noqa: F401 — sees no matplotlib, so leaves the backend alone
+        finally:
+            sys.modules["matplotlib"] = loaded
+    from ipympl.backend_nbagg import Canvas, FigureManager
+    return Canvas, FigureManager
+
+
+Canvas, FigureManager = _ipympl_canvas_classes()
 
 from .kinematics import fk, fk_all
 from .panel_compute import (PROFILES, PanelInputError, ik_answers, joint_trajectory, parse_pose_matrix,
@@ -73,10 +91,20 @@ def _line(text: str, style: str = "") -> str:
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
-    head = "".join(f"<th style='padding:2px 8px;text-align:right'>{html.escape(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td style='padding:2px 8px;text-align:right'>{c}</td>" for c in row) + "</tr>"
-                   for row in rows)
-    return f"<table style='border-collapse:collapse;font-family:monospace'><tr>{head}</tr>{body}</table>"
+    """An HTML table: the first column (names) left-aligned and unbroken, numbers right-aligned."""
+    def cell(tag: str, k: int, text: str) -> str:
+        align = "left;white-space:nowrap" if k == 0 else "left" if header[k] == "note" else "right"
+        return f"<{tag} style='padding:1px 8px;line-height:1.35;text-align:{align}'>{text}</{tag}>"
+
+    head = "".join(cell("th", k, html.escape(h)) for k, h in enumerate(header))
+    body = "".join("<tr>" + "".join(cell("td", k, c) for k, c in enumerate(row)) + "</tr>" for row in rows)
+    return f"<table style='border-collapse:collapse;font-family:monospace;font-size:12px'><tr>{head}</tr>{body}</table>"
+
+
+def _small(value: float, floor: float = 1e-6) -> str:
+    """A tool error [mm or deg]: below ``floor`` (the solvers' tolerances, 1e-9 m and rad, lie
+    below it) it is rounding, shown as such."""
+    return f"< {floor:g}" if value < floor else f"{value:.3g}"
 
 
 def shows_errors(method: Callable) -> Callable:
@@ -191,7 +219,7 @@ class FKPage:
         lo, hi = np.degrees(robot.qlim).T
         self.sliders = [w.FloatSlider(value=float(np.clip(0.0, a, b)), min=float(a), max=float(b), step=0.5,
                                       description=f"{name} [deg]", readout_format=".1f", continuous_update=True,
-                                      style={"description_width": "90px"}, layout=w.Layout(width="380px"))
+                                      style={"description_width": "140px"}, layout=w.Layout(width="430px"))
                         for name, a, b in zip(robot.joint_names, lo, hi)]
         self.home = w.Button(description="home (q = 0)", tooltip="every joint to 0°, or its nearest limit")
         self.home.on_click(lambda _: self.set_q(np.zeros(robot.n)))
@@ -227,13 +255,13 @@ class FKPage:
         q = self.q
         r = pose_readout(self.panel.robot, q, near_singular=self.panel.near_singular)
         R = r.T_0e[:3, :3]
-        rows = [["position [mm]", *(f"{v:.2f}" for v in r.position_mm)],
-                ["roll, pitch, yaw [deg]", *(f"{v:.2f}" for v in r.rpy_deg)],
-                ["quaternion w, x, y, z", " ".join(f"{v:.4f}" for v in r.quat), "", ""],
-                *[["rotation matrix R" if i == 0 else "", *(f"{v:.4f}" for v in R[i])] for i in range(3)],
-                ["manipulability w [m³]", f"{r.manipulability:.3e}", "", ""],
-                ["σ_min position [mm/rad]", f"{r.sigma_position_m * 1e3:.3g}", "", ""]]
-        self.readout.value = _table(["tool pose", "", "", ""], rows)
+        rows = [["position [mm]", *(f"{v:.2f}" for v in r.position_mm), ""],
+                ["roll, pitch, yaw [deg]", *(f"{v:.2f}" for v in r.rpy_deg), ""],
+                ["quaternion w, x, y, z", *(f"{v:.4f}" for v in r.quat)],
+                *[["rotation matrix R" if i == 0 else "", *(f"{v + 0.0:.4f}" for v in R[i]), ""] for i in range(3)],
+                ["manipulability w [m³]", f"{r.manipulability:.3e}", "", "", ""],
+                ["σ_min position [mm/rad]", f"{r.sigma_position_m * 1e3:.3g}", "", "", ""]]
+        self.readout.value = _table(["tool pose", "", "", "", ""], rows)
         self.warning.value = _line(r.warning, _NOTE)
         self.view.show(q)
 
@@ -249,12 +277,12 @@ class IKPage:
     def __init__(self, panel: "ArmPanel"):
         self.panel = panel
         self.message = w.HTML()
-        self.fields = [w.FloatText(description=name, layout=w.Layout(width="190px"),
-                                   style={"description_width": "80px"}) for name in self._FIELDS]
+        self.fields = [w.FloatText(description=name, layout=w.Layout(width="200px"),
+                                   style={"description_width": "90px"}) for name in self._FIELDS]
         self.step_mm = w.BoundedFloatText(value=10.0, min=0.0, max=1e4, description="nudge [mm]",
-                                          layout=w.Layout(width="190px"), style={"description_width": "80px"})
+                                          layout=w.Layout(width="200px"), style={"description_width": "90px"})
         self.step_deg = w.BoundedFloatText(value=5.0, min=0.0, max=180.0, description="nudge [deg]",
-                                           layout=w.Layout(width="190px"), style={"description_width": "80px"})
+                                           layout=w.Layout(width="200px"), style={"description_width": "90px"})
         rows = []
         self.nudge_buttons = {}      # (field index, −1 or +1) -> button
         for k, field in enumerate(self.fields):
@@ -276,7 +304,7 @@ class IKPage:
         self.choice = w.Dropdown(description="answer", options=[], layout=w.Layout(width="420px"))
         self.show_button = w.Button(description="show on arm")
         self.show_button.on_click(self._show)
-        self.send_button = w.Button(description="send to trajectory as final position")
+        self.send_button = w.Button(description="send to trajectory as final position", layout=w.Layout(width="auto"))
         self.send_button.on_click(self._send)
         self.answers: list = []
         self.widget = w.VBox([
@@ -297,7 +325,7 @@ class IKPage:
         values = [*(T[:3, 3] * 1e3), *np.degrees(matrix_to_rpy(T[:3, :3]))]
         for field, value in zip(self.fields, values):
             field.value = round(float(value), 6)
-        self.matrix.value = "\n".join(" ".join(f"{v:.6g}" for v in [*T[i, :3], T[i, 3] * 1e3]) for i in range(3))
+        self.matrix.value = "\n".join(" ".join(f"{v + 0.0:.6g}" for v in [*T[i, :3], T[i, 3] * 1e3]) for i in range(3))
 
     @shows_errors
     def _from_arm(self, _=None) -> None:
@@ -330,10 +358,12 @@ class IKPage:
             self.progress.layout.visibility = "hidden"
         n = panel.robot.n
         rows = []
-        for a in self.answers:
-            angles = ["–"] * n if a.q is None else [f"{v:.2f}" for v in np.degrees(a.q)]
-            errors = ["–", "–"] if a.q is None else [f"{a.pos_error_m * 1e3:.3g}", f"{np.degrees(a.rot_error_rad):.3g}"]
+        for k, a in enumerate(self.answers):
+            angles = ["–"] * n if a.q is None else [f"{round(v, 2) + 0.0:.2f}" for v in np.degrees(a.q)]
+            errors = ["–", "–"] if a.q is None else [_small(a.pos_error_m * 1e3), _small(np.degrees(a.rot_error_rad))]
             time_ms = "–" if np.isnan(a.seconds) else f"{a.seconds * 1e3:.3g}"
+            if k and a.method.startswith("closed form") and self.answers[k - 1].method.startswith("closed form"):
+                time_ms = "(same)"      # the closed form answers every branch in one solve
             verdict = "yes" if a.reaches else "no"
             rows.append([html.escape(a.method), *angles, *errors, time_ms, verdict,
                          _line(a.note, _NOTE)])
@@ -394,7 +424,7 @@ class TrajectoryPage:
         for label, action in buttons.items():
             self.buttons[label] = w.Button(description=label, button_style="primary" if label == "compute" else "")
             self.buttons[label].on_click(action)
-        self.save_button = w.Button(description="save as rerun recording")
+        self.save_button = w.Button(description="save as rerun recording", layout=w.Layout(width="auto"))
         self.save_button.on_click(self._save)
         self.fig, self.canvas = _figure(6.2, 5.6)
         self.axes = self.fig.subplots(3, 1, sharex=True)
@@ -410,7 +440,8 @@ class TrajectoryPage:
         self.widget = w.VBox([controls, w.HBox([self.canvas, w.VBox([self.view.canvas,
                                                                      w.HBox([self.play, self.frame])])])])
         self._from_arm(self.q0)
-        self._from_arm(self.qf)
+        # Until an answer is sent here: a quarter of each joint's range above its middle.
+        self._set(self.qf, robot.qlim.mean(axis=1) + 0.25 * np.ptp(robot.qlim, axis=1))
 
     def _set(self, boxes, q) -> None:
         for box, value in zip(boxes, np.degrees(np.asarray(q, dtype=float))):
@@ -491,8 +522,12 @@ class DynamicsPage:
         self.notes = w.HTML()
         self.progress = w.IntProgress(min=0, max=1, layout=w.Layout(width="300px", visibility="hidden"))
         self.peaks = w.HTML()
-        self.fig, self.canvas = _figure(7.0, 1.45 * robot.n + 0.8)
-        self.axes = self.fig.subplots(robot.n, 1, sharex=True, squeeze=False)[:, 0]
+        rows = -(-robot.n // 2)
+        self.fig, self.canvas = _figure(9.0, 1.7 * rows + 0.9)
+        grid = self.fig.subplots(rows, 2, sharex=True, squeeze=False)
+        self.axes = grid.T.ravel()[:robot.n]           # joints down the first column, then the second
+        for ax in grid.T.ravel()[robot.n:]:
+            ax.set_visible(False)
         self.parts = None
         self.widget = w.VBox([self.progress, self.notes, self.peaks, self.message, self.canvas])
 
@@ -517,10 +552,10 @@ class DynamicsPage:
         notes = [panel.models.id_note if panel.models.id is None else "", parts.note]
         self.notes.value = "<br>".join(_line(n, _NOTE) for n in notes if n)
         t = trajectory.t
-        series = [(parts.total, "total (Newton–Euler)", dict(color="k", lw=2)),
-                  (parts.inertial, "inertial M(q) q̈", dict(color="C0", lw=1)),
-                  (parts.coriolis, "Coriolis C(q, q̇) q̇", dict(color="C2", lw=1)),
-                  (parts.gravity, "gravity g(q)", dict(color="C1", lw=1))]
+        series = [(parts.total, "total (Newton–Euler)", dict(color="0.25", lw=4, alpha=0.45)),
+                  (parts.inertial, "inertial M(q) q̈", dict(color="C0", lw=1.2)),
+                  (parts.coriolis, "Coriolis C(q, q̇) q̇", dict(color="C2", lw=1.2)),
+                  (parts.gravity, "gravity g(q)", dict(color="C1", lw=1.2))]
         if parts.learned is not None:
             series.append((parts.learned, "learned ID (chapter 6)", dict(color="C3", lw=1.5, ls="--")))
         rows = []
@@ -540,7 +575,9 @@ class DynamicsPage:
             rows.append([html.escape(robot.joint_names[j]), f"{peak:.3g}",
                          f"{limit:.3g}" if np.isfinite(limit) else "not given",
                          f"{peak / limit:.0%}" if np.isfinite(limit) else "–"])
-        self.axes[-1].set_xlabel("t [s]", fontsize=8)
+        for ax in (self.axes[-1], self.axes[(len(self.axes) - 1) // 2]):
+            ax.set_xlabel("t [s]", fontsize=8)
+            ax.xaxis.set_tick_params(labelbottom=True)
         handles, labels = self.axes[0].get_legend_handles_labels()
         for ax in self.axes[1:]:
             for h, label in zip(*ax.get_legend_handles_labels()):
@@ -570,7 +607,7 @@ class ArmPanel:
     """
 
     def __init__(self, robot: Robot | str | Path, *, models_dir: str | Path | None = None,
-                 recordings_dir: str | Path | None = None, near_singular: float = 0.05, seed: int = 0):
+                 recordings_dir: str | Path | None = None, near_singular: float = 0.02, seed: int = 0):
         self.load_notes: list[str] = []
         if not isinstance(robot, Robot):
             robots = shipped_robots()

@@ -92,15 +92,18 @@ class PoseReadout:
     warning: str
 
 
-def pose_readout(robot: Robot, q, *, near_singular: float = 0.05) -> PoseReadout:
+def pose_readout(robot: Robot, q, *, near_singular: float = 0.02) -> PoseReadout:
     """The tool pose, its rotation in three forms and the distance to a singularity at ``q (n,)``
     [rad].
 
     Near a singularity means: the position Jacobian's smallest singular value below
-    ``near_singular`` × :func:`arm_scale` (the tool can hardly move in some direction; a
-    stretched elbow, the wrist over the base axis), or the orientation Jacobian's below
-    ``near_singular`` (two joints turn the tool about nearly the same axis: a wrist
-    singularity).
+    ``near_singular`` × :func:`arm_scale` (the tool can hardly move in some direction: over the
+    base axis, where the base joint cannot move it sideways, or with the elbow and wrist
+    stretched in a line), or the orientation Jacobian's below ``near_singular`` (two joints turn
+    the tool about nearly the same axis: the tool axis along the base axis). The threshold is
+    assumed: at 0.02, 6.9 % of 20 000 intelbot5 configurations drawn within its limits get a
+    warning (5.3 % for the position, 1.7 % for the orientation; at 0.05, 16 % for the position
+    alone), and 5.1 % of the SO-101's.
     """
     q = np.asarray(q, dtype=float)
     T = fk(robot, q)
