@@ -300,3 +300,21 @@ def test_the_robot_chooser_builds_the_chosen_arm(tmp_path):
     assert "not a physical rigid body" in panel.arm.widget.children[0].value   # the file's warnings, shown
     with pytest.raises(ValueError, match="robot: one of"):
         Panel("nosuch")
+
+
+def test_the_panel_notebook_runs_and_shows_the_panel():
+    """notebooks/arm_panel.ipynb as JupyterLab or Voilà runs it: no error, one widget shown, and
+    pyplot's backend left as the kernel set it (ipympl is imported without its side effect)."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    from nfarm.paths import NOTEBOOKS
+
+    nb = nbformat.read(NOTEBOOKS / "arm_panel.ipynb", as_version=4)
+    nb.cells.append(nbformat.v4.new_code_cell("import matplotlib; print(matplotlib.get_backend())"))
+    NotebookClient(nb, kernel_name="nfarm", timeout=300, resources={"metadata": {"path": str(NOTEBOOKS)}}).execute()
+    outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.outputs]
+    assert not [o for o in outputs if o.output_type == "error" or o.get("name") == "stderr"]
+    views = [o for o in outputs if "application/vnd.jupyter.widget-view+json" in o.get("data", {})]
+    assert len(views) == 1
+    assert "ipympl" not in outputs[-1]["text"]
