@@ -71,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
     report.add_argument("--force", action="store_true",
                         help="run chapters whose inputs are unchanged since their last run too")
+    report.add_argument("--serial", action="store_true",
+                        help="run the editions one after the other (default: side by side on 2+ CPUs)")
     report.add_argument("--cell-timeout", type=_seconds, default=1800, metavar="SECONDS",
                         help="fail a cell that runs longer (default 1800; a positive number of "
                              "seconds, or 'none' for no limit)")
@@ -116,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
     from .report import build_report
     return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
-                        force=args.force)
+                        force=args.force, parallel=False if args.serial else None)
 
 
 def _seconds(text: str) -> float | None:
