@@ -22,13 +22,13 @@ export PYTHONHASHSEED := 0
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
-.PHONY: setup report test bench sweep course lock lab verify clean distclean
+.PHONY: setup report test bench sweep course lock lab panel verify clean distclean
 
 setup: $(STAMP)
 
 # The lock pins uv itself (extra "tools"): bootstrap it from the lock with pip, hash-checked,
 # then let uv make the venv match the lock exactly.
-$(STAMP): environment.lock pyproject.toml
+$(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 	@command -v $(PYTHON) >/dev/null || { echo "make setup: $(PYTHON) not found (CPython 3.11 is required; set PYTHON=...)" >&2; exit 2; }
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@mkdir -p build
@@ -38,6 +38,8 @@ $(STAMP): environment.lock pyproject.toml
 	VIRTUAL_ENV=$(VENV) $(UV) pip install --quiet --python $(PY) --no-deps --no-build-isolation -e .
 	$(PY) -m ipykernel install --sys-prefix --name $(KERNEL) --display-name "Python 3.11 (nfarm)" \
 	    --env MPLBACKEND module://matplotlib_inline.backend_inline >/dev/null
+	@# JupyterLab asks nothing of the internet: no news, no update check (jupyter/lab-overrides.json).
+	@install -D -m 644 jupyter/lab-overrides.json $(VENV)/share/jupyter/lab/settings/overrides.json
 	@touch $@
 
 report: $(STAMP)
@@ -73,6 +75,11 @@ lock: $(STAMP)
 
 lab: $(STAMP)
 	$(VENV)/bin/jupyter lab --notebook-dir=notebooks
+
+# The arm panel (notebooks/arm_panel.ipynb) as a local web page, offline: make panel [PORT=8866].
+PORT ?= 8866
+panel: $(STAMP)
+	@$(PY) -m nfarm panel --port "$(PORT)"
 
 clean:
 	rm -rf build .pytest_cache .hypothesis

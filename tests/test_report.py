@@ -345,10 +345,14 @@ def make_chapter(path, parameters: str):
     nbformat.write(new_notebook(cells=cells), path)
 
 
-def fake_run(runs):
-    """Stands in for papermill: records the run and writes what the chapter was given."""
+def fake_run(runs, log=None):
+    """Stands in for papermill: records the run (in ``runs``, and as a line of ``log`` from
+    whichever process runs it) and writes what the chapter was given."""
     def run(notebook, output, parameters, **_):
         runs.append((notebook.name, {k: v for k, v in parameters.items() if k != "out_dir"}))
+        if log is not None:
+            with open(log, "a") as f:
+                f.write(f"{os.getpid()} {notebook.name} {parameters.get('study_file', parameters.get('robot_file', '-'))}\n")
         given_ = {k: v for k, v in parameters.items() if k not in ("out_dir", "smoke")}
         Table(["value"], [[repr(given_)]], caption="What the chapter was given").save(
             ROOT / parameters["out_dir"] if not os.path.isabs(parameters["out_dir"])
@@ -370,7 +374,45 @@ def two_arms(tmp_path, monkeypatch):
     monkeypatch.setattr(report, "run_notebook", fake_run(runs))
     arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
     return runs, dict(notebooks_dir=notebooks, figures_dir=tmp_path / "figures",
-                      build_dir=tmp_path / "build", arms=arms)
+                      build_dir=tmp_path / "build", arms=arms, parallel=False)
+
+
+def test_editions_side_by_side_publish_what_one_after_the_other_does(two_arms, tmp_path, monkeypatch):
+    """Each edition's chapters in a process of their own, in order; the comparing chapter after
+    both, in this process; the published bytes those of the serial run."""
+    runs, dirs = two_arms
+    assert build_report(**dirs) == 0
+    serial = {p.relative_to(dirs["figures_dir"]): p.read_bytes() for p in dirs["figures_dir"].rglob("*") if p.is_file()}
+    log = tmp_path / "runs.log"
+    monkeypatch.setattr(report, "run_notebook", fake_run([], log))
+    side = dict(dirs, figures_dir=tmp_path / "figures2", build_dir=tmp_path / "build2", parallel=True)
+    assert build_report(**side) == 0
+    assert {p.relative_to(side["figures_dir"]): p.read_bytes() for p in side["figures_dir"].rglob("*")
+            if p.is_file()} == serial
+    lines = [line.split() for line in log.read_text().splitlines()]
+    by_process = {}
+    for pid, name, given_ in lines:
+        by_process.setdefault(pid, []).append(name)
+    assert sorted(by_process.values()) == [["01_robot.ipynb", "02_shared.ipynb", "03_study.ipynb"],
+                                           ["01_robot.ipynb", "03_study.ipynb"], ["04_compare.ipynb"]]
+    assert lines[-1][:2] == [str(os.getpid()), "04_compare.ipynb"]          # after both, here
+    assert not list(tmp_path.glob(".figures2.*")), "no publishing leftovers"
+
+
+def test_a_failing_edition_side_by_side_stops_the_run_in_one_line(two_arms, tmp_path, monkeypatch, capfd):
+    runs, dirs = two_arms
+
+    def failing(notebook, output, parameters, **options):
+        if parameters.get("study_file") == "sb.yaml":
+            raise report.ReportError(f"{notebook.name} failed in cell 2 ('x'): ValueError: bad")
+        return fake_run([])(notebook, output, parameters, **options)
+
+    monkeypatch.setattr(report, "run_notebook", failing)
+    assert build_report(**dict(dirs, parallel=True)) == 1
+    err = capfd.readouterr().err
+    assert "report: 03_study.ipynb failed in cell 2 ('x'): ValueError: bad" in err
+    assert "04_compare" not in err and "Traceback" not in err
+    assert verify_manifest(dirs["figures_dir"]) == []
 
 
 def given(path):
@@ -531,3 +573,43 @@ def test_a_read_only_build_directory_is_one_line(project, capsys, monkeypatch):
     assert build_report(only=["01"], **dirs) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"report: cannot write {dirs['build_dir'] / 'report' / 'mathjax'}: Permission denied"]
+
+
+def test_ctrl_c_stops_editions_running_side_by_side(tmp_path):
+    """SIGINT to the report alone (not its process group): it passes the interrupt on to the
+    editions still running after its grace period, and ends with one line."""
+    import signal
+    import subprocess
+    import sys
+
+    code = f"""
+import sys, time
+sys.path.insert(0, {os.path.dirname(__file__)!r})
+from pathlib import Path
+from nfarm import report
+from test_report import make_chapter, fake_run
+root = Path({str(tmp_path)!r})
+notebooks = root / "notebooks"
+notebooks.mkdir()
+make_chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"')
+make_chapter(notebooks / "02_compare.ipynb", 'study_files = ["sa.yaml"]')
+def slow(notebook, output, parameters, **options):
+    with report._interruptible():
+        (root / f"started-{{parameters.get('robot_file', 'a')}}").touch()
+        time.sleep(120)
+report.run_notebook = slow
+arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
+sys.exit(report.build_report(notebooks_dir=notebooks, figures_dir=root / "figures", build_dir=root / "build",
+                             arms=arms, parallel=True))
+"""
+    run = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    for _ in range(600):
+        if len(list(tmp_path.glob("started-*"))) == 2:
+            break
+        time.sleep(0.1)
+    start = time.monotonic()
+    run.send_signal(signal.SIGINT)
+    _, err = run.communicate(timeout=60)
+    assert run.returncode == 130 and time.monotonic() - start < 30
+    assert err.strip().splitlines()[-1].startswith("report: interrupted;"), err
+    assert "Traceback" not in err, err

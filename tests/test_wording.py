@@ -62,7 +62,8 @@ def test_torque_columns_mark_the_joints_below_the_sensor_noise():
     from nfarm.wording import torque_columns
     headers, note = torque_columns([2.0, 0.0001], [0.005, 0.005], ["base", "roll"])
     assert headers == ["τ1 [%]", "τ2 [%] (below noise)"]
-    assert note.startswith(" The torque of τ2 (roll: spread 0.0001 N·m, sensor noise σ 0.005 N·m) is below")
+    assert note.startswith(". The torque of τ2 (roll: spread 0.0001 N·m, sensor noise σ 0.005 N·m) is below")
+    assert not note.endswith(".")                       # the captions it ends have no final stop
     assert " it, and its NRMSE" in note
     headers, note = torque_columns([1e-4, 2e-4], [0.005, 0.005], ["a", "b"], unit="N·m")
     assert headers == ["τ1 [N·m] (below noise)", "τ2 [N·m] (below noise)"] and " are below " in note and "them" in note

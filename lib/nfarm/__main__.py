@@ -1,5 +1,5 @@
 """Command line: ``python -m nfarm check-params FILE...``, ``report``, ``datasets``, ``sweep``,
-``course`` and ``verify``."""
+``course``, ``verify`` and ``panel``."""
 
 from __future__ import annotations
 
@@ -71,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
     report.add_argument("--force", action="store_true",
                         help="run chapters whose inputs are unchanged since their last run too")
+    report.add_argument("--serial", action="store_true",
+                        help="run the editions one after the other (default: side by side on 2+ CPUs)")
     report.add_argument("--cell-timeout", type=_seconds, default=1800, metavar="SECONDS",
                         help="fail a cell that runs longer (default 1800; a positive number of "
                              "seconds, or 'none' for no limit)")
@@ -97,7 +99,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="the student build and the index only (nothing executed)")
     verify = sub.add_parser("verify", help="check figures/ against figures/MANIFEST.sha256")
     verify.add_argument("--figures", default=None, metavar="DIR")
+    panel = sub.add_parser("panel", help="serve the arm panel as a local web page (Voilà)")
+    panel.add_argument("--port", type=int, default=8866, metavar="PORT", help="default 8866")
     args = parser.parse_args(argv)
+    if args.command == "panel":
+        from .panel_server import serve
+        return serve(args.port)
     if args.command == "check-params":
         return check_params(args.files)
     if args.command == "verify":
@@ -111,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
     from .report import build_report
     return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
-                        force=args.force)
+                        force=args.force, parallel=False if args.serial else None)
 
 
 def _seconds(text: str) -> float | None:

@@ -18,6 +18,13 @@ beside it (``.figures.new/``) and exchanged with ``figures/`` by one ``renameat2
 RENAME_EXCHANGE)`` system call. At every instant ``figures/`` is a complete published state
 whose manifest matches it (``python -m nfarm verify``), whenever the run is killed.
 
+**Editions side by side.** On two or more CPUs each edition's chapters run in a process of
+their own, in chapter order, and the chapters that compare the editions after both: a chapter
+runs in one kernel, mostly on one core (BLAS has one thread in the report), so one edition
+alone leaves a core idle outside chapter 6's sweeps. Publishing takes a lock (``flock`` on the
+figures directory's parent), so the editions publish one at a time; the published bytes are
+those of a run one edition after the other (``--serial``).
+
 A failing, hanging (``cell_timeout``) or crashing notebook stops the run with one line naming
 the notebook and the cell (counted as in the source notebook, without papermill's injected
 cell); the executed copy is kept for inspection. Executed notebooks hold no absolute paths of
@@ -32,11 +39,14 @@ import csv
 import ctypes
 import ctypes.util
 import datetime
+import fcntl
+import functools
 import hashlib
 import html
 import io
 import json
 import logging
+import multiprocessing
 import os
 import re
 import shutil
@@ -45,6 +55,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -358,6 +369,12 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
                 f"{notebook.name} failed in cell {cell} ({first!r}): {exc.ename}: "
                 f"{exc.evalue.strip().splitlines()[0] if exc.evalue.strip() else ''}; "
                 f"the executed notebook is kept at {output}") from None
+        except KeyboardInterrupt:
+            # The running cell's task ends with its kernel and is collected later, when asyncio
+            # would log its DeadKernelError ("Task exception was never retrieved", seen when a
+            # report runs the editions side by side): the caller says the interrupt in one line.
+            logging.getLogger("asyncio").addFilter(_DropMessage("Task exception was never retrieved"))
+            raise
         except (DeadKernelError, CellTimeoutError, RuntimeError) as exc:
             where = _running_cell(output)
             at = f" in cell {where[0]} ({where[1]!r})" if where else ""
@@ -477,6 +494,21 @@ def _sibling(figures_dir: Path, kind: str) -> Path:
     return figures_dir.with_name(f".{figures_dir.name}.{kind}")
 
 
+@contextlib.contextmanager
+def _publishing(figures_dir: Path):
+    """Hold the lock of ``figures_dir``'s publishing: editions run side by side (module
+    docstring) publish one at a time. An exclusive ``flock`` on the parent directory, which
+    the kernel releases when its holder dies: no lock file, nothing stale."""
+    parent = figures_dir.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(parent, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)            # releases the lock
+
+
 def _publish(stage: Path, figures_dir: Path, prefix: str, subdir: str = "") -> list[Path]:
     """Replace chapter ``prefix``'s files in ``figures_dir/subdir`` (an edition's directory,
     ``""`` for the primary arm's) with those in ``stage`` and rewrite the manifest, as one
@@ -486,6 +518,11 @@ def _publish(stage: Path, figures_dir: Path, prefix: str, subdir: str = "") -> l
     if strays:
         raise ReportError(f"chapter {prefix} wrote files not named {prefix}_*.png or "
                           f"tables/{prefix}_*.{{csv,md}}: {', '.join(map(str, strays))}")
+    with _publishing(figures_dir):
+        return _publish_locked(stage, made, figures_dir, prefix, subdir)
+
+
+def _publish_locked(stage: Path, made: list[Path], figures_dir: Path, prefix: str, subdir: str) -> list[Path]:
     _recover(figures_dir)
     new = _sibling(figures_dir, "new")
     if figures_dir.exists():
@@ -979,7 +1016,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  notebooks_dir: Path = NOTEBOOKS, figures_dir: Path = FIGURES,
                  build_dir: Path = BUILD, extra_parameters: dict | None = None,
                  cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
-                 force: bool = False) -> int:
+                 force: bool = False, parallel: bool | None = None) -> int:
     """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
     export HTML and write the index.
 
@@ -988,6 +1025,10 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     with ``extra_parameters`` is one edition (the primary's, with those parameters). A chapter
     whose inputs (:func:`_chapter_key`) are those of its last run, and whose published files
     are still that run's, is not run again unless ``force``.
+
+    ``parallel`` (default: when this process may use two CPUs or more): the editions' chapters
+    run side by side, one process per edition, each in chapter order (module docstring); the
+    chapters that compare the editions run after them. Otherwise one after the other.
 
     Returns the process exit status (0; 1 with the failure on stderr; 2 for a bad choice of
     chapters; 130 when interrupted).
@@ -1025,42 +1066,64 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
             return [(arms[0], files)]
         return [(a, p) for a in arms if (p := a.parameters(names)) is not None]
 
-    _recover(figures_dir)
+    with _publishing(figures_dir):
+        _recover(figures_dir)
+    comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
+    jobs = [(nb, arm, own) for nb in notebooks for arm, own in runs(nb)]
+    sequences = [[j for j in jobs if j[1] is arm and j[0].name not in comparing] for arm in arms]
+    sequences = [seq for seq in sequences if seq]
+    if parallel is None:
+        parallel = _cpus() >= 2
+    side_by_side = parallel and len(sequences) > 1
+
+    def chapter(nb: Path, arm: Edition, own: dict) -> bool:
+        """Run and publish one chapter of one edition; False (said on stderr) if it failed."""
+        prefix = nb.name[:2]
+        label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
+        stage = build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
+        executed = base / "notebooks" / arm.subdir / nb.name
+        stamp = base / "stamps" / arm.name / f"{nb.stem}.json"
+        parameters = {"smoke": smoke, **own, **extra}
+        key = _chapter_key(nb, parameters, smoke)
+        if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
+            print(f"report: {label}: up to date (its inputs are unchanged)", file=sys.stderr, flush=True)
+            return True
+        shutil.rmtree(stage, ignore_errors=True)
+        stage.mkdir(parents=True)
+        print(f"report: {label} …", file=sys.stderr, flush=True)
+        try:
+            run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
+                         progress=sys.stderr.isatty() and not side_by_side, cell_timeout=cell_timeout,
+                         remove_tags=COURSE_TAGS)
+            published = _publish(stage, figures_dir, prefix, arm.subdir)
+        except ReportError as exc:
+            stamp.unlink(missing_ok=True)
+            print(f"report: {exc}", file=sys.stderr, flush=True)
+            return False
+        shutil.rmtree(stage, ignore_errors=True)
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(stamp) as tmp:
+            tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
+                figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
+        print(f"report: {label}: {len(published)} figures and tables published in "
+              f"{shown_path(figures_dir / arm.subdir)}", file=sys.stderr, flush=True)
+        return True
+
+    def in_order(sequence) -> int:
+        return 0 if all(chapter(*job) for job in sequence) else 1
+
     try:
         _install_mathjax(report_dir)
-        for nb in notebooks:
-            prefix = nb.name[:2]
-            for arm, own in runs(nb):
-                label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
-                stage = build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
-                executed = base / "notebooks" / arm.subdir / nb.name
-                stamp = base / "stamps" / arm.name / f"{nb.stem}.json"
-                parameters = {"smoke": smoke, **own, **extra}
-                key = _chapter_key(nb, parameters, smoke)
-                if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
-                    print(f"report: {label}: up to date (its inputs are unchanged)",
-                          file=sys.stderr, flush=True)
-                    continue
-                shutil.rmtree(stage, ignore_errors=True)
-                stage.mkdir(parents=True)
-                print(f"report: {label} …", file=sys.stderr, flush=True)
-                try:
-                    run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
-                                 progress=sys.stderr.isatty(), cell_timeout=cell_timeout,
-                                 remove_tags=COURSE_TAGS)
-                    published = _publish(stage, figures_dir, prefix, arm.subdir)
-                except ReportError as exc:
-                    stamp.unlink(missing_ok=True)
-                    print(f"report: {exc}", file=sys.stderr)
-                    return 1
-                shutil.rmtree(stage, ignore_errors=True)
-                stamp.parent.mkdir(parents=True, exist_ok=True)
-                with atomic_path(stamp) as tmp:
-                    tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
-                        figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
-                print(f"report: {label}: {len(published)} figures and tables published in "
-                      f"{shown_path(figures_dir / arm.subdir)}", file=sys.stderr)
-        comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
+        if side_by_side:
+            status = _side_by_side([functools.partial(in_order, seq) for seq in sequences])
+        else:
+            status = in_order([j for j in jobs if j[0].name not in comparing])
+        if status == 0:
+            status = in_order([j for j in jobs if j[0].name in comparing])
+        if status == 130:
+            raise KeyboardInterrupt
+        if status:
+            return status
         _write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke,
                      None if smoke or extra else build_dir / "recordings")
     except KeyboardInterrupt:
@@ -1068,12 +1131,75 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
               f"before (its manifest matches)", file=sys.stderr)
         return 130
     except OSError as exc:                        # a read-only or full build directory, …
-        where = f" {shown_path(Path(exc.filename))}" if exc.filename else ""
-        print(f"report: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
-        return 1
+        return _cannot_write(exc)
     print(f"report: {shown_path(report_dir / 'index.html')}; figures in "
           f"{shown_path(figures_dir)}", file=sys.stderr)
     return 0
+
+
+def _cpus() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _wait(children, seconds: float) -> None:
+    """Join ``children`` for at most ``seconds`` in all, ignoring further Ctrl-C meanwhile."""
+    deadline = time.monotonic() + seconds
+    for child in children:
+        while child.is_alive() and time.monotonic() < deadline:
+            try:
+                child.join(max(0.0, min(0.5, deadline - time.monotonic())))
+            except KeyboardInterrupt:
+                pass
+
+
+def _side_by_side(tasks, grace: float = 10.0) -> int:
+    """Run each task (a callable returning an exit status) in a forked process of its own, all
+    at once; the first non-zero status (130 when interrupted). Ctrl-C reaches every process of
+    the terminal's group: each child stops its notebook (:func:`_interruptible`) and exits 130,
+    and this process waits for them."""
+    context = multiprocessing.get_context("fork")
+    sys.stdout.flush()
+    sys.stderr.flush()
+    children = [context.Process(target=_child, args=(task,), daemon=False) for task in tasks]
+    for child in children:
+        child.start()
+    interrupted = False
+    while True:
+        try:
+            for child in children:
+                child.join()
+            break
+        except KeyboardInterrupt:
+            # From the terminal, the children got it too and are stopping; one still running
+            # after a grace period was not (the signal went to this process alone): pass it on,
+            # once (a second one would land in its kernel's shut-down).
+            interrupted = True
+            _wait(children, grace)
+            for child in children:
+                if child.is_alive():
+                    os.kill(child.pid, signal.SIGINT)
+    codes = [child.exitcode for child in children]
+    if interrupted or 130 in codes or any(c is not None and c < 0 for c in codes):
+        return 130
+    return next((c for c in codes if c), 0)
+
+
+def _cannot_write(exc: OSError) -> int:
+    where = f" {shown_path(Path(exc.filename))}" if exc.filename else ""
+    print(f"report: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+    return 1
+
+
+def _child(task) -> None:
+    try:
+        code = task()
+    except KeyboardInterrupt:
+        code = 130
+    except OSError as exc:
+        code = _cannot_write(exc)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report_dir: Path,

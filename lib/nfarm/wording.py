@@ -86,7 +86,8 @@ def torque_columns(spread, noise, joint_names, unit: str = "%") -> tuple[list[st
     [N·m]) is below its sensor's noise σ (``noise (n,)`` [N·m], or ``None``: no sensor
     declared) has a torque no sensor of the measured arm resolves: its header is marked
     "(below noise)" and the sentence names it with both values, so its NRMSE is read as what
-    it is, not as evidence for or against a model. The sentence is "" when no joint is.
+    it is, not as evidence for or against a model. The sentence ("" when no joint is) ends a
+    caption without a final stop, as the report's captions are: it starts with ". ".
     """
     n = len(joint_names)
     below = [False] * n if noise is None else [float(s) < float(e) for s, e in zip(spread, noise)]
@@ -96,6 +97,7 @@ def torque_columns(spread, noise, joint_names, unit: str = "%") -> tuple[list[st
     if not parts:
         return headers, ""
     verb = "is" if len(parts) == 1 else "are"
-    return headers, (f" The torque of {' and '.join(parts)} {verb} below the noise of the measured arm's sensors: "
+    # The captions it ends carry no final stop: it begins one sentence and ends without.
+    return headers, (f". The torque of {' and '.join(parts)} {verb} below the noise of the measured arm's sensors: "
                      f"no sensor would resolve {'it' if len(parts) == 1 else 'them'}, and {'its' if len(parts) == 1 else 'their'} "
-                     f"NRMSE is shown but is not evidence for or against a model.")
+                     f"NRMSE is shown but is not evidence for or against a model")
