@@ -18,16 +18,17 @@ def test_the_examples_hold():
 
 @pytest.mark.parametrize("ratio, words", [
     (1.0, "about the same as"), (0.996, "about the same as"), (1.1, "about the same as"),
-    (0.9, "about the same as"), (1.11, "1.1 times"), (0.31, "0.31 times"), (0.0612, "0.061 times"),
-    (9.96, "10 times"), (52.3, "52 times"), (994.1, "990 times"), (0.0, "0 times"),
+    (0.9, "about the same as"), (1.11, "1.1 times"), (0.31, "31 % of"), (0.0612, "6.1 % of"),
+    (0.0100, "1.0 % of"), (9.96, "10 times"), (52.3, "52 times"), (994.1, "990 times"), (0.0, "0 % of"),
 ])
 def test_a_ratio_near_one_is_about_the_same_and_others_have_two_digits(ratio, words):
+    """Below one, a share ("31 % of the error"), not "0.31 times", which reads as a gain."""
     assert times(ratio) == words
 
 
 @pytest.mark.parametrize("lo, hi, words", [
     (0.996, 1.0, "about the same as"), (1.2, 52.0, "1.2–52 times"), (52.0, 1.2, "1.2–52 times"),
-    (2.0, 2.04, "2.0 times"), (0.06, 994.0, "0.060–990 times"),
+    (2.0, 2.04, "2.0 times"), (0.06, 994.0, "0.060–990 times"), (0.4, 0.8, "40–80 % of"), (0.5, 0.502, "50 % of"),
 ])
 def test_a_range_of_ratios(lo, hi, words):
     assert times_range(lo, hi) == words
@@ -47,6 +48,7 @@ def test_a_span_of_equal_values_is_one_value():
 def test_no_ratio_reads_as_one_times_or_in_exponent_form(ratio):
     words = times(ratio)
     assert words != "1 times" and "e+" not in words and "e-" not in words and "1.0 times" != words
+    assert not (words.startswith("0.") and words.endswith("times")) and words != "100 % of"
 
 
 def test_a_ratio_must_be_finite():
@@ -69,3 +71,12 @@ def test_torque_columns_mark_the_joints_below_the_sensor_noise():
     assert headers == ["τ1 [N·m] (below noise)", "τ2 [N·m] (below noise)"] and " are below " in note and "them" in note
     assert torque_columns([2.0, 3.0], [0.005, 0.005], ["a", "b"]) == (["τ1 [%]", "τ2 [%]"], "")
     assert torque_columns([1e-9, 3.0], None, ["a", "b"]) == (["τ1 [%]", "τ2 [%]"], "")
+
+
+@pytest.mark.parametrize("items, words", [
+    ([], ""), (["q1"], "q1"), (["q1", "q5"], "q1 and q5"), (("a", "b", "c"), "a, b and c"),
+    ((f"q{j}" for j in (2, 3, 4, 5)), "q2, q3, q4 and q5"),
+])
+def test_names_in_a_sentence_end_with_and(items, words):
+    from nfarm.wording import listed
+    assert listed(items) == words

@@ -268,6 +268,12 @@ def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
     return 0
 
 
+
+def _unchosen(method: str) -> str:
+    """A method's name after "the chosen model,": without its own ", chosen" ("ANFIS, chosen
+    (arm_plane)" → "ANFIS (arm_plane)")."""
+    return method.replace(", chosen", "")
+
 def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
     """Plain-text sentences (one per task) of one arm's answers, every number read from its
     summary rows: the chosen ANFIS, the dissertation's design (assumed), the best baseline and
@@ -281,7 +287,7 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
     chosen = [r for r in rows if r["task"] == task and r["role"] == "learned (chosen)"]
     if chosen:
         get = {r["metric"]: r for r in chosen}
-        text = (f"{arm}, inverse kinematics: the chosen model, {chosen[0]['method']}, misses by "
+        text = (f"{arm}, inverse kinematics: the chosen model, {_unchosen(chosen[0]['method'])}, misses by "
                 f"{_with_interval(get['worst joint RMSE'])} on its worst joint; the tool lands "
                 f"{_with_interval(get['position median'])} from the target at the median, "
                 f"{_with_interval(get['position p95'])} at the 95th percentile and "
@@ -307,7 +313,7 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
     task = "inverse dynamics"
     free = find(task, "learned (chosen)", "worst joint NRMSE")
     if free:
-        text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {free['method']}, "
+        text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {_unchosen(free['method'])}, "
                 f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE), largest error "
                 f"{_with_interval(find(task, 'learned (chosen)', 'largest error'))}.")
         base = find(task, "best baseline", "worst joint NRMSE")

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["times", "times_range", "about", "sig", "span", "torque_columns"]
+__all__ = ["times", "times_range", "about", "listed", "sig", "span", "torque_columns"]
 
 #: Ratios within this of 1 read as "about the same": measured ratios of timings and errors
 #: move by several per cent between runs and seeds.
@@ -44,21 +44,32 @@ def _ratio(r: float, digits: int = 2) -> str:
 
 def times(r: float, *, same: float = SAME) -> str:
     """``r`` as the words before "that of …" or a noun: "about the same as" within ``same`` of
-    1, else "2.3 times", "0.41 times", "52 times" (two significant digits)."""
+    1; "2.3 times", "52 times" above; "41 % of", "1.0 % of" below (two significant digits):
+    "0.41 times the error" reads as a gain where it is a fraction."""
     if abs(r - 1) <= same + 1e-12:         # (1.1 - 1 is 0.10000000000000009)
         return "about the same as"
-    return f"{_ratio(r)} times"
+    return f"{_ratio(r)} times" if r > 1 else f"{_ratio(100 * r)} % of"
 
 
 def times_range(lo: float, hi: float, *, same: float = SAME) -> str:
     """A range of ratios, before a noun as :func:`times`: "about the same as" when both ends
-    are within ``same`` of 1, one ratio when both ends read alike, else "1.2–52 times"."""
+    are within ``same`` of 1, one ratio when both ends read alike, "40–80 % of" when both are
+    below 1, else "1.2–52 times"."""
     if lo > hi:
         lo, hi = hi, lo
     if abs(lo - 1) <= same + 1e-12 and abs(hi - 1) <= same + 1e-12:
         return "about the same as"
+    if hi < 1:                              # every ratio a share: "80–95 % of"
+        a, b = _ratio(100 * lo), _ratio(100 * hi)
+        return f"{a} % of" if a == b else f"{a}–{b} % of"
     a, b = _ratio(lo), _ratio(hi)
     return f"{a} times" if a == b else f"{a}–{b} times"
+
+
+def listed(items) -> str:
+    """Names in a sentence: "a", "a and b", "a, b and c" (``items``: any iterable of text)."""
+    items = [str(x) for x in items]
+    return " and ".join(items) if len(items) <= 2 else f"{', '.join(items[:-1])} and {items[-1]}"
 
 
 def sig(x: float, digits: int = 3) -> str:
