@@ -318,3 +318,19 @@ def test_the_panel_notebook_runs_and_shows_the_panel():
     views = [o for o in outputs if "application/vnd.jupyter.widget-view+json" in o.get("data", {})]
     assert len(views) == 1
     assert "ipympl" not in outputs[-1]["text"]
+
+
+def test_jupyterlab_asks_nothing_of_the_internet():
+    """make setup installs the project's JupyterLab settings into the venv: no "fetch news?"
+    question, no update check (with fetchNews alone the page still asked PyPI through the
+    server)."""
+    import json
+    import sys
+    from pathlib import Path
+
+    from nfarm.paths import ROOT
+
+    installed = Path(sys.prefix) / "share" / "jupyter" / "lab" / "settings" / "overrides.json"
+    ours = json.loads((ROOT / "jupyter" / "lab-overrides.json").read_text())
+    assert ours["@jupyterlab/apputils-extension:notification"] == {"fetchNews": "false", "checkForUpdates": False}
+    assert json.loads(installed.read_text()) == ours
