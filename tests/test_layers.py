@@ -13,7 +13,7 @@ LAYERS = {
     "model": ["reading", "paths", "limits", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
               "fuzzy", "trajectory", "workspace"],
     "solvers": ["ik", "geometric_ik", "tool_paths", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
-    "io": ["urdf", "recording", "plotting", "wording", "report", "panel_compute", "panel", "statistics", "summary", "pinocchio_ref", "jobs", "sweep", "course",
+    "io": ["urdf", "recording", "plotting", "wording", "report", "panel_compute", "panel", "panel_server", "statistics", "summary", "pinocchio_ref", "jobs", "sweep", "course",
            "answers", "__main__"],
 }
 RANK = {module: rank for rank, names in enumerate(LAYERS.values()) for module in names}
