@@ -439,6 +439,8 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     shared_b = (build / "report" / "b" / "02_shared.html").read_text()          # its navigation stays in b
     assert "../b/01_robot.html" in shared_b and "../b/03_study.html" in shared_b and "../01_robot.html" not in shared_b
     assert "<title>Chapter 01_robot · b</title>" in page                      # not "Notebook"
+    index = (build / "report" / "index.html").read_text()
+    assert "href='b/02_shared.html'" in index and "href='02_shared.html'" in index   # each edition's copy
     assert "<title>Chapter 01_robot · a</title>" in (build / "report" / "01_robot.html").read_text()
     assert "<title>Chapter 02_shared</title>" in (build / "report" / "02_shared.html").read_text()
     index = (build / "report" / "index.html").read_text()

@@ -964,12 +964,18 @@ def _write_index(report_dir: Path, figures_dir: Path,
             return f"ch{entry[0]}"
         return f"{(edition if own(edition, entry[2]) else arms[0]).name}-ch{entry[0]}"
 
+    def read_at(edition: Edition, entry: tuple[str, str, str]) -> str:
+        """A shared chapter is read in the edition's copy, whose navigation stays in the edition."""
+        if entry in compared or not edition.subdir or own(edition, entry[2]):
+            return entry[2]
+        return f"{edition.subdir}/{Path(entry[2]).name}"
+
     for edition in arms:
         entries = pages.get(edition.name, [])
         if entries:
             parts.append(f"<h2 id='{edition.name}'>Chapters for {html.escape(edition.name)}"
                          f"{' (the dissertation’s arm)' if edition.primary else ''}</h2><ol>")
-            parts += [f"<li value='{int(e[0])}'><a href='{e[2]}'>{html.escape(e[1])}</a> · <a "
+            parts += [f"<li value='{int(e[0])}'><a href='{read_at(edition, e)}'>{html.escape(e[1])}</a> · <a "
                       f"href='#{anchor(edition, e)}'>its figures and tables</a>"
                       f"{'' if own(edition, e[2]) or e in compared else ' (the same for every arm)'}"
                       f"</li>" for e in entries]
