@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from nfarm.statistics import trajectory_maxima, trajectory_sums
-from nfarm.summary import (IK_METRICS, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference, long_table,
-                           read_long_table,
-                           wide_table)
+from nfarm.statistics import bootstrap_nrmse
+from nfarm.summary import (IK_METRICS, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
+                           long_table, read_long_table, resolved_sums, wide_table, with_resolved_worst)
+from nfarm.sweep import Cell, CellResult, Replicates
 
 
 def ik_errors(seed=0, n=500, joints=5):
@@ -28,7 +29,11 @@ def test_ik_rows_are_the_direct_statistics_with_intervals_that_hold_them():
               np.degrees(np.median(e["orientation"])), np.degrees(np.percentile(e["orientation"], 95)),
               np.degrees(e["orientation"].max())]
     np.testing.assert_allclose([r.value for r in rows], direct, rtol=1e-12)
-    assert all(r.low <= r.value <= r.high and r.n == 300 and "500 test poses" in r.spread for r in rows)
+    assert all(r.low <= r.value <= r.high and "500 test poses" in r.spread for r in rows)
+    # A maximum's percentile interval ends at the maximum itself: shown without one.
+    maxima = [r for r in rows if r.metric.endswith(" max")]
+    assert len(maxima) == 2 and all(r.low == r.value == r.high and r.n == 0 and "no interval" in r.spread for r in maxima)
+    assert all(r.n == 300 and r.low < r.high for r in rows if r not in maxima)
     assert [r.metric for r in ik_rows("lm", "reference", e, joint=False, draws=300)] == [m for m, _ in IK_METRICS[1:]]
 
 
@@ -54,7 +59,7 @@ def test_id_rows_give_each_joint_the_worst_and_the_largest_error():
     nrmse = 100 * np.sqrt(((predicted - tau) ** 2).mean(axis=0)) / tau.std(axis=0)
     np.testing.assert_allclose([r.value for r in rows[:3]], nrmse, rtol=1e-10)
     assert rows[3].value == pytest.approx(nrmse.max()) and rows[4].value == np.abs(predicted - tau).max()
-    assert rows[4].high == rows[4].value and rows[4].low <= rows[4].value
+    assert rows[4].high == rows[4].value == rows[4].low and rows[4].n == 0 and "no interval" in rows[4].spread
     raw = id_rows("m", "learned", sums, maxima, ["a", "b", "c"], normalised=False, draws=300)
     assert raw[0].unit == "N·m" and raw[3].metric == "worst joint RMSE"
     assert largest_difference(maxima, maxima, draws=300).value == 0
@@ -97,3 +102,54 @@ def test_the_abstract_reads_every_number_from_the_summary_table(tmp_path):
     bad.write_text("a,b\n1,2\n", encoding="utf-8")
     with pytest.raises(ValueError, match="not a summary table"):
         read_long_table(bad)
+
+
+def test_the_worst_joint_is_taken_over_the_joints_a_sensor_resolves():
+    rng = np.random.default_rng(3)
+    label = np.repeat(np.arange(12), 30)
+    tau = rng.normal(size=(len(label), 3)) * [1.0, 1.0, 1e-4]        # the third joint's torque: below any noise
+    predicted = tau + rng.normal(0, [0.05, 0.1, 1e-4], size=tau.shape)   # its NRMSE about 100 %: the worst
+    sums, maxima = trajectory_sums(predicted, tau, label), trajectory_maxima(predicted, tau, label)
+    resolved = np.array([True, True, False])
+    rows = id_rows("m", "learned", sums, maxima, ["a", "b", "c"], resolved=resolved, draws=300)
+    assert [r.metric for r in rows] == ["τ1 NRMSE", "τ2 NRMSE", "τ3 NRMSE (below noise)", WORST_ID, "largest error"]
+    nrmse = 100 * np.sqrt(((predicted - tau) ** 2).mean(axis=0)) / tau.std(axis=0)
+    assert nrmse.argmax() == 2 and rows[3].value == pytest.approx(nrmse[:2].max())
+    # The interval is over the same resamples as the whole set's, of the two joints' worst
+    sub = bootstrap_nrmse(sums[:, [0, 1, 2, 4, 5, 7, 8]], draws=300)
+    assert (rows[3].low, rows[3].high) == pytest.approx((100 * sub.worst_low, 100 * sub.worst_high))
+    np.testing.assert_array_equal(resolved_sums(sums, resolved), sums[:, [0, 1, 2, 4, 5, 7, 8]])
+    with pytest.raises(ValueError, match="at least one"):
+        resolved_sums(sums, [False, False, False])
+    with pytest.raises(ValueError, match="at least one"):
+        resolved_sums(sums, [True, False])
+
+
+def test_configurations_are_chosen_by_their_resolved_joints_and_the_cells_are_left_as_they_were():
+    def group(*per_seed):
+        return Replicates(tuple(CellResult(Cell({"inputs": "x", "seed": k}, f"cell{k}"), "ok",
+                                           {"val_nrmse": list(v), "worst_nrmse": max(v)}, 1.0, "w")
+                                for k, v in enumerate(per_seed)))
+    a = group([0.02, 0.01, 0.7], [0.03, 0.02, 0.8])           # good on the resolved joints, bad on the third
+    b = group([0.30, 0.20, 0.5], [0.35, 0.25, 0.6])
+    assert a.metrics["worst_nrmse"] > b.metrics["worst_nrmse"]          # every joint: b looks better
+    ra, rb = with_resolved_worst([a, b], [True, True, False], "val_nrmse")
+    assert ra.metrics["worst_nrmse"] == pytest.approx(0.025) and rb.metrics["worst_nrmse"] == pytest.approx(0.325)
+    assert ra.low("worst_nrmse") == 0.02 and ra.high("worst_nrmse") == 0.03
+    assert ra.metrics["worst_nrmse_all"] == pytest.approx(0.75)
+    assert a.runs[0].metrics["worst_nrmse"] == 0.7                    # the cells' own results untouched
+    with pytest.raises(ValueError, match="3 joints, resolved 2"):
+        with_resolved_worst([a], [True, False], "val_nrmse")
+
+
+def test_the_abstract_leaves_the_joints_below_noise_out_and_names_them(tmp_path):
+    rng = np.random.default_rng(5)
+    label = np.repeat(np.arange(10), 20)
+    tau = rng.normal(size=(200, 2)) * [1.0, 1e-4]
+    predicted = tau + rng.normal(0, [0.02, 1e-4], size=tau.shape)
+    rows = id_rows("ANFIS, model-free", "learned (chosen)", trajectory_sums(predicted, tau, label),
+                   trajectory_maxima(predicted, tau, label), ["a", "b"], resolved=[True, False], draws=300)
+    long_table(rows).save(tmp_path, "07_summary")
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
+    worst = next(r for r in rows if r.metric == WORST_ID)
+    assert f"misses by {worst.value:.4g} %" in line and "τ2, whose torque is below the sensor noise, left out" in line

@@ -66,9 +66,10 @@ def test_torque_columns_mark_the_joints_below_the_sensor_noise():
     assert headers == ["τ1 [%]", "τ2 [%] (below noise)"]
     assert note.startswith(". The torque of τ2 (roll: spread 0.0001 N·m, sensor noise σ 0.005 N·m) is below")
     assert not note.endswith(".")                       # the captions it ends have no final stop
-    assert " it, and its NRMSE" in note
+    assert " it, and its NRMSE" in note and note.endswith("the worst joint is taken over the others")
     headers, note = torque_columns([1e-4, 2e-4], [0.005, 0.005], ["a", "b"], unit="N·m")
     assert headers == ["τ1 [N·m] (below noise)", "τ2 [N·m] (below noise)"] and " are below " in note and "them" in note
+    assert "taken over the others" not in note              # every joint below: the worst is over them all
     assert torque_columns([2.0, 3.0], [0.005, 0.005], ["a", "b"]) == (["τ1 [%]", "τ2 [%]"], "")
     assert torque_columns([1e-9, 3.0], None, ["a", "b"]) == (["τ1 [%]", "τ2 [%]"], "")
 
@@ -80,3 +81,17 @@ def test_torque_columns_mark_the_joints_below_the_sensor_noise():
 def test_names_in_a_sentence_end_with_and(items, words):
     from nfarm.wording import listed
     assert listed(items) == words
+
+
+@pytest.mark.parametrize("spread, noise, resolved, words", [
+    ([2.0, 1.0, 0.5, 0.1, 1e-4], [0.005] * 5, [True, True, True, True, False], "worst of τ1–τ4"),
+    ([2.0, 1e-4, 0.5, 0.1, 3.0], [0.005] * 5, [True, False, True, True, True], "worst of τ1, τ3, τ4 and τ5"),
+    ([2.0, 1e-4], [0.005] * 2, [True, False], "worst of τ1"),
+    ([2.0, 1e-9], None, [True, True], "worst"),                       # no sensor declared: every joint
+    ([1e-4, 1e-4], [0.005] * 2, [True, True], "worst"),               # none resolved: every joint counts
+    ([0.005, 0.1], [0.005, 0.005], [True, True], "worst"),             # at the noise: resolved
+])
+def test_the_worst_joint_is_over_the_joints_a_sensor_resolves(spread, noise, resolved, words):
+    from nfarm.wording import resolved_joints, worst_of
+    assert resolved_joints(spread, noise).tolist() == resolved
+    assert worst_of(resolved) == words

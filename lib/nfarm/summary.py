@@ -8,19 +8,24 @@ One :class:`Row` per task, method and metric, with ``value``, ``ci_low``, ``ci_h
   percentile and largest tool position [mm] and orientation [deg] errors of ``fk(predicted q)``,
   resampling the **test poses** (each drawn on its own, so independent);
 * **inverse dynamics** (:func:`id_rows`): each joint's NRMSE [%] (or RMSE [N·m] against measured
-  torques), the worst joint's and the largest absolute torque error [N·m], resampling the **test
-  trajectories** (a trajectory's samples are correlated: :mod:`nfarm.statistics`).
+  torques), the worst joint's — over the joints whose torque a sensor resolves
+  (:func:`nfarm.wording.resolved_joints`) — and the largest absolute torque error [N·m],
+  resampling the **test trajectories** (a trajectory's samples are correlated:
+  :mod:`nfarm.statistics`).
 
 :func:`ik_difference` and :func:`largest_difference` compare two methods on the same resamples
 (paired), so a chapter says where a baseline wins only when the interval of the difference
 excludes 0. The median and the 95th percentile are the reader's; the maximum is reported because
-the worst case is what a controller meets, and its interval is the bootstrap's of an extreme (its
-upper end is the sample's own maximum).
+the worst case is what a controller meets, **without an interval**: the percentile bootstrap of
+a sample's maximum has the maximum itself as its upper end (measured: "70.4 (27.7–70.4)"), an
+interval that says nothing of how much larger the next test set's worst case could be. Such a
+row has ``low == high == value`` and ``n == 0``; comparisons of maxima are made on paired
+differences only.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
@@ -30,10 +35,15 @@ from .learned import Baseline
 from .report import Table, shown
 from .robot import Robot
 from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows
-from .sweep import Sweep, best_by, by_configuration, sweep_results
+from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
+from .wording import resolved_joints
 
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
-           "long_table", "wide_table", "interval_text", "ik_baselines", "best_id_baseline"]
+           "long_table", "wide_table", "interval_text", "ik_baselines", "best_id_baseline",
+           "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID"]
+
+#: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
+WORST_ID = "worst resolved joint NRMSE"
 
 IK_BASELINES = {"nearest": "nearest neighbour", "rbf": "RBF interpolation", "linear": "linear least squares"}
 
@@ -47,7 +57,8 @@ IK_METRICS = (("worst joint RMSE", "deg"), ("position median", "mm"), ("position
 @dataclass(frozen=True)
 class Row:
     """One method's value of one metric on held-out data and its interval (``low``, ``high``
-    at coverage ``level``, from ``n`` resamples of ``spread``)."""
+    at coverage ``level``, from ``n`` resamples of ``spread``); ``n == 0``: a maximum, shown
+    without an interval (``low == high == value``)."""
 
     task: str
     method: str
@@ -97,7 +108,10 @@ def ik_rows(method: str, role: str, errors: Mapping[str, np.ndarray], *, joint: 
     n = columns.shape[1] - 2
     est = bootstrap_rows(columns, _ik_statistic(n), draws=draws, level=level, seed=seed)
     spread = f"bootstrap over {len(columns):,} test poses"
-    return [Row(task, method, role, metric, unit, float(est.value[k]), float(est.low[k]), float(est.high[k]),
+    extreme = f"the largest of {len(columns):,} test poses (a maximum: no interval)"
+    return [Row(task, method, role, metric, unit, float(est.value[k]), float(est.value[k]), float(est.value[k]),
+                0, level, extreme, arm) if metric.endswith(" max") else
+            Row(task, method, role, metric, unit, float(est.value[k]), float(est.low[k]), float(est.high[k]),
                 draws, level, spread, arm)
             for k, (metric, unit) in enumerate(IK_METRICS) if joint or k > 0]
 
@@ -120,28 +134,94 @@ def _largest(X):
     return X.max(axis=(-2, -1))
 
 
+def resolved_sums(sums: np.ndarray, resolved) -> np.ndarray:
+    """The columns of ``sums (T, 1 + 3n)`` (:func:`nfarm.statistics.trajectory_sums`) of the
+    joints ``resolved (n,)`` bool marks: ``(T, 1 + 3k)``, so that a worst joint and its
+    interval (:func:`nfarm.statistics.bootstrap_nrmse`, ``worst_difference``) are taken over
+    those joints, on the same resamples as the whole."""
+    sums = np.asarray(sums, float)
+    n = (sums.shape[-1] - 1) // 3
+    resolved = np.asarray(resolved, bool)
+    if resolved.shape != (n,) or not resolved.any():
+        raise ValueError(f"resolved must mark at least one of the sums' {n} joints, got {resolved.tolist()}")
+    keep = np.flatnonzero(resolved)
+    return sums[:, np.concatenate([[0], 1 + keep, 1 + n + keep, 1 + 2 * n + keep])]
+
+
+def bootstrap_resolved(sums: np.ndarray, resolved=None, **options):
+    """:func:`nfarm.statistics.bootstrap_nrmse` of ``sums`` with its worst joint (value and
+    interval) taken over the ``resolved (n,)`` joints (``None``: every joint), on the same
+    resamples; ``options`` as that function's."""
+    whole = bootstrap_nrmse(sums, **options)
+    if resolved is None or np.all(resolved):
+        return whole
+    sub = bootstrap_nrmse(resolved_sums(sums, resolved), **options)
+    return replace(whole, worst=sub.worst, worst_low=sub.worst_low, worst_high=sub.worst_high)
+
+
 def id_rows(method: str, role: str, sums: np.ndarray, maxima: np.ndarray, joint_names: Sequence[str], *,
-            normalised: bool = True, task: str = "inverse dynamics", draws: int = 2000, level: float = 0.95,
-            seed: int = 0, arm: str = "") -> list[Row]:
+            resolved=None, normalised: bool = True, task: str = "inverse dynamics", draws: int = 2000,
+            level: float = 0.95, seed: int = 0, arm: str = "") -> list[Row]:
     """The ID metrics of one method on the test trajectories: each joint's NRMSE [%] (with
     ``normalised=False`` its RMSE [N·m]), the worst joint's, and the largest absolute torque
-    error [N·m], with intervals over the trajectories. ``sums (T, 1 + 3n)``:
-    :func:`nfarm.statistics.trajectory_sums`; ``maxima (T, n)``:
-    :func:`nfarm.statistics.trajectory_maxima` of the same trajectories."""
+    error [N·m] (a maximum: no interval), with intervals over the trajectories.
+    ``sums (T, 1 + 3n)``: :func:`nfarm.statistics.trajectory_sums`; ``maxima (T, n)``:
+    :func:`nfarm.statistics.trajectory_maxima` of the same trajectories.
+
+    ``resolved (n,)`` bool (:func:`nfarm.wording.resolved_joints`): the joints whose torque a
+    sensor resolves. Given, the worst joint is taken over them (metric :data:`WORST_ID`) and
+    the others' metrics are marked "(below noise)"; ``None``: over every joint ("worst joint
+    NRMSE")."""
     sums, maxima = np.asarray(sums, float), np.asarray(maxima, float)
     if maxima.ndim != 2 or len(maxima) != len(sums) or maxima.shape[1] != len(joint_names):
         raise ValueError(f"maxima must be (trajectories={len(sums)}, joints={len(joint_names)}), got {maxima.shape}")
     ci = bootstrap_nrmse(sums, draws=draws, level=level, seed=seed, normalised=normalised)
     scale, name, unit = (100.0, "NRMSE", "%") if normalised else (1.0, "RMSE", "N·m")
     spread = f"bootstrap over {ci.trajectories} test trajectories"
-    rows = [Row(task, method, role, f"τ{j + 1} {name}", unit, scale * ci.value[j], scale * ci.low[j],
-                scale * ci.high[j], draws, level, spread, arm) for j in range(len(joint_names))]
-    rows.append(Row(task, method, role, f"worst joint {name}", unit, scale * ci.worst, scale * ci.worst_low,
-                    scale * ci.worst_high, draws, level, spread, arm))
-    big = bootstrap_rows(maxima, _largest, draws=draws, level=level, seed=seed)
-    rows.append(Row(task, method, role, "largest error", "N·m", big.value, big.low, big.high, draws, level, spread,
-                    arm))
+    below = np.zeros(len(joint_names), bool) if resolved is None else ~np.asarray(resolved, bool)
+    rows = [Row(task, method, role, f"τ{j + 1} {name}" + (" (below noise)" if below[j] else ""), unit,
+                scale * ci.value[j], scale * ci.low[j], scale * ci.high[j], draws, level, spread, arm)
+            for j in range(len(joint_names))]
+    worst = bootstrap_resolved(sums, resolved, draws=draws, level=level, seed=seed, normalised=normalised)
+    rows.append(Row(task, method, role, f"worst joint {name}" if resolved is None else f"worst resolved joint {name}",
+                    unit, scale * worst.worst, scale * worst.worst_low, scale * worst.worst_high, draws, level,
+                    spread, arm))
+    big = float(maxima.max())
+    rows.append(Row(task, method, role, "largest error", "N·m", big, big, big, 0, level,
+                    f"the largest over {ci.trajectories} test trajectories (a maximum: no interval)", arm))
     return rows
+
+
+def with_resolved_worst(groups: Sequence[Replicates], resolved, source: str) -> list[Replicates]:
+    """A sweep's configurations (:func:`nfarm.sweep.by_configuration`) with each seed's
+    ``worst_nrmse`` taken over the ``resolved (n,)`` joints of its per-joint metric ``source``
+    (``"val_nrmse"`` of a learned-ID cell, ``"nrmse"`` of a baseline's); the all-joint value
+    kept as ``worst_nrmse_all``. Means, ranges and :func:`nfarm.sweep.best_by` then choose by
+    the joints a sensor resolves — the cells themselves are not touched (their results are
+    reused)."""
+    resolved = np.asarray(resolved, bool)
+    if not resolved.any():
+        raise ValueError("resolved must mark at least one joint")
+
+    def run(r):
+        if source not in r.metrics:
+            return r
+        values = np.asarray(r.metrics[source], float)
+        if values.shape != resolved.shape:
+            raise ValueError(f"{source} of a cell has {values.shape[0]} joints, resolved {len(resolved)}")
+        return replace(r, metrics={**r.metrics, "worst_nrmse_all": r.metrics.get("worst_nrmse"),
+                                   "worst_nrmse": float(values[resolved].max())})
+    return [Replicates(tuple(run(r) for r in g.runs)) for g in groups]
+
+
+def resolved_on_validation(study, directory) -> np.ndarray:
+    """``(n,)`` bool: the joints whose torque spread on the study's ID validation trajectories
+    (``id_val.npz`` in ``directory``) reaches its sensor noise (:func:`nfarm.wording.resolved_joints`)
+    — fixed on validation data, as every choice is, and used alike by chapters 06–08."""
+    from .datasets import load
+
+    val = load(directory / "id_val.npz", study.robot, study)
+    return resolved_joints(val["tau"].std(axis=0), study.id.noise)
 
 
 def largest_difference(maxima_a: np.ndarray, maxima_b: np.ndarray, *, draws: int = 2000, level: float = 0.95,
@@ -210,15 +290,19 @@ def ik_baselines(robot: Robot, train: Mapping, val: Mapping, *, encoding: str = 
     return out
 
 
-def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None):
+def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None,
+                     resolved=None):
     """The best scikit-learn baseline of a baselines sweep (``params/sweeps/id_baselines.yaml``,
     restricted to one arm): each learner's best configuration by its mean worst-joint NRMSE
-    over the seeds on validation, the best of those (least squares on ``q, q̇, q̈``, the floor,
+    over the seeds on validation (over the ``resolved`` joints, :func:`with_resolved_worst`;
+    ``None``: every joint), the best of those (least squares on ``q, q̇, q̈``, the floor,
     left out), and that configuration's run on the test split with ``seed`` (run now if it is
     not in ``sweeps_dir``). Returns ``(name, validation Replicates, test CellResult)``, or
     ``None`` if the sweep holds no learner but the floor."""
     unseeded = lambda p: {k: v for k, v in p.items() if k != "seed"}          # noqa: E731
     val = by_configuration(sweep_results(sweep, sweeps_dir, workers=workers))
+    if resolved is not None:
+        val = with_resolved_worst(val, resolved, "nrmse")
     learners = [g for learner, g in best_by(val, "learner", "worst_nrmse").items() if learner != "linear"]
     if not learners:
         return None
@@ -260,7 +344,10 @@ def _with_interval(row: Mapping[str, str]) -> str:
 
 
 def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
-    """-1 when ours is lower beyond both intervals, +1 when higher, 0 when they overlap."""
+    """-1 when ours is lower beyond both intervals, +1 when higher, 0 when they overlap or
+    either is a maximum without an interval (``n`` 0: compared on paired differences only)."""
+    if "0" in (ours.get("n"), theirs.get("n")):
+        return 0
     if _number(ours["ci_high"]) < _number(theirs["ci_low"]):
         return -1
     if _number(ours["ci_low"]) > _number(theirs["ci_high"]):
@@ -311,20 +398,24 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
             text += f" The closed form is exact (largest tool position error {_with_interval(exact)})."
         lines.append(text)
     task = "inverse dynamics"
-    free = find(task, "learned (chosen)", "worst joint NRMSE")
+    worst = next((m for m in (WORST_ID, "worst joint NRMSE") if find(task, "learned (chosen)", m)), WORST_ID)
+    free = find(task, "learned (chosen)", worst)
     if free:
+        below = [r["metric"].split()[0] for r in rows if r["task"] == task and r["role"] == "learned (chosen)"
+                 and r["metric"].endswith("(below noise)")]
         text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {_unchosen(free['method'])}, "
-                f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE), largest error "
-                f"{_with_interval(find(task, 'learned (chosen)', 'largest error'))}.")
-        base = find(task, "best baseline", "worst joint NRMSE")
+                f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE"
+                + (f"; {' and '.join(below)}, whose torque is below the sensor noise, left out" if below else "")
+                + f"), largest error {_with_interval(find(task, 'learned (chosen)', 'largest error'))}.")
+        base = find(task, "best baseline", worst)
         if base:
             verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
                        0: "no different from the ANFIS within the intervals"}[_compare(base, free)]
             text += f" The best baseline on validation, {base['method']}: {_with_interval(base)}, {verdict}."
-        recipe = find(task, "dissertation's design", "worst joint NRMSE")
+        recipe = find(task, "dissertation's design", worst)
         if recipe:
             text += f" The dissertation's design (assumed, each joint's own state): {_with_interval(recipe)}."
-        ident = find(task, "physics-informed", "worst joint NRMSE")
+        ident = find(task, "physics-informed", worst)
         if ident:
             text += f" Given the geometry, identifying the inertial parameters: {_with_interval(ident)}."
         lines.append(text)
