@@ -438,6 +438,8 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     assert "../mathjax/MathJax.js" in page and "../b/02_shared.html" in page   # the shared 02, in b's pages
     shared_b = (build / "report" / "b" / "02_shared.html").read_text()          # its navigation stays in b
     assert "../b/01_robot.html" in shared_b and "../b/03_study.html" in shared_b and "../01_robot.html" not in shared_b
+    last_b = (build / "report" / "b" / "03_study.html").read_text()          # b's last leads on to the comparison
+    assert "../04_compare.html" in last_b
     assert "<title>Chapter 01_robot · b</title>" in page                      # not "Notebook"
     index = (build / "report" / "index.html").read_text()
     assert "href='b/02_shared.html'" in index and "href='02_shared.html'" in index   # each edition's copy

@@ -59,6 +59,23 @@ def _in_kernel() -> bool:
     return getattr(get_ipython(), "kernel", None) is not None
 
 
+_NUMBERS: dict[str, list[str]] = {}     # chapter → its figures' names, in the order first shown
+
+
+def figure_number(path: str) -> str:
+    """"Figure 6.3." for the third figure a chapter shows (its file named ``06_…``), in the order
+    they are first shown in this process; a figure shown again keeps its number; "Figure." for
+    a file not named after a chapter."""
+    name = os.path.splitext(os.path.basename(path))[0]
+    chapter = name[:2]
+    if not (chapter.isdigit() and name[2:3] == "_"):
+        return "Figure."
+    names = _NUMBERS.setdefault(chapter, [])
+    if name not in names:
+        names.append(name)
+    return f"Figure {int(chapter)}.{names.index(name) + 1}."
+
+
 def _display_figure(path: str, caption: str) -> None:
     """A saved figure as a notebook output: HTML (the image, its alternative text and a visible
     caption) for pages and JupyterLab, the PNG itself for other front ends."""
@@ -72,7 +89,7 @@ def _display_figure(path: str, caption: str) -> None:
     text = html.escape(caption or os.path.basename(path), quote=True)
     figure = (f'<figure class="nfarm-figure" style="margin:.5em 0 1.5em">'
               f'<img src="data:image/png;base64,{data}" alt="{text}" style="max-width:100%">'
-              f'<figcaption style="color:#444;font-size:.9em;margin-top:.3em"><b>Figure.</b> {text}'
+              f'<figcaption style="color:#444;font-size:.9em;margin-top:.3em"><b>{figure_number(path)}</b> {text}'
               f'</figcaption></figure>')
     display({"text/html": figure, "image/png": data, "text/plain": f"Figure: {caption}"}, raw=True)
 
@@ -222,17 +239,27 @@ def plot_convergence(histories: Mapping[str, Mapping[str, np.ndarray]], *, floor
     return fig
 
 
-def plot_joint_paths(s: np.ndarray, paths: Mapping[str, np.ndarray], joint_names) -> Figure:
+def plot_joint_paths(s: np.ndarray, paths: Mapping[str, np.ndarray], joint_names, *,
+                     floor: float = 1e-3) -> Figure:
     """Joint angles [deg] along a path parameter ``s (K,)``: one panel per joint, one line per
-    named solution ``(K, n)`` [rad]."""
+    named solution ``(K, n)`` [rad].
+
+    A joint that every solution holds within ``floor`` [deg] along the path is drawn on a ±1°
+    axis and titled "constant": autoscaled, its panel would magnify the solver's rounding
+    (10⁻⁷°) into spikes that look like motion."""
     n = len(joint_names)
     fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 3.0), layout="constrained", sharex=True)
     for k, (label, q) in enumerate(paths.items()):
         for j, ax in enumerate(axes):
             ax.plot(s, np.degrees(q[:, j]), ".-" if k else "-", color=f"C{k}", label=label,
                     ms=3, lw=1.2)
-    for ax, name in zip(axes, joint_names):
-        ax.set(title=name, xlabel="path parameter s")
+    for j, (ax, name) in enumerate(zip(axes, joint_names)):
+        values = np.concatenate([np.degrees(np.asarray(q)[:, j]) for q in paths.values()])
+        held = np.ptp(values) < floor
+        if held:
+            middle = float(np.round(values.mean(), 3)) + 0.0        # (+ 0.0: no "-0")
+            ax.set_ylim(middle - 1, middle + 1)
+        ax.set(title=f"{name} (constant)" if held else name, xlabel="path parameter s")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("joint angle [deg]")
     handles, labels = axes[0].get_legend_handles_labels()
@@ -479,6 +506,7 @@ def plot_joint_curves(models: list, joint_names, *, joints=None, scale=180 / np.
         ax.plot([], [], color="0.3", ls=":", lw=1.0, label="sensor noise σ")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, which="both")
+    _readable_log_axis(ax.yaxis)
     return fig
 
 
@@ -506,7 +534,8 @@ def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg"
     ax.set_ylabel(f"{quantity} [{unit}]")
     sizes = [int(round(s)) for s in sizes]
     ax.set_xticks(sizes, [f"{s:,}" for s in sizes])
-    ax.minorticks_off()
+    ax.xaxis.set_minor_locator(mticker.NullLocator())
+    _readable_log_axis(ax.yaxis)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, which="both")
     return fig
@@ -575,21 +604,29 @@ def plot_predicted_vs_true(q_true: np.ndarray, q_pred: np.ndarray, joint_names, 
     return fig
 
 
-def plot_error_map(points: np.ndarray, error: np.ndarray, *, label: str, title: str = "") -> Figure:
-    """Side view (distance from the base axis, height) of tool positions ``(N, 3)`` [m]
-    coloured by ``error`` (log scale), the largest errors drawn on top."""
+def plot_error_map(points: np.ndarray, error: np.ndarray, *, label: str, title: str = "",
+                   cells: int = 28, least: int = 3) -> Figure:
+    """Side view (distance from the base axis, height) of tool positions ``(N, 3)`` [m]: the
+    **median** ``error`` of the positions in each hexagonal cell (``cells`` across the wider
+    side; cells with fewer than ``least`` positions left blank), on a log colour scale.
+
+    A scatter of every position (the earlier figure) overplots: 10 000 points of a 3-D region
+    projected on a plane cover each other, and whichever is drawn last sets the colour, so the
+    map showed the drawing order, not the error. A cell's median is what the positions there
+    have in common (``matplotlib``'s ``hexbin`` with ``reduce_C_function=np.median``)."""
     from matplotlib.colors import LogNorm
-    order = np.argsort(error)
-    r = np.hypot(points[order, 0], points[order, 1])
+    points, error = np.asarray(points, float), np.asarray(error, float)
+    r, z = np.hypot(points[:, 0], points[:, 1]), points[:, 2]
     # The figure's width follows the side view's aspect (equal axes), so no width is left blank.
     span_r = float(np.ptp(r)) or 1.0
-    span_z = float(np.ptp(points[:, 2])) or 1.0
+    span_z = float(np.ptp(z)) or 1.0
     fig, ax = plt.subplots(figsize=(float(np.clip(4.0 * span_r / span_z + 2.0, 3.6, 10.0)), 4.5),
                            layout="constrained")
     floor = max(float(np.percentile(error, 1)), 1e-12)
-    sc = ax.scatter(r, points[order, 2], c=np.maximum(error[order], floor), s=3, cmap="viridis",
-                    norm=LogNorm(vmin=floor, vmax=max(float(error.max()), floor * 10)))
-    fig.colorbar(sc, ax=ax, label=label)
+    across = max(2, int(round(cells * min(1.0, span_r / span_z))))     # hexagons about as tall as wide
+    hb = ax.hexbin(r, z, C=np.maximum(error, floor), reduce_C_function=np.median, gridsize=across,
+                   mincnt=least, cmap="viridis", norm=LogNorm(), linewidths=0.2, edgecolors="face")
+    fig.colorbar(hb, ax=ax, label=f"{label}, median per cell")
     ax.set_xlabel("distance from the base axis r [m]")
     ax.set_ylabel("height z [m]")
     ax.set_aspect("equal")
@@ -625,14 +662,24 @@ def plot_error_against(x: Mapping[str, np.ndarray], error: np.ndarray, *, label:
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].set_ylabel(label)
     axes[0, 0].legend(fontsize=8)
-    lo, hi = axes[0, 0].get_ylim()
-    if hi / lo < 30:     # less than about a decade and a half: ticks at 1, 1.5, 2, 3, 5 and 7 of each decade
-        axis = axes[0, 0].yaxis
-        axis.set_major_locator(mticker.LogLocator(base=10, subs=(1.0, 1.5, 2.0, 3.0, 5.0, 7.0)))
-        axis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
-        axis.set_minor_locator(mticker.LogLocator(base=10, subs=tuple(range(1, 10))))
-        axis.set_minor_formatter(mticker.NullFormatter())
+    _readable_log_axis(axes[0, 0].yaxis)
     return fig
+
+
+def _readable_log_axis(axis) -> None:
+    """Labelled ticks on a logarithmic ``axis`` that spans too few decades for matplotlib's
+    (which labels powers of ten only, so a curve between 1.1 and 4 gets a single "10⁰"): every
+    digit and 1.2, 1.5, 2.5 of each decade below a span of 3, at 1, 1.5, 2, 3, 5 and 7 below
+    30, at 1, 2 and 5 below 1 000, written as plain numbers. Call after the data are drawn (the limits are read)."""
+    lo, hi = sorted(axis.axes.get_ylim() if axis.axis_name == "y" else axis.axes.get_xlim())
+    if not (0 < lo < hi) or hi / lo >= 1000:
+        return
+    subs = ((1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0) if hi / lo < 3 else
+            (1.0, 1.5, 2.0, 3.0, 5.0, 7.0) if hi / lo < 30 else (1.0, 2.0, 5.0))
+    axis.set_major_locator(mticker.LogLocator(base=10, subs=subs))
+    axis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
+    axis.set_minor_locator(mticker.LogLocator(base=10, subs=tuple(range(1, 10))))
+    axis.set_minor_formatter(mticker.NullFormatter())
 
 
 def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mapping[str, np.ndarray],
@@ -671,5 +718,6 @@ def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mappin
     right.set(xscale="log", xlabel="learned IK: tool position error [mm]",
               ylabel="share of test poses", title="Learned IK on each arm's test poses")
     right.grid(alpha=0.3, which="both")
-    right.legend(fontsize=8, loc="lower right")
+    # Below the panel as well: in its lower right the legend covered the slower arm's curve.
+    right.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     return fig

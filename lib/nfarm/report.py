@@ -1239,9 +1239,12 @@ def _write_pages(everything, runs, comparing: set[str], arms, base: Path, report
         # so that "previous" and "next" never leave the edition.
         here = [f"{arm.subdir}/{Path(page).name}" if arm.subdir else page for _, _, page in own]
         for k, (prefix, title, page) in enumerate(own):
+            # An edition's last chapter leads on to the chapter that compares the arms (one page,
+            # the primary's), which the reader of every edition meets last.
+            last = (up + compared[0][2], compared[0][1]) if compared and not arm.primary else None
             links = {"index": (up + "index.html", "all chapters"),
                      "previous": (up + here[k - 1], own[k - 1][1]) if k > 0 else None,
-                     "next": (up + here[k + 1], own[k + 1][1]) if k + 1 < len(own) else None}
+                     "next": (up + here[k + 1], own[k + 1][1]) if k + 1 < len(own) else last}
             executed = base / "notebooks" / page.replace(".html", ".ipynb")
             page = here[k]
             _export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
