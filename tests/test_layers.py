@@ -11,8 +11,8 @@ from nfarm.paths import ROOT
 
 LAYERS = {
     "model": ["reading", "paths", "limits", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
-              "fuzzy", "trajectory", "workspace"],
-    "solvers": ["ik", "geometric_ik", "tool_paths", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
+              "fuzzy", "trajectory"],
+    "solvers": ["ik", "geometric_ik", "tool_paths", "workspace", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
     "io": ["urdf", "recording", "plotting", "wording", "report", "panel_compute", "panel", "panel_server", "statistics", "summary", "pinocchio_ref", "jobs", "sweep", "course",
            "answers", "__main__"],
 }

@@ -7,10 +7,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import binned_statistic_2d
 
-from .kinematics import fk, manipulability
+from .geometric_ik import class_refusal, elbow_meeting_angles
+from .kinematics import fk, fk_all, manipulability, min_singular_value
 from .robot import Robot, sample_configurations
 
-__all__ = ["Map2D", "workspace_points", "reach", "plane_map", "joint_map"]
+__all__ = ["Map2D", "workspace_points", "reach", "plane_map", "joint_map", "singular_configurations",
+           "near_stretched"]
 
 
 @dataclass(frozen=True)
@@ -63,3 +65,67 @@ def joint_map(robot: Robot, i: int, j: int, points: int, *, part: str = "positio
     q = np.broadcast_to(q_rest, (*qi.shape, robot.n)).copy()
     q[..., i], q[..., j] = qi, qj
     return Map2D(edges_i, edges_j, manipulability(robot, q, part=part))
+
+
+def singular_configurations(robot: Robot, *, steps: int = 721) -> tuple[dict[str, np.ndarray], str]:
+    """Named configurations [rad] at the arm's elbow singularities, computed from its geometry,
+    and a note for the reader ("" when there is nothing to say).
+
+    The ready pose (0 moved into the limits), and the elbow at each angle where its two links
+    are in line (``"arm stretched"``, ``"arm folded"``: the closed form's meeting angles,
+    :func:`nfarm.geometric_ik.elbow_meeting_angles`, where they lie within the elbow's limits)
+    with the wrist turned to put the tool point on that line too — a root of the tool's signed
+    distance from the line through the shoulder and wrist axes, bracketed on ``steps`` wrist
+    angles and refined by Brent's method (``scipy.optimize.brentq``); every other joint at 0.
+    Where no root exists, the wrist angle of least position σ_min. An arm outside the closed
+    form's class (:func:`nfarm.geometric_ik.class_refusal`) gets its ready pose and a note.
+
+    Why computed, not written down: the angles at which an arm is stretched depend on its DH
+    offsets (intelbot5: elbow 90°; the SO-101: −73.8°), so poses written for one arm are
+    ordinary configurations of another.
+    """
+    from scipy.optimize import brentq
+
+    ready = np.clip(0.0, robot.qlim[:, 0], robot.qlim[:, 1])
+    refusal = class_refusal(robot)
+    if refusal:
+        return {"ready (q = 0)": ready}, f"No stretched or folded configuration is computed for {robot.name}: {refusal}."
+    axis = (lambda k: k - 1) if robot.convention == "standard" else (lambda k: k)   # frame of joint k's axis
+
+    def with_wrist(elbow, wrist):
+        q = np.tile(ready, np.shape(wrist) + (1,))
+        q[..., 2], q[..., 3] = elbow, wrist
+        return q
+
+    def off_line(q):
+        """The tool point's signed distance from the line through the shoulder and wrist axes [m]."""
+        frames, tool = fk_all(robot, q), fk(robot, q)[..., :3, 3]
+        p2, p4, n = frames[..., axis(2), :3, 3], frames[..., axis(4), :3, 3], frames[..., axis(2), :3, 2]
+        u = p4 - p2
+        return np.einsum("...i,...i", n, np.cross(u, tool - p2)) / np.linalg.norm(u, axis=-1)
+
+    def in_line(elbow):
+        wrist = np.linspace(robot.qlim[3, 0], robot.qlim[3, 1], steps)
+        f = off_line(with_wrist(elbow, wrist))
+        roots = [brentq(lambda x: float(off_line(with_wrist(elbow, x))), wrist[k], wrist[k + 1], xtol=1e-15)
+                 for k in np.flatnonzero(np.sign(f[:-1]) * np.sign(f[1:]) <= 0)]
+        q = with_wrist(elbow, np.array(roots if roots else wrist))
+        return q[np.argmin(min_singular_value(robot, q))]
+
+    named = {"ready (q = 0)": ready}
+    for name, elbow in zip(("arm stretched", "arm folded"), elbow_meeting_angles(robot)):
+        if robot.qlim[2, 0] <= elbow <= robot.qlim[2, 1]:
+            named[name] = in_line(elbow)
+    return named, ""
+
+
+def near_stretched(robot: Robot, stretched: np.ndarray, degrees: float) -> np.ndarray:
+    """``stretched (n,)`` [rad] (:func:`singular_configurations`) with the elbow moved
+    ``degrees`` towards the middle of its range: a configuration next to the singularity,
+    inside the limits."""
+    if not 0 < degrees < 90:
+        raise ValueError(f"degrees from stretched must be in (0, 90), got {degrees!r}")
+    near = np.array(stretched, dtype=float)
+    inward = np.sign(robot.qlim[2].mean() - near[2]) or 1.0
+    near[2] += inward * np.radians(degrees)
+    return near
