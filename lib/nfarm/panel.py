@@ -1,6 +1,6 @@
 """The arm panel: the dissertation's interactive program ("Intelbot") as widgets.
 
-Four pages, as the seed program's: **forward kinematics** (a slider per joint, the arm in 3-D,
+Four pages, as the dissertation's program: **forward kinematics** (a slider per joint, the arm in 3-D,
 the tool's pose), **inverse kinematics** (a target pose answered by the closed form's every
 branch, Levenberg–Marquardt and the learned ANFIS side by side; an answer goes on to the
 trajectory as its final position), **trajectory** (cubic or quintic between two
@@ -392,7 +392,7 @@ class IKPage:
 
 
 class TrajectoryPage:
-    """A joint trajectory between two configurations (the seed's cubic, or a quintic): the
+    """A joint trajectory between two configurations (the dissertation's cubic, or a quintic): the
     boundary values per joint, start, step and end time; its positions, velocities and
     accelerations plotted; the arm animated along it with the tool's path; a rerun recording."""
 
