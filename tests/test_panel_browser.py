@@ -17,7 +17,7 @@ from urllib.parse import urlparse
 
 import pytest
 
-from nfarm.panel_server import check_port, serve, voila_command, voila_environment
+from nfarm.publishing.panel_server import check_port, serve, voila_command, voila_environment
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 DRIVER = shutil.which("chromedriver")

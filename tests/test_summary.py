@@ -1,4 +1,4 @@
-"""The study's long summary (nfarm.summary): each row's value is the direct statistic of the
+"""The study's long summary (nfarm.study.summary): each row's value is the direct statistic of the
 held-out errors, its interval holds it, paired differences vanish for a method against itself,
 and the table is one line per task, method and metric."""
 
@@ -7,11 +7,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.statistics import trajectory_maxima, trajectory_sums
-from nfarm.statistics import bootstrap_nrmse
-from nfarm.summary import (IK_METRICS, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
+from nfarm.study.statistics import trajectory_maxima, trajectory_sums
+from nfarm.study.statistics import bootstrap_nrmse
+from nfarm.study.summary import (IK_METRICS, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
                            long_table, read_long_table, resolved_sums, wide_table, with_resolved_worst)
-from nfarm.sweep import Cell, CellResult, Replicates
+from nfarm.study.sweep import Cell, CellResult, Replicates
 
 
 def ik_errors(seed=0, n=500, joints=5):

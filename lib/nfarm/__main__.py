@@ -9,25 +9,25 @@ import os
 import sys
 import warnings
 
-from .robot import ParamsError, ParamsWarning, load_robot
+from .model.robot import ParamsError, ParamsWarning, load_robot
 
 
 def _check_one(path: str) -> str:
     """Validate one robot, study or sweep file (told apart by their required fields); the
     summary."""
-    from .reading import load_yaml
+    from .infra.reading import load_yaml
 
     if path.lower().endswith(".urdf"):
         robot = load_robot(path)
         return f"{robot.name}, {robot.n} joints converted from the URDF to {robot.convention} DH"
     data = load_yaml(path)
     if isinstance(data, dict) and "metrics" in data and ("job" in data or "notebook" in data):
-        from .sweep import sweep_from_dict
+        from .study.sweep import sweep_from_dict
 
         sweep = sweep_from_dict(data, source=path)
         return f"sweep {sweep.name!r}: {len(sweep.cells)} cells of {sweep.target}"
     if isinstance(data, dict) and "robot_file" in data and "joints" not in data:
-        from .datasets import study_from_dict
+        from .study.datasets import study_from_dict
 
         study = study_from_dict(data, source=path)
         return (f"study {study.name!r} of {study.robot.name}, IK sizes "
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     panel.add_argument("--port", type=int, default=8866, metavar="PORT", help="default 8866")
     args = parser.parse_args(argv)
     if args.command == "panel":
-        from .panel_server import serve
+        from .publishing.panel_server import serve
         return serve(args.port)
     if args.command == "check-params":
         return check_params(args.files)
@@ -112,11 +112,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "datasets":
         return make_datasets(args.study, args.out, args.force)
     if args.command == "course":
-        from .course import main as course_main
+        from .publishing.course import main as course_main
         return course_main(args.out, args.smoke, args.only, not args.no_teacher)
     if args.command == "sweep":
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
-    from .report import build_report
+    from .publishing.report import build_report
     return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
                         force=args.force, parallel=False if args.serial else None)
 
@@ -155,7 +155,7 @@ def _output_directory(option: str, out: str | None) -> str | None:
 
 def make_datasets(study_file: str, out: str | None, force: bool) -> int:
     """Build (or reuse) every data set of a study; one line per file."""
-    from .datasets import build_datasets, load_study
+    from .study.datasets import build_datasets, load_study
 
     problem = _output_directory("--out", out)
     if problem:
@@ -181,8 +181,8 @@ def run_sweep_file(path: str, scheduler: str | None, workers: int | None, out: s
                    smoke: bool) -> int:
     """Run a sweep; one line per failed cell and a closing line. 0 if every cell succeeded,
     1 if some failed, 2 for a bad sweep file or an unreachable scheduler."""
-    from .paths import BUILD, project_path, shown_path
-    from .sweep import load_sweep, run_sweep
+    from .infra.paths import BUILD, project_path, shown_path
+    from .study.sweep import load_sweep, run_sweep
 
     if workers is not None and workers < 0:
         print(f"--workers: must be >= 0, got {workers}", file=sys.stderr)
@@ -222,8 +222,8 @@ def verify_figures(figures: str | None) -> int:
     """Print what differs from the manifest; 0 when nothing does, else 1."""
     from pathlib import Path
 
-    from .paths import FIGURES
-    from .report import verify_manifest
+    from .infra.paths import FIGURES
+    from .publishing.manifest import verify_manifest
 
     directory = Path(figures) if figures else FIGURES
     problems = verify_manifest(directory)
