@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import nbformat
 import numpy as np
@@ -24,7 +25,7 @@ from nfarm.publishing import manifest, report
 from nfarm.infra.paths import ROOT, atomic_path
 from nfarm.presentation.tables import Table, markdown_section
 from nfarm.publishing.manifest import verify_manifest, write_manifest
-from nfarm.publishing.report import build_report
+from nfarm.__main__ import report_command as build_report   # the command line's: exit status, one line each
 
 
 def make_notebook(path, *code, tags=None):
@@ -215,7 +216,7 @@ def test_killing_a_real_run_at_random_moments_keeps_figures_consistent(project):
     """``python -m nfarm report`` killed with SIGKILL at seeded random moments: figures/ and
     its manifest agree after every kill."""
     root, dirs = project
-    script = (f"import sys; from pathlib import Path; from nfarm.publishing.report import build_report; "
+    script = (f"import sys; from pathlib import Path; from nfarm.__main__ import report_command as build_report; "
               f"sys.exit(build_report(notebooks_dir=Path({str(dirs['notebooks_dir'])!r}), "
               f"figures_dir=Path({str(dirs['figures_dir'])!r}), "
               f"build_dir=Path({str(dirs['build_dir'])!r})))")
@@ -551,7 +552,7 @@ def test_cell_timeout_none_is_no_limit(monkeypatch):
     from nfarm import __main__
     from nfarm.publishing import report
     seen = {}
-    monkeypatch.setattr(report, "build_report", lambda **kw: seen.update(kw) or 0)
+    monkeypatch.setattr(report, "build_report", lambda **kw: seen.update(kw) or report.ReportRun(Path("i"), Path("f")))
     assert __main__.main(["report", "--cell-timeout", "none"]) == 0 and seen["cell_timeout"] is None
     assert __main__.main(["report", "--cell-timeout", "600.5"]) == 0 and seen["cell_timeout"] == 600.5
 
@@ -607,7 +608,8 @@ def slow(notebook, output, parameters, **options):
         time.sleep(120)
 report.run_notebook = slow
 arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
-sys.exit(report.build_report(notebooks_dir=notebooks, figures_dir=root / "figures", build_dir=root / "build",
+from nfarm.__main__ import report_command
+sys.exit(report_command(notebooks_dir=notebooks, figures_dir=root / "figures", build_dir=root / "build",
                              arms=arms, parallel=True))
 """
     run = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
@@ -621,3 +623,24 @@ sys.exit(report.build_report(notebooks_dir=notebooks, figures_dir=root / "figure
     assert run.returncode == 130 and time.monotonic() - start < 30
     assert err.strip().splitlines()[-1].startswith("report: interrupted;"), err
     assert "Traceback" not in err, err
+
+
+@pytest.mark.notebook
+def test_the_library_reports_by_return_and_exception_and_prints_nothing(project, capsys):
+    """build_report returns what it wrote and raises what went wrong; the command line prints
+    (report_command) — the library itself says nothing unless given ``say``."""
+    from nfarm.infra.notebook_runs import ReportError
+    from nfarm.publishing.report import ReportUsageError, build_report as library_build
+
+    root, dirs = project
+    said = []
+    run = library_build(only=["01"], say=said.append, **dirs)
+    assert run.index == dirs["build_dir"] / "report" / "index.html" and run.index.exists()
+    assert said[0] == "01_first.ipynb …" and said[1].startswith("01_first.ipynb: ") and "published in" in said[1]
+    with pytest.raises(ReportUsageError, match=r"^no chapter 99 \(chapters: 01"):
+        library_build(only=["99"], **dirs)
+    make_notebook(dirs["notebooks_dir"] / "02_second.ipynb", "raise ValueError('bad joint')")
+    with pytest.raises(ReportError, match="02_second.ipynb failed in cell 3"):
+        library_build(only=["02"], **dirs)
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""

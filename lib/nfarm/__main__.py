@@ -103,8 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     panel.add_argument("--port", type=int, default=8866, metavar="PORT", help="default 8866")
     args = parser.parse_args(argv)
     if args.command == "panel":
-        from .publishing.panel_server import serve
-        return serve(args.port)
+        return panel_command(args.port)
     if args.command == "check-params":
         return check_params(args.files)
     if args.command == "verify":
@@ -112,13 +111,69 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "datasets":
         return make_datasets(args.study, args.out, args.force)
     if args.command == "course":
-        from .publishing.course import main as course_main
-        return course_main(args.out, args.smoke, args.only, not args.no_teacher)
+        return course_command(args.out, args.smoke, args.only, not args.no_teacher)
     if args.command == "sweep":
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
-    from .publishing.report import build_report
-    return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
-                        force=args.force, parallel=False if args.serial else None)
+    return report_command(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
+                          force=args.force, parallel=False if args.serial else None)
+
+
+def panel_command(port: int) -> int:
+    """``python -m nfarm panel``: the address, then the process becomes the Voilà server; 2 with
+    one line for a port that cannot be used."""
+    from .publishing.panel_server import check_port, serve
+
+    try:
+        check_port(port)
+    except ValueError as error:
+        print(f"panel: {error}", file=sys.stderr)
+        return 2
+    print(f"panel: http://127.0.0.1:{port}/ (the page takes a few seconds to start its kernel; "
+          f"Ctrl-C stops the server)", flush=True)
+    serve(port)
+    return 0   # not reached: serve replaces the process
+
+
+def course_command(out: str | None, smoke: bool, only, teacher: bool) -> int:
+    """``python -m nfarm course``: 0, or 1 with one line on standard error."""
+    from .infra.notebook_runs import ReportError
+    from .infra.paths import shown_path
+    from .publishing.course import build_course
+
+    try:
+        where = build_course(out, smoke=smoke, only=only, teacher=teacher,
+                             progress=lambda text: print(text, file=sys.stderr))
+    except (ValueError, ReportError) as exc:
+        print(f"course: {exc}", file=sys.stderr)
+        return 1
+    print(f"{shown_path(where)}: student/, teacher/ and index.html")
+    return 0
+
+
+def report_command(**options) -> int:
+    """``python -m nfarm report``: :func:`nfarm.publishing.report.build_report` with its progress
+    and its failure on stderr, one line each; the exit status (0; 1 for a failure; 2 for a bad
+    choice of chapters; 130 when interrupted)."""
+    from .infra.notebook_runs import ReportError
+    from .infra.paths import shown_path
+    from .publishing import report
+
+    def say(text: str) -> None:
+        print(f"report: {text}", file=sys.stderr, flush=True)
+
+    try:
+        run = report.build_report(say=say, **options)
+    except report.ReportUsageError as exc:
+        say(str(exc))
+        return 2
+    except report.ReportInterrupted as exc:
+        say(str(exc))
+        return 130
+    except ReportError as exc:
+        say(str(exc))
+        return 1
+    say(f"{shown_path(run.index)}; figures in {shown_path(run.figures_dir)}")
+    return 0
 
 
 def _seconds(text: str) -> float | None:

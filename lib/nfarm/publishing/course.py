@@ -27,14 +27,13 @@ from __future__ import annotations
 import html
 import json
 import os
-import sys
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..infra.paths import BUILD, NOTEBOOKS, atomic_path, shown_path
+from ..infra.paths import BUILD, NOTEBOOKS, atomic_path
 from .pages import COURSE_TAGS
 
 __all__ = ["check", "check_function", "check_that", "student_notebook", "exercise_notebook",
@@ -271,17 +270,3 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
         found.append((notebook, chapter_title(notebook), facts, executed))
     _index(out, found)
     return out
-
-
-def main(out: str | None, smoke: bool, only: Sequence[str] | None, teacher: bool) -> int:
-    """``python -m nfarm course``: 0, or 1 with one line on standard error."""
-    from ..infra.notebook_runs import ReportError
-
-    try:
-        where = build_course(out, smoke=smoke, only=only, teacher=teacher,
-                             progress=lambda text: print(text, file=sys.stderr))
-    except (ValueError, ReportError) as exc:
-        print(f"course: {exc}", file=sys.stderr)
-        return 1
-    print(f"{shown_path(where)}: student/, teacher/ and index.html")
-    return 0

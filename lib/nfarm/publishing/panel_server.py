@@ -65,19 +65,16 @@ def check_port(port: int) -> None:
                              f"choose another, e.g. make panel PORT={port + 1}") from None
 
 
-def serve(port: int = DEFAULT_PORT) -> int:
-    """Serve the panel until Ctrl-C: print its address, then become the Voilà server (the
-    process is replaced, so Ctrl-C and the exit status are Voilà's own)."""
-    try:
-        check_port(port)
-    except ValueError as error:
-        print(f"panel: {error}", file=sys.stderr)
-        return 2
+def serve(port: int = DEFAULT_PORT) -> None:
+    """Become the Voilà server of the panel on ``port`` (the process is replaced, so Ctrl-C and
+    the exit status are Voilà's own; ``python -m nfarm panel`` says the address first).
+
+    Raises:
+        ValueError: ``port`` is not a port number free on 127.0.0.1 (:func:`check_port`).
+    """
+    check_port(port)
     state = BUILD / "panel" / "jupyter"
     state.mkdir(parents=True, exist_ok=True)
-    print(f"panel: http://127.0.0.1:{port}/ (the page takes a few seconds to start its kernel; "
-          f"Ctrl-C stops the server)", flush=True)
     command = voila_command(port, connection_dir=state / "connections")
     (state / "connections").mkdir(exist_ok=True)
     os.execve(command[0], command, voila_environment(state))
-    return 0   # not reached

@@ -39,7 +39,7 @@ import shutil
 import signal
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,7 +51,8 @@ from ..presentation.tables import DOCUMENTS
 from .manifest import chapter_files, publish_chapter, publishing_lock, recover_figures
 from .pages import COURSE_TAGS, install_mathjax, write_pages
 
-__all__ = ["Edition", "editions", "build_report", "PRIMARY_STUDY", "RECORDINGS"]
+__all__ = ["Edition", "editions", "build_report", "ReportRun", "ReportUsageError", "ReportInterrupted",
+           "PRIMARY_STUDY", "RECORDINGS"]
 
 
 PRIMARY_STUDY = "intelbot5"      # the dissertation's arm: its edition publishes into figures/
@@ -179,25 +180,46 @@ def _up_to_date(stamp: Path, key: str, executed: Path, figures_dir: Path, subdir
 # The whole report
 
 
-def _select(notebooks_dir: Path, only: Sequence[str] | None) -> tuple[list[Path], list[Path]] | str:
+class ReportUsageError(ReportError):
+    """A choice of chapters that names none (the command line's exit status 2)."""
+
+
+class ReportInterrupted(ReportError):
+    """The run was stopped by Ctrl-C; the figures directory holds what was published before."""
+
+
+@dataclass(frozen=True)
+class ReportRun:
+    """What a finished report wrote: its index page and the figures directory it published into."""
+
+    index: Path
+    figures_dir: Path
+
+
+def _select(notebooks_dir: Path, only: Sequence[str] | None) -> tuple[list[Path], list[Path]]:
     everything = chapters(notebooks_dir)
     if only is None:
         return everything, everything
     wanted = set(only)
     if not wanted:
-        return "report: --only needs chapter numbers (e.g. --only 01 03)"
+        raise ReportUsageError("--only needs chapter numbers (e.g. --only 01 03)")
     unknown = sorted(wanted - {nb.name[:2] for nb in everything})
     if unknown:
-        return (f"report: no chapter {', '.join(unknown)} (chapters: "
-                f"{', '.join(nb.name[:2] for nb in everything)})")
+        raise ReportUsageError(f"no chapter {', '.join(unknown)} (chapters: "
+                               f"{', '.join(nb.name[:2] for nb in everything)})")
     return everything, [nb for nb in everything if nb.name[:2] in wanted]
+
+
+def _quiet(text: str) -> None:
+    """The default progress sink: the library says nothing; the command line prints."""
 
 
 def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  notebooks_dir: Path = NOTEBOOKS, figures_dir: Path = FIGURES,
                  build_dir: Path = BUILD, extra_parameters: dict | None = None,
                  cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
-                 force: bool = False, parallel: bool | None = None) -> int:
+                 force: bool = False, parallel: bool | None = None,
+                 say: Callable[[str], None] = _quiet) -> ReportRun:
     """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
     export HTML and write the index.
 
@@ -211,17 +233,18 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     run side by side, one process per edition, each in chapter order (module docstring); the
     chapters that compare the editions run after them. Otherwise one after the other.
 
-    Returns the process exit status (0; 1 with the failure on stderr; 2 for a bad choice of
-    chapters; 130 when interrupted).
+    ``say`` receives a line per chapter as it starts, is found up to date, or is published
+    (``python -m nfarm report`` prints them).
+
+    Raises:
+        ReportUsageError: ``only`` names no chapter, or one that does not exist.
+        ReportInterrupted: Ctrl-C; the figures directory holds the chapters published before.
+        ReportError: a chapter failed (one line naming it and its cell), a notebook or study
+            file is not valid, or a directory cannot be written.
     """
-    selected = _select(notebooks_dir, only)
-    if isinstance(selected, str):
-        print(selected, file=sys.stderr)
-        return 2
-    everything, notebooks = selected
+    everything, notebooks = _select(notebooks_dir, only)
     if not notebooks:
-        print(f"report: no chapter notebooks NN_*.ipynb in {notebooks_dir}", file=sys.stderr)
-        return 1
+        raise ReportError(f"no chapter notebooks NN_*.ipynb in {shown_path(notebooks_dir)}")
     extra = dict(extra_parameters or {})
     variant = "smoke" if smoke else "custom" if extra else None
     base = build_dir / variant if variant else build_dir
@@ -230,12 +253,11 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     report_dir = base / "report"
     try:
         arms = list(arms) if arms is not None else editions()
-        if extra:
-            arms = [a for a in arms if a.primary]
-        declared = {nb.name: declared_parameters(nb) for nb in everything}
-    except (ReportError, ValueError) as exc:      # a bad notebook, or study file (ParamsError)
-        print(f"report: {exc}", file=sys.stderr)
-        return 1
+    except ValueError as exc:                     # a study file (ParamsError)
+        raise ReportError(str(exc)) from None
+    if extra:
+        arms = [a for a in arms if a.primary]
+    declared = {nb.name: declared_parameters(nb) for nb in everything}
 
     def runs(nb: Path) -> list[tuple[Edition, dict]]:
         names = declared[nb.name]
@@ -247,8 +269,6 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
             return [(arms[0], files)]
         return [(a, p) for a in arms if (p := a.parameters(names)) is not None]
 
-    with publishing_lock(figures_dir):
-        recover_figures(figures_dir)
     comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
     jobs = [(nb, arm, own) for nb in notebooks for arm, own in runs(nb)]
     sequences = [[j for j in jobs if j[1] is arm and j[0].name not in comparing] for arm in arms]
@@ -257,8 +277,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         parallel = _cpus() >= 2
     side_by_side = parallel and len(sequences) > 1
 
-    def chapter(nb: Path, arm: Edition, own: dict) -> bool:
-        """Run and publish one chapter of one edition; False (said on stderr) if it failed."""
+    def chapter(nb: Path, arm: Edition, own: dict) -> None:
+        """Run and publish one chapter of one edition (raises :class:`ReportError`)."""
         prefix = nb.name[:2]
         label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
         stage = build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
@@ -267,55 +287,48 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         parameters = {"smoke": smoke, **own, **extra}
         key = _chapter_key(nb, parameters, smoke)
         if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
-            print(f"report: {label}: up to date (its inputs are unchanged)", file=sys.stderr, flush=True)
-            return True
+            say(f"{label}: up to date (its inputs are unchanged)")
+            return
         shutil.rmtree(stage, ignore_errors=True)
         stage.mkdir(parents=True)
-        print(f"report: {label} …", file=sys.stderr, flush=True)
+        say(f"{label} …")
         try:
             run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
                          progress=sys.stderr.isatty() and not side_by_side, cell_timeout=cell_timeout,
                          remove_tags=COURSE_TAGS)
             published = publish_chapter(stage, figures_dir, prefix, arm.subdir)
-        except ReportError as exc:
+        except ReportError:
             stamp.unlink(missing_ok=True)
-            print(f"report: {exc}", file=sys.stderr, flush=True)
-            return False
+            raise
         shutil.rmtree(stage, ignore_errors=True)
         stamp.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(stamp) as tmp:
             tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
                 figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
-        print(f"report: {label}: {len(published)} figures and tables published in "
-              f"{shown_path(figures_dir / arm.subdir)}", file=sys.stderr, flush=True)
-        return True
+        say(f"{label}: {len(published)} figures and tables published in "
+            f"{shown_path(figures_dir / arm.subdir)}")
 
-    def in_order(sequence) -> int:
-        return 0 if all(chapter(*job) for job in sequence) else 1
+    def in_order(sequence) -> None:
+        for job in sequence:
+            chapter(*job)
 
     try:
+        with publishing_lock(figures_dir):
+            recover_figures(figures_dir)
         install_mathjax(report_dir)
         if side_by_side:
-            status = _side_by_side([functools.partial(in_order, seq) for seq in sequences])
+            _side_by_side([functools.partial(in_order, seq) for seq in sequences])
         else:
-            status = in_order([j for j in jobs if j[0].name not in comparing])
-        if status == 0:
-            status = in_order([j for j in jobs if j[0].name in comparing])
-        if status == 130:
-            raise KeyboardInterrupt
-        if status:
-            return status
+            in_order([j for j in jobs if j[0].name not in comparing])
+        in_order([j for j in jobs if j[0].name in comparing])
         write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke,
-                     None if smoke or extra else build_dir / "recordings")
+                    None if smoke or extra else build_dir / "recordings")
     except KeyboardInterrupt:
-        print(f"report: interrupted; {shown_path(figures_dir)} holds the chapters published "
-              f"before (its manifest matches)", file=sys.stderr)
-        return 130
+        raise ReportInterrupted(f"interrupted; {shown_path(figures_dir)} holds the chapters published "
+                                f"before (its manifest matches)") from None
     except OSError as exc:                        # a read-only or full build directory, …
-        return _cannot_write(exc)
-    print(f"report: {shown_path(report_dir / 'index.html')}; figures in "
-          f"{shown_path(figures_dir)}", file=sys.stderr)
-    return 0
+        raise ReportError(_cannot_write(exc)) from None
+    return ReportRun(report_dir / "index.html", figures_dir)
 
 
 def _cpus() -> int:
@@ -333,17 +346,23 @@ def _wait(children, seconds: float) -> None:
                 pass
 
 
-def _side_by_side(tasks, grace: float = 10.0) -> int:
-    """Run each task (a callable returning an exit status) in a forked process of its own, all
-    at once; the first non-zero status (130 when interrupted). Ctrl-C reaches every process of
-    the terminal's group: each child stops its notebook (:func:`_interruptible`) and exits 130,
-    and this process waits for them."""
+def _side_by_side(tasks, grace: float = 10.0) -> None:
+    """Run each task (a callable) in a forked process of its own, all at once, and raise what
+    the first that failed raised (:class:`ReportInterrupted` when one was interrupted). Ctrl-C
+    reaches every process of the terminal's group: each child stops its notebook
+    (:func:`nfarm.infra.notebook_runs._interruptible`) and says so, and this process waits for
+    them. A child tells its end through a pipe, as (``"ok"``, ``""``), (``"failed"``,
+    message) or (``"interrupted"``, ``""``)."""
     context = multiprocessing.get_context("fork")
     sys.stdout.flush()
     sys.stderr.flush()
-    children = [context.Process(target=_child, args=(task,), daemon=False) for task in tasks]
+    pipes = [context.Pipe(duplex=False) for _ in tasks]
+    children = [context.Process(target=_child, args=(task, sender), daemon=False)
+                for task, (_, sender) in zip(tasks, pipes)]
     for child in children:
         child.start()
+    for _, sender in pipes:
+        sender.close()                              # the children hold their ends
     interrupted = False
     while True:
         try:
@@ -359,27 +378,42 @@ def _side_by_side(tasks, grace: float = 10.0) -> int:
             for child in children:
                 if child.is_alive():
                     os.kill(child.pid, signal.SIGINT)
-    codes = [child.exitcode for child in children]
-    if interrupted or 130 in codes or any(c is not None and c < 0 for c in codes):
-        return 130
-    return next((c for c in codes if c), 0)
+    ends = []
+    for (receiver, _), child in zip(pipes, children):
+        try:
+            end = receiver.recv() if receiver.poll() else None
+        except (EOFError, OSError):
+            end = None
+        receiver.close()
+        if end is None:                             # it ended before it could tell
+            end = ("interrupted", "") if child.exitcode is None or child.exitcode < 0 else \
+                ("failed", f"an edition's process ended with status {child.exitcode} (its error is above)")
+        ends.append(end)
+    if interrupted or any(how == "interrupted" for how, _ in ends):
+        raise KeyboardInterrupt
+    failed = [message for how, message in ends if how == "failed"]
+    if failed:
+        raise ReportError("; ".join(failed))
 
 
-def _cannot_write(exc: OSError) -> int:
+def _cannot_write(exc: OSError) -> str:
     where = f" {shown_path(Path(exc.filename))}" if exc.filename else ""
-    print(f"report: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
-    return 1
+    return f"cannot write{where}: {exc.strerror or exc}"
 
 
-def _child(task) -> None:
+def _child(task, sender) -> None:
     try:
-        code = task()
+        task()
+        end = ("ok", "")
     except KeyboardInterrupt:
-        code = 130
+        end = ("interrupted", "")
+    except ReportError as exc:
+        end = ("failed", str(exc))
     except OSError as exc:
-        code = _cannot_write(exc)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)
-
-
+        end = ("failed", _cannot_write(exc))
+    try:
+        sender.send(end)
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
