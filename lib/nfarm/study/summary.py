@@ -34,7 +34,7 @@ from ..learning.baselines import label as baseline_label
 from ..learning.learned import Baseline
 from ..model.robot import Robot
 from ..presentation.tables import Table, shown
-from ..presentation.wording import resolved_joints
+from ..presentation.wording import resolved_joints, times
 from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
@@ -243,14 +243,16 @@ def _floor(row: Row, floors: Mapping[str, float]) -> float:
 def long_table(rows: Sequence[Row], *, floors: Mapping[str, float] | None = None, caption: str = "") -> Table:
     """The machine-readable table: one line per task, method and metric (columns ``task,
     method, role, metric, unit, value, ci_low, ci_high, n, level, spread``). Values below a
-    unit's floor (``floors``: unit → level of rounding) are written as such (``< 1e-06``)."""
+    unit's floor (``floors``: unit → level of rounding) are written as such (``< 1e-06``); a
+    maximum (``n`` 0) has no interval: its ``ci_low``, ``ci_high`` and ``level`` are empty."""
     floors = floors or {}
     fmt = lambda v, r: shown(v, ".4g", floor=_floor(r, floors))   # noqa: E731
     arm = any(r.arm for r in rows)          # a column of arms when the rows are of several
     return Table((["arm"] if arm else []) + ["task", "method", "role", "metric", "unit", "value", "ci_low", "ci_high",
                                              "n", "level", "spread"],
                  [([r.arm] if arm else []) + [r.task, r.method, r.role, r.metric, r.unit, fmt(r.value, r),
-                                              fmt(r.low, r), fmt(r.high, r), r.n, f"{r.level:g}", r.spread]
+                                              *((fmt(r.low, r), fmt(r.high, r)) if r.n else ("", "")), r.n,
+                                              f"{r.level:g}" if r.n else "", r.spread]
                   for r in rows], caption=caption)
 
 
@@ -340,7 +342,7 @@ def _number(text: str) -> float:
 def _with_interval(row: Mapping[str, str]) -> str:
     value, low, high = row["value"], row["ci_low"], row["ci_high"]
     unit = {"deg": "°", "%": " %", "mm": " mm", "N·m": " N·m"}.get(row["unit"], f" {row['unit']}")
-    return f"{value}{unit}" if low == high == value else f"{value}{unit} ({low}–{high})"
+    return f"{value}{unit}" if low == high == value or not (low or high) else f"{value}{unit} ({low}–{high})"
 
 
 def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
@@ -354,6 +356,11 @@ def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
         return 1
     return 0
 
+
+
+def _times_of(ours: Mapping[str, str], theirs: Mapping[str, str]) -> str:
+    """"2.2 times" or "85 % of": ours's value over theirs's, in words (:func:`times`)."""
+    return times(_number(ours["value"]) / _number(theirs["value"]))
 
 
 def _unchosen(method: str) -> str:
@@ -379,9 +386,15 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
                 f"{_with_interval(get['position median'])} from the target at the median, "
                 f"{_with_interval(get['position p95'])} at the 95th percentile and "
                 f"{_with_interval(get['position max'])} at worst.")
-        recipe = find(task, "dissertation's recipe", "worst joint RMSE")
-        if recipe:
-            text += f" The dissertation's recipe (assumed) on the same data: {_with_interval(recipe)}."
+        first = find(task, "dissertation's recipe", "worst joint RMSE")    # on the region's data: listed first
+        recipe = {r["metric"]: r for r in rows if first and r["task"] == task and r["method"] == first["method"]}
+        if "worst joint RMSE" in recipe:
+            text += (f" The dissertation's recipe (assumed) on the same data: {_with_interval(recipe['worst joint RMSE'])}"
+                     f" on its worst joint")
+            better = [f"{m} ({_with_interval(r)} against {_with_interval(get[m])})"
+                      for m, r in recipe.items() if m in get and _compare(r, get[m]) < 0]
+            text += ("; it is better than the chosen model beyond both intervals on " + "; ".join(better) + "."
+                     if better else ".")
         base = [r for r in rows if r["task"] == task and r["role"].startswith("best baseline")]
         if base:
             wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
@@ -431,6 +444,10 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
             verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(residual, ls)]
             text += f", {verdict} the least-squares friction identification ({_with_interval(ls)})"
         if learner:
-            text += f"; the best learner as a residual, {learner['method']}: {_with_interval(learner)}"
+            verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(learner, residual)]
+            text += (f"; the best learner as a residual, {learner['method']}: {_with_interval(learner)}, "
+                     f"{verdict} the ANFIS residual")
+            if _compare(learner, residual) < 0:
+                text += f" (the ANFIS residual leaves {_times_of(residual, learner)} its error)"
         lines.append(text + ".")
     return lines
