@@ -14,9 +14,9 @@ import time
 import numpy as np
 
 from common import seconds_per_call  # noqa: F401  (sets the allocator like `make bench`)
-from nfarm import jang
-from nfarm.anfis import ANFIS
-from nfarm.report import Table
+from nfarm.learning import jang
+from nfarm.learning.anfis import ANFIS
+from nfarm.presentation.tables import Table
 
 
 def problems():

@@ -13,12 +13,12 @@ import time
 import numpy as np
 
 from common import seconds_per_call  # noqa: F401 — sets the benchmark environment
-from nfarm.datasets import ik_samples, load_study, random_trajectories
-from nfarm.dynamics import rnea
-from nfarm.kinematics import fk
-from nfarm.paths import PARAMS
-from nfarm.report import Table
-from nfarm.robot import sample_configurations
+from nfarm.study.datasets import ik_samples, load_study, random_trajectories
+from nfarm.model.dynamics import rnea
+from nfarm.model.kinematics import fk
+from nfarm.infra.paths import PARAMS
+from nfarm.presentation.tables import Table
+from nfarm.model.robot import sample_configurations
 
 N = 1_000_000
 

@@ -10,11 +10,11 @@ import numpy as np
 import pinocchio as pin
 
 from common import seconds_per_call
-from nfarm.dynamics import rnea
-from nfarm.paths import PARAMS
-from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.report import Table
-from nfarm.robot import load_robot, sample_configurations
+from nfarm.model.dynamics import rnea
+from nfarm.infra.paths import PARAMS
+from nfarm.model.pinocchio_ref import pinocchio_model
+from nfarm.presentation.tables import Table
+from nfarm.model.robot import load_robot, sample_configurations
 
 BATCHES = (1, 1_000, 100_000)
 PIN_LOOP = 5_000

@@ -13,13 +13,13 @@ import numpy as np
 import pinocchio as pin
 
 from common import seconds_per_call
-from nfarm.ik import solve
-from nfarm.kinematics import fk
-from nfarm.paths import PARAMS
-from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.report import Table
-from nfarm.robot import load_robot, sample_configurations
-from nfarm.rotations import pose_error
+from nfarm.solvers.ik import solve
+from nfarm.model.kinematics import fk
+from nfarm.infra.paths import PARAMS
+from nfarm.model.pinocchio_ref import pinocchio_model
+from nfarm.presentation.tables import Table
+from nfarm.model.robot import load_robot, sample_configurations
+from nfarm.model.rotations import pose_error
 
 N_TARGETS = 10_000
 TOL = 1e-9

@@ -15,11 +15,11 @@ import time
 import numpy as np
 
 from common import best_of
-from nfarm.ik import closed_form, solve
-from nfarm.kinematics import fk
-from nfarm.paths import PARAMS
-from nfarm.report import Table
-from nfarm.robot import load_robot, sample_configurations
+from nfarm.solvers.ik import closed_form, solve
+from nfarm.model.kinematics import fk
+from nfarm.infra.paths import PARAMS
+from nfarm.presentation.tables import Table
+from nfarm.model.robot import load_robot, sample_configurations
 
 N_CLOSED = 400_000
 N_LM = 10_000

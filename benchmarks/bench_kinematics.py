@@ -9,11 +9,11 @@ from __future__ import annotations
 import pinocchio as pin
 
 from common import seconds_per_call
-from nfarm.kinematics import fk, jacobian
-from nfarm.paths import PARAMS
-from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.report import Table
-from nfarm.robot import load_robot, sample_configurations
+from nfarm.model.kinematics import fk, jacobian
+from nfarm.infra.paths import PARAMS
+from nfarm.model.pinocchio_ref import pinocchio_model
+from nfarm.presentation.tables import Table
+from nfarm.model.robot import load_robot, sample_configurations
 
 BATCHES = (1, 1_000, 100_000)
 PIN_LOOP = 2_000  # configurations timed in Pinocchio's per-configuration loop

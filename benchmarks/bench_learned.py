@@ -14,10 +14,11 @@ import numpy as np
 import papermill
 
 from common import best_of
-from nfarm import datasets, ik
-from nfarm.learned import Baseline, LearnedIK
-from nfarm.paths import NOTEBOOKS, PARAMS
-from nfarm.report import Table
+from nfarm.study import datasets
+from nfarm import ik
+from nfarm.learning.learned import Baseline, LearnedIK
+from nfarm.infra.paths import NOTEBOOKS, PARAMS
+from nfarm.presentation.tables import Table
 
 
 

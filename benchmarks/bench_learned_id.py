@@ -17,11 +17,11 @@ import numpy as np
 import papermill
 
 from common import best_of
-from nfarm import datasets
-from nfarm.dynamics import regressor, rnea
-from nfarm.learned import LearnedID
-from nfarm.paths import NOTEBOOKS, PARAMS
-from nfarm.report import Table
+from nfarm.study import datasets
+from nfarm.model.dynamics import regressor, rnea
+from nfarm.learning.learned import LearnedID
+from nfarm.infra.paths import NOTEBOOKS, PARAMS
+from nfarm.presentation.tables import Table
 
 N_PREDICT = 200_000
 MODEL_FREE = {"inputs": "affine", "partition": "grid", "n_mfs": [1, 2, 2, 2, 1], "mf": "gauss"}

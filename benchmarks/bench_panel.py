@@ -16,9 +16,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from common import best_of
-from nfarm.panel import ArmPanel
-from nfarm.plotting import plot_arm_poses
-from nfarm.report import Table
+from nfarm.publishing.panel import ArmPanel
+from nfarm.presentation.plotting import plot_arm_poses
+from nfarm.presentation.tables import Table
 
 MOVES = 60
 TARGET_MS = 100.0

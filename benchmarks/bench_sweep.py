@@ -1,4 +1,4 @@
-"""Parameter sweeps on Dask (nfarm.sweep): the machinery's own cost per cell, and the speed-up
+"""Parameter sweeps on Dask (nfarm.study.sweep): the machinery's own cost per cell, and the speed-up
 of a grid of ANFIS trainings with one and two local worker processes, in the same run.
 
 Targets (issue 14): overhead per cell ≤ 0.5 s on a local cluster; speed-up close to the number
@@ -19,8 +19,8 @@ import tempfile
 import time
 
 from common import best_of
-from nfarm.report import Table
-from nfarm.sweep import run_sweep, sweep_from_dict
+from nfarm.presentation.tables import Table
+from nfarm.study.sweep import run_sweep, sweep_from_dict
 
 WORKERS = 2
 CELLS = 160
@@ -45,7 +45,7 @@ def timed_run(sweep, workers: int, client=None) -> tuple[float, list]:
 def plain_processes(sweep, processes: int) -> float:
     """Wall time of the grid split over ``processes`` plain Python processes running their
     share in-process, side by side: what the machine allows, without Dask."""
-    code = ("import sys, tempfile; from nfarm.sweep import run_sweep, sweep_from_dict; "
+    code = ("import sys, tempfile; from nfarm.study.sweep import run_sweep, sweep_from_dict; "
             "import json; d = json.loads(sys.argv[1]); k, n = int(sys.argv[2]), int(sys.argv[3]); "
             "s = sweep_from_dict(d, 'bench'); s = s.select(lambda p, c=[-1]: (c.__setitem__(0, c[0] + 1) or c[0] % n == k)); "
             "run_sweep(s, tempfile.mkdtemp(), workers=0)")

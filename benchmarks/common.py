@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-# No environment of its own: nfarm tunes glibc's allocator when imported (nfarm._allocator),
+# No environment of its own: nfarm tunes glibc's allocator when imported (nfarm.infra._allocator),
 # so a benchmark measures what a user's plain script gets.
 
 

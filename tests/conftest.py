@@ -10,9 +10,9 @@ import pytest
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
-from nfarm.paths import ROOT
-from nfarm.robot import ParamsWarning, Robot, load_robot, robot_from_dict
-from nfarm.rotations import quat_to_matrix
+from nfarm.infra.paths import ROOT
+from nfarm.model.robot import ParamsWarning, Robot, load_robot, robot_from_dict
+from nfarm.model.rotations import quat_to_matrix
 
 # Deterministic property tests: the same examples on every run and every machine.
 settings.register_profile("nfarm", derandomize=True, deadline=None, max_examples=40,

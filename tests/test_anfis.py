@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from nfarm import jang
-from nfarm.anfis import ANFIS, ANFISMulti, ANFISWarning, load
-from nfarm.reading import ParamsError, with_content_digest
-from nfarm.fuzzy import mf_gradients, mf_rows, mf_values
+from nfarm.learning import jang
+from nfarm.learning.anfis import ANFIS, ANFISMulti, ANFISWarning, load
+from nfarm.infra.reading import ParamsError, with_content_digest
+from nfarm.learning.fuzzy import mf_gradients, mf_rows, mf_values
 
 
 @pytest.mark.parametrize("kind, params", [
@@ -121,7 +121,7 @@ def test_determinism_with_random_state():
 @pytest.mark.parametrize("seed", [0, 1])
 def test_fcm_memberships_match_scikit_fuzzy_with_the_centres_held(seed):
     from skfuzzy.cluster import cmeans_predict
-    from nfarm.fuzzy import fcm_memberships
+    from nfarm.learning.fuzzy import fcm_memberships
     rng = np.random.default_rng(seed)
     data, centres = rng.normal(size=(300, 4)), rng.normal(size=(6, 4))
     data[7] = centres[2]                                   # a sample on a centre belongs to it alone
@@ -189,7 +189,7 @@ def test_describe_and_plot():
 
 
 def test_joint_curves_take_a_scale_per_joint_and_draw_the_noise():
-    from nfarm.plotting import plot_joint_curves
+    from nfarm.presentation.plotting import plot_joint_curves
     X, y, Xc, yc = jang.three_input_data()
     models = [ANFIS(epochs=3).fit(X, k * y, Xc, k * yc) for k in (1.0, 10.0)]
     fig = plot_joint_curves(models, ["a", "b"], scale=[2.0, 0.1], unit="%", quantity="NRMSE", symbol="τ",
@@ -204,7 +204,7 @@ def test_joint_curves_take_a_scale_per_joint_and_draw_the_noise():
 
 
 def test_predicted_vs_true_shows_the_errors_at_their_own_scale():
-    from nfarm.plotting import plot_predicted_vs_true
+    from nfarm.presentation.plotting import plot_predicted_vs_true
     rng = np.random.default_rng(0)
     q = rng.uniform(-1, 1, (500, 3))
     error = np.column_stack([np.zeros(500), 0.004 * rng.normal(size=500), np.zeros(500)])
@@ -400,7 +400,7 @@ def test_premise_inputs_equal_inputs_with_one_function(mf, partition):
 
 def test_normal_equations_in_blocks_equal_the_whole(monkeypatch):
     """A design too large to form is summed over blocks of samples: the same consequents."""
-    import nfarm.anfis as anfis_module
+    import nfarm.learning.anfis as anfis_module
     rng = np.random.default_rng(4)
     X = rng.random((500, 6))
     y = X[:, 0] * X[:, 1] + np.cos(2 * X[:, 2]) + 0.1 * X[:, 5]

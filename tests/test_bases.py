@@ -1,4 +1,4 @@
-"""Model-free inverse dynamics (nfarm.bases, nfarm.baselines, LearnedID's affine input sets):
+"""Model-free inverse dynamics (nfarm.learning.bases, nfarm.learning.baselines, LearnedID's affine input sets):
 the bases hold what they claim (the chain basis spans the rigid-body model of arms like
 intelbot5, the generic one does not), the rules over the configuration add what one rule lacks,
 the scikit-learn baselines are seeded functions of their options, and bad options are refused
@@ -11,13 +11,13 @@ import warnings
 import numpy as np
 import pytest
 
-from nfarm import bases
-from nfarm.baselines import DEFAULTS, LEARNERS, BaselineID
-from nfarm.datasets import load_study, random_trajectories
-from nfarm.dynamics import rnea
-from nfarm.learned import LearnedID, id_features
-from nfarm.paths import PARAMS
-from nfarm.robot import load_robot
+from nfarm.learning import bases
+from nfarm.learning.baselines import DEFAULTS, LEARNERS, BaselineID
+from nfarm.study.datasets import load_study, random_trajectories
+from nfarm.model.dynamics import rnea
+from nfarm.learning.learned import LearnedID, id_features
+from nfarm.infra.paths import PARAMS
+from nfarm.model.robot import load_robot
 
 STUDY = load_study(PARAMS / "studies" / "intelbot5.yaml")
 ROBOT = STUDY.robot
@@ -172,8 +172,13 @@ def test_residual_baseline_adds_newton_euler(trajectories):
     ("ridge", {"degree": 2}, "unknown option 'degree' for learner 'ridge'; valid: basis, alpha"),
     ("ridge", {"alpha": -1}, "ridge: alpha must be a positive number, got -1"),
     ("ridge", {"basis": "fourier"}, "ridge: basis must be one of"),
-    ("kernel", {"n_components": 1.5}, "kernel: n_components must be an integer >= 2"),
-    ("mlp", {"hidden": 32}, "mlp: hidden must be a list of layer widths"),
+    ("kernel", {"n_components": 1.5}, "kernel: n_components must be an integer from 2 to 10,000, got 1.5"),
+    ("kernel", {"n_components": 10**6}, "kernel: n_components must be an integer from 2 to 10,000, got 1000000"),
+    ("boosting", {"max_iter": 10**9}, "boosting: max_iter must be an integer from 2 to 100,000"),
+    ("boosting", {"max_leaf_nodes": True}, "boosting: max_leaf_nodes must be an integer from 2 to 4,096"),
+    ("mlp", {"hidden": 32}, "mlp: hidden must be a list of 1 to 16 layer widths"),
+    ("mlp", {"hidden": [10**6]}, "mlp: hidden must be a list of 1 to 16 layer widths from 1 to 4,096"),
+    ("mlp", {"hidden": [True]}, "mlp: hidden must be a list of 1 to 16 layer widths"),
     ("linear", {"alpha": 1.0}, "unknown option 'alpha' for learner 'linear'; valid: none"),
 ])
 def test_bad_baseline_options_are_refused_before_any_work(learner, options, message, trajectories):
@@ -181,3 +186,40 @@ def test_bad_baseline_options_are_refused_before_any_work(learner, options, mess
         BaselineID(learner, options).fit(ROBOT, trajectories["train"])
     with pytest.raises(ValueError, match="not fitted yet"):
         BaselineID().predict(*np.zeros((3, 2, 5)))
+
+
+@pytest.mark.parametrize("learner, options", [("boosting", {"max_iter": 12}), ("mlp", {"hidden": [16], "max_iter": 12})])
+def test_the_time_limited_learners_compute_what_scikit_learn_does(learner, options, trajectories):
+    """The hooks that check the time limit change no arithmetic: the same predictions, bit for bit,
+    as the plain scikit-learn estimators with the same options and seed."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+    from sklearn.neural_network import MLPRegressor
+
+    from nfarm.learning import baselines
+
+    train, val = trajectories["train"], trajectories["val"]
+    ours = BaselineID(learner, options, random_state=4).fit(ROBOT, train)
+    plain = {"boosting": HistGradientBoostingRegressor, "mlp": MLPRegressor}[learner]
+    timed = baselines._timed_learners()[learner == "mlp"]
+    assert timed is not plain and issubclass(timed, plain)
+    original = baselines._timed_learners
+    try:
+        baselines._timed_learners = lambda: (HistGradientBoostingRegressor, MLPRegressor)
+        reference = BaselineID(learner, options, random_state=4).fit(ROBOT, train)
+    finally:
+        baselines._timed_learners = original
+    X = (val["q"], val["qd"], val["qdd"])
+    np.testing.assert_array_equal(ours.predict(*X), reference.predict(*X))
+
+
+@pytest.mark.parametrize("learner, options, what", [
+    ("boosting", {"max_iter": 100_000, "max_leaf_nodes": 4}, "boosting: an iteration"),
+    ("mlp", {"hidden": [4], "max_iter": 100_000}, "mlp: an epoch")])
+def test_a_time_limit_stops_an_iterative_baseline_within_an_iteration(learner, options, what, trajectories):
+    """A sweep cell's deadline reaches inside scikit-learn's loops (without the hook these fits
+    run 100 000 iterations)."""
+    from nfarm.infra.limits import TimeLimitError, time_limit
+
+    small = {k: v[:200] for k, v in trajectories["train"].items()}
+    with pytest.raises(TimeLimitError, match=f"{what}: over the time limit of 0.2 s"), time_limit(0.2):
+        BaselineID(learner, options).fit(ROBOT, small)

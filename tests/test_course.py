@@ -1,4 +1,4 @@
-"""The course edition (nfarm.course): exercises with worked solutions and checks, the student
+"""The course edition (nfarm.publishing.course): exercises with worked solutions and checks, the student
 build without solutions or outputs, the teacher build with every check passing, and every check
 failing with its message on a deliberately wrong answer."""
 
@@ -11,10 +11,10 @@ import numpy as np
 import papermill
 import pytest
 
-from nfarm.course import (TAGS, build_course, check, check_function, check_results, check_that,
+from nfarm.publishing.course import (TAGS, build_course, check, check_function, check_results, check_that,
                           exercise_notebook)
-from nfarm.paths import NOTEBOOKS
-from nfarm.report import chapters, run_notebook
+from nfarm.infra.paths import NOTEBOOKS
+from nfarm.infra.notebook_runs import chapters, run_notebook
 
 WITH_EXERCISES = [nb for nb in chapters(NOTEBOOKS)
                   if any("exercise" in c.get("metadata", {}).get("tags", [])

@@ -1,4 +1,4 @@
-"""Data sets for learned IK and ID (nfarm.datasets): they obey the models, lie where declared,
+"""Data sets for learned IK and ID (nfarm.study.datasets): they obey the models, lie where declared,
 keep their splits apart, are reproducible byte for byte, refuse the wrong robot or study, and
 every study-file rule has a bad file."""
 
@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 import yaml
 
-from nfarm import datasets
-from nfarm.datasets import (IKRegion, build_datasets, measured_states, check_single_valued, load, load_study,
+from nfarm.study import datasets
+from nfarm.study.datasets import (IKRegion, build_datasets, measured_states, check_single_valued, load, load_study,
                             random_trajectories, study_from_dict)
-from nfarm.dynamics import rnea, stribeck_drive_torques
-from nfarm.kinematics import fk
-from nfarm.paths import PARAMS
-from nfarm.reading import ParamsError
-from nfarm.robot import load_robot, robot_from_dict, robot_to_dict
+from nfarm.model.dynamics import rnea, stribeck_drive_torques
+from nfarm.model.kinematics import fk
+from nfarm.infra.paths import PARAMS
+from nfarm.infra.reading import ParamsError
+from nfarm.model.robot import load_robot, robot_from_dict, robot_to_dict
 
 STUDY = PARAMS / "studies" / "intelbot5.yaml"
 BASE = yaml.safe_load(STUDY.read_text())
@@ -330,7 +330,7 @@ def test_robot_hash_ignores_layout_but_not_values(tmp_path):
     source = PARAMS / "robots" / "intelbot5.yaml"
     robot = load_robot(source)
     (tmp_path / "same.yaml").write_text("# a comment\n" + source.read_text())
-    from nfarm.robot import robot_hash
+    from nfarm.model.robot import robot_hash
     assert robot_hash(load_robot(tmp_path / "same.yaml")) == robot_hash(robot)
     params = robot_to_dict(robot)
     params["joints"][0]["d"] += 1e-12
@@ -358,7 +358,7 @@ def test_workspace_volume_of_a_spherical_shell(upper, fore):
 
 
 def test_reach_is_measured_from_the_first_joint_s_origin():
-    from nfarm.workspace import reach, workspace_points
+    from nfarm.solvers.workspace import reach, workspace_points
     robot = _yaw_pitch_elbow(2.0, 1.0)
     assert 2.99 < reach(workspace_points(robot, 20_000, 0), robot) <= 3.0 + 1e-12
 
@@ -424,7 +424,7 @@ def test_seed_like_trajectories_are_the_dissertation_s_cubics():
 
 
 def test_a_redrawn_study_draws_new_training_data_and_keeps_the_test_set(built, tmp_path):
-    from nfarm.datasets import dataset_dir, load, redrawn
+    from nfarm.study.datasets import dataset_dir, load, redrawn
     study, out, _ = built
     assert redrawn(study, 0) is study
     again = redrawn(study, 2)
@@ -442,7 +442,7 @@ def test_a_redrawn_study_draws_new_training_data_and_keeps_the_test_set(built, t
 
 
 def test_the_memory_budget_is_half_the_machine_or_what_nfarm_memory_gb_says(monkeypatch):
-    from nfarm.datasets import memory_budget
+    from nfarm.study.datasets import memory_budget
     monkeypatch.delenv("NFARM_MEMORY_GB", raising=False)
     assert memory_budget() == 0.5 * os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     monkeypatch.setenv("NFARM_MEMORY_GB", "0.25")

@@ -12,13 +12,13 @@ from conftest import random_chains
 import dataclasses
 import math
 
-from nfarm.dynamics import (coriolis, gravity_torques, inertial_parameters, joint_drive_torques, stribeck_drive_torques,
+from nfarm.model.dynamics import (coriolis, gravity_torques, inertial_parameters, joint_drive_torques, stribeck_drive_torques,
                             mass_matrix, regressor, rnea)
-from nfarm.kinematics import jacobian
-from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.reading import ParamsError
-from nfarm.robot import robot_from_dict, robot_hash, robot_to_dict, sample_configurations
-from nfarm.trajectory import quintic
+from nfarm.model.kinematics import jacobian
+from nfarm.model.pinocchio_ref import pinocchio_model
+from nfarm.infra.reading import ParamsError
+from nfarm.model.robot import robot_from_dict, robot_hash, robot_to_dict, sample_configurations
+from nfarm.solvers.trajectory import quintic
 
 RTOL = 1e-10
 

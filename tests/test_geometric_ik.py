@@ -1,4 +1,4 @@
-"""The closed-form IK (nfarm.ik.closed_form) against forward kinematics, Pinocchio, multi-start
+"""The closed-form IK (nfarm.solvers.ik.closed_form) against forward kinematics, Pinocchio, multi-start
 LM and the geometry of the class: every solution found, every solution exact, every branch
 named, nothing non-finite at the singular poses, and every other robot refused in one line."""
 
@@ -10,13 +10,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import load_quietly, random_chains
-from nfarm.geometric_ik import check_class
-from nfarm.ik import BRANCHES, branch_of, closed_form, in_class, solve
-from nfarm.kinematics import fk, fk_all
-from nfarm.paths import ROOT
-from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.robot import Robot, robot_from_dict, sample_configurations
-from nfarm.rotations import exp_so3, pose_error, quat_to_matrix
+from nfarm.solvers.geometric_ik import check_class
+from nfarm.solvers.ik import BRANCHES, branch_of, closed_form, in_class, solve
+from nfarm.model.kinematics import fk, fk_all
+from nfarm.infra.paths import ROOT
+from nfarm.model.pinocchio_ref import pinocchio_model
+from nfarm.model.robot import Robot, robot_from_dict, sample_configurations
+from nfarm.model.rotations import exp_so3, pose_error, quat_to_matrix
 
 ARMS = ["intelbot5", "so101"]
 
@@ -328,7 +328,7 @@ def test_batch_shapes(intelbot5, batch):
 
 
 def test_threads_do_not_change_the_result(intelbot5):
-    from nfarm.geometric_ik import _CHUNK
+    from nfarm.solvers.geometric_ik import _CHUNK
     T = fk(intelbot5, sample_configurations(intelbot5, 3 * _CHUNK + 5, 2))    # four chunks
     one, two = closed_form(intelbot5, T, threads=1), closed_form(intelbot5, T, threads=2)
     for field in ("q", "valid", "pos_error", "rot_error"):
@@ -448,7 +448,7 @@ def test_not_a_robot_is_refused():
 def test_planar_points_are_the_arm_in_frame_1(name):
     """Standard-DH arms: frame k's origin, seen from frame 1, is the planar chain's point (its
     lateral part is the offset w)."""
-    from nfarm.geometric_ik import planar_points
+    from nfarm.solvers.geometric_ik import planar_points
     robot = arm(name)
     q = sample_configurations(robot, 50, 8)
     frames = fk_all(robot, q)                                   # (N, 6, 4, 4): base, frames 1-5
@@ -461,7 +461,7 @@ def test_planar_points_are_the_arm_in_frame_1(name):
 
 @pytest.mark.parametrize("name", ARMS)
 def test_branch_margins_vanish_where_solutions_meet(name):
-    from nfarm.geometric_ik import branch_margins, elbow_meeting_angles
+    from nfarm.solvers.geometric_ik import branch_margins, elbow_meeting_angles
     robot = arm(name)
     q = singular_configurations(robot)
     stretched, folded = elbow_meeting_angles(robot)

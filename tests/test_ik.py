@@ -8,11 +8,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import load_quietly
-from nfarm.ik import METHODS, REASONS, solve
-from nfarm.kinematics import fk
-from nfarm.paths import PARAMS
-from nfarm.robot import robot_from_dict, sample_configurations
-from nfarm.rotations import exp_so3, pose_error
+from nfarm.solvers.ik import METHODS, REASONS, solve
+from nfarm.model.kinematics import fk
+from nfarm.infra.paths import PARAMS
+from nfarm.model.robot import robot_from_dict, sample_configurations
+from nfarm.model.rotations import exp_so3, pose_error
 
 ROBOTS = {name: load_quietly(PARAMS / "robots" / f"{name}.yaml") for name in ("intelbot5", "puma560")}
 
@@ -180,14 +180,14 @@ def test_bad_target_index_in_a_2d_batch(intelbot5):
 
 @pytest.mark.parametrize("rule", ["nan", "last row", "not orthonormal", "reflection"])
 def test_bad_targets_beyond_the_first_check_chunk_are_named(intelbot5, rule, monkeypatch):
-    import nfarm.ik
-    monkeypatch.setattr(nfarm.ik, "_CHECK_CHUNK", 3)       # the pose sits in the second chunk
+    import nfarm.solvers.ik
+    monkeypatch.setattr(nfarm.solvers.ik, "_CHECK_CHUNK", 3)       # the pose sits in the second chunk
     make, message = BAD_TARGETS[rule]
     T = make(intelbot5)
     bad_row = {"nan": 2, "last row": 3, "not orthonormal": 1, "reflection": 2}[rule]
     shifted = np.concatenate([good_targets(intelbot5)[:4], T[bad_row:bad_row + 1]])
     with pytest.raises(ValueError, match=message.replace(rf"\[{bad_row}\]", r"\[4\]")):
-        nfarm.ik.check_targets(shifted)
+        nfarm.solvers.ik.check_targets(shifted)
 
 @pytest.mark.parametrize("kwargs, message", [
     (dict(q0=np.zeros(4)), r"q0 must have shape \(5,\) or \(4, 5\)"),

@@ -8,10 +8,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import random_chains
-from nfarm.kinematics import (fk, fk_all, jacobian, manipulability, min_singular_value,
+from nfarm.model.kinematics import (fk, fk_all, jacobian, manipulability, min_singular_value,
                               numerical_jacobian)
-from nfarm.pinocchio_ref import pinocchio_model
-from nfarm.robot import sample_configurations
+from nfarm.model.pinocchio_ref import pinocchio_model
+from nfarm.model.robot import sample_configurations
 
 TOL = 1e-12
 
@@ -74,7 +74,7 @@ def test_batch_shapes(intelbot5, batch):
 
 
 def test_batches_larger_than_a_chunk_are_exact(intelbot5):
-    from nfarm import kinematics
+    from nfarm.model import kinematics
     q = sample_configurations(intelbot5, 2 * kinematics.CHUNK + 3, seed=3)
     single = np.array([fk(intelbot5, x) for x in q[-5:]])
     np.testing.assert_array_equal(fk(intelbot5, q)[-5:], single)
@@ -127,10 +127,10 @@ def test_a_base_places_the_chain_in_the_world(intelbot5):
     without a base keeps its hash, one with a bad base is refused."""
     import dataclasses
 
-    from nfarm.dynamics import rnea
-    from nfarm.reading import ParamsError
-    from nfarm.robot import robot_from_dict, robot_hash, robot_to_dict
-    from nfarm.rotations import quat_to_matrix
+    from nfarm.model.dynamics import rnea
+    from nfarm.infra.reading import ParamsError
+    from nfarm.model.robot import robot_from_dict, robot_hash, robot_to_dict
+    from nfarm.model.rotations import quat_to_matrix
 
     rng = np.random.default_rng(7)
     B = np.eye(4)

@@ -1,5 +1,5 @@
-"""The package's layers: the model (robot, rotations, kinematics, dynamics) never imports the
-solvers and learners, nor the I/O and presentation modules above them."""
+"""The package's layers are its subpackages, bottom to top; a module imports only from its own
+layer and the layers below it (``nfarm/__init__``'s docstring says what each holds)."""
 
 from __future__ import annotations
 
@@ -7,36 +7,48 @@ import ast
 
 import pytest
 
-from nfarm.paths import ROOT
+from nfarm.infra import provenance
 
-LAYERS = {
-    "model": ["reading", "paths", "limits", "provenance", "robot", "rotations", "linalg", "kinematics", "dynamics",
-              "fuzzy", "trajectory"],
-    "solvers": ["ik", "geometric_ik", "tool_paths", "workspace", "anfis", "jang", "datasets", "bases", "learned", "baselines"],
-    "io": ["urdf", "recording", "plotting", "wording", "report", "panel_compute", "panel", "panel_server", "statistics", "summary", "pinocchio_ref", "jobs", "sweep", "course",
-           "answers", "__main__"],
-}
-RANK = {module: rank for rank, names in enumerate(LAYERS.values()) for module in names}
+LAYERS = ["infra", "model", "solvers", "learning", "presentation", "study", "publishing"]
+RANK = {layer: rank for rank, layer in enumerate(LAYERS)}
+PACKAGE = provenance.PACKAGE
+MODULES = sorted(p.relative_to(PACKAGE) for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts)
 
 
-def imports(module: str) -> set[str]:
-    tree = ast.parse((ROOT / "lib" / "nfarm" / f"{module}.py").read_text())
+def layer_of(relative) -> str:
+    return relative.parts[0] if len(relative.parts) > 1 else relative.stem
+
+
+def imported_layers(relative) -> set[str]:
+    """The layers the module's relative imports reach, anywhere in the file, but not under
+    ``if TYPE_CHECKING:`` (never run)."""
+    tree = ast.parse((PACKAGE / relative).read_bytes())
+    own = list(relative.parent.parts)
     out = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom) and node.level == 1:
-            if node.module:
-                out.add(node.module.split(".")[0])
-            else:
-                out.update(alias.name for alias in node.names)
-    return out - {"__version__", "_allocator"}
+    for node in provenance._run_time_nodes(tree):
+        if isinstance(node, ast.ImportFrom) and node.level >= 1:
+            base = own[:len(own) - (node.level - 1)]
+            target = base + (node.module.split(".") if node.module else [])
+            if target:
+                out.add(target[0])
+            else:                                   # `from .. import layer` or `__version__`
+                out.update(a.name for a in node.names if a.name in RANK)
+    return out
 
 
-def test_every_module_has_a_layer():
-    modules = {p.stem for p in (ROOT / "lib" / "nfarm").glob("*.py")} - {"__init__", "_allocator"}
-    assert modules == set(RANK), modules ^ set(RANK)
+def test_every_module_is_in_a_layer():
+    loose = [str(m) for m in MODULES if len(m.parts) == 1 and m.stem not in ("__init__", "__main__")]
+    assert not loose, f"modules outside the layers: {loose}"
+    assert {m.parts[0] for m in MODULES if len(m.parts) > 1} == set(LAYERS)
 
 
-@pytest.mark.parametrize("module", sorted(RANK))
-def test_lower_layers_never_import_upper_ones(module):
-    upper = {m for m in imports(module) if m in RANK and RANK[m] > RANK[module]}
-    assert not upper, f"{module} (layer {RANK[module]}) imports {sorted(upper)} from a layer above"
+@pytest.mark.parametrize("relative", [m for m in MODULES if len(m.parts) > 1], ids=str)
+def test_lower_layers_never_import_upper_ones(relative):
+    rank = RANK[layer_of(relative)]
+    upper = {layer for layer in imported_layers(relative) if RANK.get(layer, -1) > rank}
+    assert not upper, f"{relative} (layer {layer_of(relative)}) imports from {sorted(upper)} above it"
+
+
+def test_the_package_itself_imports_no_layer_at_import_time():
+    """``import nfarm`` runs only the allocator's tuning; public names load on first use."""
+    assert imported_layers(PACKAGE.relative_to(PACKAGE) / "__init__.py") <= {"infra"}

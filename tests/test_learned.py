@@ -1,4 +1,4 @@
-"""Learned inverse kinematics (nfarm.learned): encodings are faithful charts of the poses, a
+"""Learned inverse kinematics (nfarm.learning.learned): encodings are faithful charts of the poses, a
 small seeded training reaches a stated error, save/load is bit for bit, batching follows the
 library's rule, and every bad input is one clear error before any work."""
 
@@ -10,13 +10,13 @@ import warnings
 import numpy as np
 import pytest
 
-from nfarm.datasets import ik_samples, load_study
-from nfarm.kinematics import fk
-from nfarm.learned import ENCODINGS, LearnedIK, encode, out_of_plane
-from nfarm.paths import PARAMS
-from nfarm.reading import ParamsError, with_content_digest
-from nfarm.robot import load_robot
-from nfarm.rotations import quat_to_matrix
+from nfarm.study.datasets import ik_samples, load_study
+from nfarm.model.kinematics import fk
+from nfarm.learning.learned import ENCODINGS, LearnedIK, encode, out_of_plane
+from nfarm.infra.paths import PARAMS
+from nfarm.infra.reading import ParamsError, with_content_digest
+from nfarm.model.robot import load_robot
+from nfarm.model.rotations import quat_to_matrix
 
 STUDY = load_study(PARAMS / "studies" / "intelbot5.yaml")
 ROBOT = STUDY.robot
@@ -305,9 +305,9 @@ def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
 
 # -- learned inverse dynamics ------------------------------------------------------------------
 
-from nfarm.datasets import random_trajectories  # noqa: E402
-from nfarm.dynamics import inertial_parameters, rnea  # noqa: E402
-from nfarm.learned import INPUT_SETS, LearnedID, id_features, regressor_columns  # noqa: E402
+from nfarm.study.datasets import random_trajectories  # noqa: E402
+from nfarm.model.dynamics import inertial_parameters, rnea  # noqa: E402
+from nfarm.learning.learned import INPUT_SETS, LearnedID, id_features, regressor_columns  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -430,7 +430,7 @@ def test_id_fit_refuses_bad_input_before_any_work(id_data, kwargs, change, messa
 
 # -- the model cache ---------------------------------------------------------------------------
 
-from nfarm.learned import fit_cached  # noqa: E402
+from nfarm.learning.learned import fit_cached  # noqa: E402
 
 
 @pytest.mark.parametrize("kind", ["ik", "id"])
@@ -474,7 +474,7 @@ def test_the_arm_chart_describes_an_arm_whose_tool_is_off_its_roll_axis(tmp_path
     the SO-101's tool point is 7.9 mm off its roll axis and its base axis points down: in the
     world its approach axis leaves the arm's plane by degrees, in its chart by less than 0.2°
     (the CAD model's sub-millimetre offsets). A model fitted with a chart saves and loads it."""
-    from nfarm.learned import arm_chart
+    from nfarm.learning.learned import arm_chart
     assert arm_chart(ROBOT) is None
     so101 = load_robot(PARAMS / "robots" / "so101.yaml")
     chart = arm_chart(so101)
@@ -496,7 +496,7 @@ def test_the_arm_chart_describes_an_arm_whose_tool_is_off_its_roll_axis(tmp_path
 
 
 def test_poses_far_outside_the_training_data_are_predicted_with_a_warning(fitted, data):
-    from nfarm.learned import OutsideTrainingWarning
+    from nfarm.learning.learned import OutsideTrainingWarning
     import warnings
     T = data["test"]["T"][:3].copy()
     with warnings.catch_warnings():
@@ -518,7 +518,7 @@ def test_poses_far_outside_the_training_data_are_predicted_with_a_warning(fitted
 
 
 def test_states_far_outside_the_training_data_warn_and_overflowing_ones_are_refused(id_data):
-    from nfarm.learned import OutsideTrainingWarning
+    from nfarm.learning.learned import OutsideTrainingWarning
     import warnings
     d = id_data["val"]
     model = LearnedID(inputs="affine_generic", n_mfs=1, epochs=1).fit(ROBOT, id_data["train"])   # products of q̇

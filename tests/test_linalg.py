@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.linalg import cholesky_solve_T, gram_T
+from nfarm.model.linalg import cholesky_solve_T, gram_T
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 7])

@@ -9,8 +9,9 @@ import re
 import papermill
 import pytest
 
-from nfarm.paths import FIGURES, NOTEBOOKS, ROOT
-from nfarm.report import COURSE_TAGS, _export_html, _title, chapters, run_notebook
+from nfarm.infra.paths import FIGURES, NOTEBOOKS, ROOT
+from nfarm.infra.notebook_runs import chapters, run_notebook
+from nfarm.publishing.pages import COURSE_TAGS, chapter_title, export_html
 
 NOTEBOOK_FILES = chapters(NOTEBOOKS)
 
@@ -29,9 +30,9 @@ def check_page(notebook, executed, where):
     figure captioned (visibly and as alternative text), no path of the machine, no "1 times",
     no prose number with more digits than a measurement supports, one parameters cell."""
     page = where / f"{notebook.stem}.html"
-    _export_html(executed, page, title=_title(notebook))
+    export_html(executed, page, title=chapter_title(notebook))
     text = page.read_text(encoding="utf-8")
-    assert "<title>Notebook</title>" not in text and f"<title>{_title(notebook)}" in text
+    assert "<title>Notebook</title>" not in text and f"<title>{chapter_title(notebook)}" in text
     images = re.findall(r"<img\b[^>]*>", text)
     assert images, "the page shows its figures"
     for image in images:
@@ -39,6 +40,12 @@ def check_page(notebook, executed, where):
         assert alt and alt.group(1).strip() and "No description" not in alt.group(1), \
             f"a figure without a caption: {image[:120]}"
     assert text.count("<figcaption") >= text.count('class="nfarm-figure"') > 0
+    # Figures are numbered by chapter in the order a reader first meets them: 6.1, 6.2, …
+    numbers = re.findall(r"<figcaption[^>]*><b>Figure (\d+)\.(\d+)\.</b>", text)
+    assert len(numbers) == text.count("<figcaption"), "every caption carries its figure's number"
+    assert {int(c) for c, _ in numbers} == {int(notebook.stem[:2])}, numbers
+    first = list(dict.fromkeys(int(k) for _, k in numbers))
+    assert first == list(range(1, len(first) + 1)), f"figures numbered out of order: {first}"
     assert str(ROOT) not in text, "a path of the checkout on the page"   # (the tests' own paths are parameters)
     prose = " ".join(re.sub(r"<[^>]+>", " ", m) for m in re.findall(
         r'<div class="jp-RenderedHTMLCommon jp-RenderedMarkdown[^"]*"[^>]*>(.*?)</div>', text, flags=re.S))

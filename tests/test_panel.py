@@ -12,16 +12,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nfarm import panel_compute as pc
-from nfarm.datasets import ik_samples, load_study
-from nfarm.dynamics import rnea
-from nfarm.geometric_ik import in_class
-from nfarm.kinematics import fk, fk_all
-from nfarm.learned import LearnedID, LearnedIK
-from nfarm.panel import ArmPanel, Panel
-from nfarm.paths import PARAMS
-from nfarm.robot import load_robot, sample_configurations
-from nfarm.rotations import pose_error, quat_to_matrix, rpy_to_matrix
+from nfarm.publishing import panel_compute as pc
+from nfarm.study.datasets import ik_samples, load_study
+from nfarm.model.dynamics import rnea
+from nfarm.solvers.geometric_ik import in_class
+from nfarm.model.kinematics import fk, fk_all
+from nfarm.learning.learned import LearnedID, LearnedIK
+from nfarm.publishing.panel import ArmPanel, Panel
+from nfarm.infra.paths import PARAMS
+from nfarm.model.robot import load_robot, sample_configurations
+from nfarm.model.rotations import pose_error, quat_to_matrix, rpy_to_matrix
 
 with warnings.catch_warnings():          # the Puma's published inertias are not physical
     warnings.simplefilter("ignore")
@@ -308,7 +308,7 @@ def test_the_panel_notebook_runs_and_shows_the_panel():
     import nbformat
     from nbclient import NotebookClient
 
-    from nfarm.paths import NOTEBOOKS
+    from nfarm.infra.paths import NOTEBOOKS
 
     nb = nbformat.read(NOTEBOOKS / "arm_panel.ipynb", as_version=4)
     nb.cells.append(nbformat.v4.new_code_cell("import matplotlib; print(matplotlib.get_backend())"))
@@ -328,7 +328,7 @@ def test_jupyterlab_asks_nothing_of_the_internet():
     import sys
     from pathlib import Path
 
-    from nfarm.paths import ROOT
+    from nfarm.infra.paths import ROOT
 
     installed = Path(sys.prefix) / "share" / "jupyter" / "lab" / "settings" / "overrides.json"
     ours = json.loads((ROOT / "jupyter" / "lab-overrides.json").read_text())

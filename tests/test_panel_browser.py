@@ -17,7 +17,8 @@ from urllib.parse import urlparse
 
 import pytest
 
-from nfarm.panel_server import check_port, serve, voila_command, voila_environment
+from nfarm.__main__ import panel_command
+from nfarm.publishing.panel_server import check_port, voila_command, voila_environment
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 DRIVER = shutil.which("chromedriver")
@@ -36,13 +37,13 @@ def free_port() -> int:
 
 def test_a_taken_port_is_refused_in_one_line(capsys, monkeypatch):
     def not_here(*args):
-        raise AssertionError("serve() went on to start Voilà in the test process")
+        raise AssertionError("the panel went on to start Voilà in the test process")
 
     monkeypatch.setattr(os, "execve", not_here)
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-        assert serve(port) == 2
+        assert panel_command(port) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"port {port}" in err and "PORT=" in err
     for bad in (0, 70000, "8866", True):

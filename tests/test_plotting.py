@@ -1,4 +1,4 @@
-"""Figures a reader can read (nfarm.plotting): labelled ticks on short logarithmic axes, a
+"""Figures a reader can read (nfarm.presentation.plotting): labelled ticks on short logarithmic axes, a
 constant joint drawn as constant, legends that hide no data."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from nfarm.plotting import plot_joint_paths, plot_size_curve  # noqa: E402
+from nfarm.presentation.plotting import plot_joint_paths, plot_size_curve  # noqa: E402
 
 
 def labelled_ticks(axis):
@@ -44,7 +44,7 @@ def test_a_joint_held_along_the_path_is_drawn_as_constant_not_as_rounding_spikes
 
 
 def test_the_arms_figure_keeps_its_legends_off_the_data():
-    from nfarm.plotting import plot_arms_compared
+    from nfarm.presentation.plotting import plot_arms_compared
     rng = np.random.default_rng(1)
     side = {name: np.column_stack([rng.uniform(0, r, 5000), rng.uniform(-0.2, r, 5000)])
             for name, r in (("a", 0.5), ("b", 0.4))}
@@ -61,7 +61,7 @@ def test_the_arms_figure_keeps_its_legends_off_the_data():
 
 
 def test_figures_are_numbered_by_chapter_in_the_order_shown(tmp_path):
-    from nfarm import plotting
+    from nfarm.presentation import plotting
     plotting._NUMBERS.clear()
     assert plotting.figure_number(str(tmp_path / "06_ik_curves.png")) == "Figure 6.1."
     assert plotting.figure_number(str(tmp_path / "06_ik_sizes.png")) == "Figure 6.2."

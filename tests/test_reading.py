@@ -1,4 +1,4 @@
-"""The shared reading path (nfarm.reading): hostile and careless parameter files, each one a
+"""The shared reading path (nfarm.infra.reading): hostile and careless parameter files, each one a
 one-line error naming the file, the field (or line) and the rule, found in bounded time and
 memory."""
 
@@ -12,9 +12,9 @@ import warnings
 import numpy as np
 import pytest
 
-from nfarm.paths import PARAMS
-from nfarm.reading import ParamsError, ParamsWarning, load_json, load_yaml, read_bytes
-from nfarm.robot import load_robot
+from nfarm.infra.paths import PARAMS
+from nfarm.infra.reading import ParamsError, ParamsWarning, load_json, load_yaml, read_bytes
+from nfarm.model.robot import load_robot
 
 INTELBOT5 = PARAMS / "robots" / "intelbot5.yaml"
 TEXT = INTELBOT5.read_text()
@@ -174,7 +174,7 @@ def test_json_reader_refuses_what_json_would_read_silently(tmp_path, text, messa
 
 
 def test_json_ready_converts_numpy_and_refuses_non_finite():
-    from nfarm.reading import json_ready
+    from nfarm.infra.reading import json_ready
     value = {"a": (1, np.float64(2.5)), "b": np.arange(3), "c": [np.int64(4), None, "x"]}
     assert json_ready(value) == {"a": [1, 2.5], "b": [0, 1, 2], "c": [4, None, "x"]}
     for bad in (float("nan"), [1.0, float("inf")], {"k": np.float32("nan")}):

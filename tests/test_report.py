@@ -13,15 +13,19 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import nbformat
 import numpy as np
 import pytest
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
-from nfarm import report
-from nfarm.paths import ROOT, atomic_path
-from nfarm.report import Table, build_report, markdown_section, verify_manifest, write_manifest
+from nfarm.infra import notebook_runs
+from nfarm.publishing import manifest, report
+from nfarm.infra.paths import ROOT, atomic_path
+from nfarm.presentation.tables import Table, markdown_section
+from nfarm.publishing.manifest import verify_manifest, write_manifest
+from nfarm.__main__ import report_command as build_report   # the command line's: exit status, one line each
 
 
 def make_notebook(path, *code, tags=None):
@@ -33,9 +37,9 @@ def make_notebook(path, *code, tags=None):
 
 
 WRITE = """import matplotlib.pyplot as plt
-from nfarm.paths import project_path
-from nfarm.plotting import save_figure
-from nfarm.report import Table
+from nfarm.infra.paths import project_path
+from nfarm.presentation.plotting import save_figure
+from nfarm.presentation.tables import Table
 out = project_path(out_dir)
 fig, ax = plt.subplots()
 ax.plot([0, 1], [0, 1])
@@ -173,7 +177,7 @@ def test_publishing_is_atomic_at_every_step(tmp_path, monkeypatch):
         (s / "tables" / "01_t.md").write_text(f"v{version}\n")
         return s
 
-    report._publish(stage(1), figures, "01")
+    manifest.publish_chapter(stage(1), figures, "01")
     states = {tuple(sorted((p.name, digest(p)) for p in figures.rglob("*") if p.is_file()))}
     real_ops = {name: getattr(shutil, name) for name in ("copyfile", "copytree", "rmtree")}
     step, crash_at = [0], [0]
@@ -190,9 +194,9 @@ def test_publishing_is_atomic_at_every_step(tmp_path, monkeypatch):
         step[0], crash_at[0] = 0, crash
         for name, fn in real_ops.items():
             monkeypatch.setattr(shutil, name, counting(fn))
-        monkeypatch.setattr(report, "_exchange", counting(report._exchange))
+        monkeypatch.setattr(manifest, "_exchange", counting(manifest._exchange))
         try:
-            report._publish(stage(2 + crash % 2), figures, "01")
+            manifest.publish_chapter(stage(2 + crash % 2), figures, "01")
             finished = True
         except KeyboardInterrupt:
             finished = False
@@ -203,7 +207,7 @@ def test_publishing_is_atomic_at_every_step(tmp_path, monkeypatch):
     else:
         pytest.fail("the publish never finished")
     assert crash > 3, "the crash points covered the publish"
-    report._recover(figures)
+    manifest.recover_figures(figures)
     assert not list(tmp_path.glob(".figures.*"))
 
 
@@ -212,7 +216,7 @@ def test_killing_a_real_run_at_random_moments_keeps_figures_consistent(project):
     """``python -m nfarm report`` killed with SIGKILL at seeded random moments: figures/ and
     its manifest agree after every kill."""
     root, dirs = project
-    script = (f"import sys; from pathlib import Path; from nfarm.report import build_report; "
+    script = (f"import sys; from pathlib import Path; from nfarm.__main__ import report_command as build_report; "
               f"sys.exit(build_report(notebooks_dir=Path({str(dirs['notebooks_dir'])!r}), "
               f"figures_dir=Path({str(dirs['figures_dir'])!r}), "
               f"build_dir=Path({str(dirs['build_dir'])!r})))")
@@ -274,7 +278,7 @@ def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path):
     import sys
 
     target = tmp_path / "id_val.npz"
-    code = ("import sys, time; from nfarm.paths import atomic_path\n"
+    code = ("import sys, time; from nfarm.infra.paths import atomic_path\n"
             "with atomic_path(sys.argv[1]) as tmp:\n"
             "    tmp.write_bytes(b'x' * 1000); print(tmp, flush=True); time.sleep(60)")
     writer = subprocess.Popen([sys.executable, "-c", code, str(target)], stdout=subprocess.PIPE, text=True)
@@ -307,7 +311,7 @@ def test_ctrl_c_stops_a_running_notebook_in_one_line(tmp_path):
                 nbformat.v4.new_code_cell("import time\ntime.sleep(seconds)")]
     nbformat.write(nb, notebook)
     out = tmp_path / "out.ipynb"
-    code = ("import sys\nfrom nfarm.report import run_notebook\n"
+    code = ("import sys\nfrom nfarm.infra.notebook_runs import run_notebook\n"
             "try:\n    run_notebook(sys.argv[1], sys.argv[2], {})\n    print('finished', file=sys.stderr)\n"
             "except KeyboardInterrupt:\n    print('interrupted', file=sys.stderr)\n    sys.exit(130)\n")
     run = subprocess.Popen([sys.executable, "-c", code, str(notebook), str(out)], stderr=subprocess.PIPE, text=True)
@@ -331,7 +335,7 @@ def test_executed_notebook_json_is_plain(tmp_path):
                                 "output_path": str(ROOT / "build" / "x.ipynb")}
     path = tmp_path / "x.ipynb"
     nbformat.write(nb, path)
-    report._clean_executed(path, ROOT / "notebooks" / "x.ipynb")
+    notebook_runs._clean_executed(path, ROOT / "notebooks" / "x.ipynb")
     data = json.loads(path.read_text())
     assert "widgets" not in data["metadata"]
     assert data["metadata"]["papermill"]["input_path"] == "notebooks/x.ipynb"
@@ -528,10 +532,9 @@ def test_verify_refuses_manifest_entries_outside_the_figures_directory(tmp_path,
 
 
 def test_verify_hashes_in_chunks(tmp_path, monkeypatch):
-    from nfarm import report
     (tmp_path / "big.png").write_bytes(bytes(range(256)) * 9000)      # 2.3 MB: three chunks of 1 MiB
     write_manifest(tmp_path)
-    monkeypatch.setattr(report.Path, "read_bytes", lambda self: pytest.fail("read whole"))
+    monkeypatch.setattr(manifest.Path, "read_bytes", lambda self: pytest.fail("read whole"))
     assert verify_manifest(tmp_path) == []
 
 
@@ -546,9 +549,10 @@ def test_cell_timeout_takes_a_positive_number_of_seconds(value, message, capsys)
 
 
 def test_cell_timeout_none_is_no_limit(monkeypatch):
-    from nfarm import __main__, report
+    from nfarm import __main__
+    from nfarm.publishing import report
     seen = {}
-    monkeypatch.setattr(report, "build_report", lambda **kw: seen.update(kw) or 0)
+    monkeypatch.setattr(report, "build_report", lambda **kw: seen.update(kw) or report.ReportRun(Path("i"), Path("f")))
     assert __main__.main(["report", "--cell-timeout", "none"]) == 0 and seen["cell_timeout"] is None
     assert __main__.main(["report", "--cell-timeout", "600.5"]) == 0 and seen["cell_timeout"] == 600.5
 
@@ -568,12 +572,12 @@ def test_an_out_directory_that_cannot_be_one_is_one_line(tmp_path, capsys, out, 
 
 def test_a_read_only_build_directory_is_one_line(project, capsys, monkeypatch):
     """(Simulated: the tests may run as a user who may write anywhere.)"""
-    from nfarm import report
+    from nfarm.publishing import report
     _, dirs = project
 
     def refuse(report_dir):
         raise PermissionError(13, "Permission denied", str(report_dir / "mathjax"))
-    monkeypatch.setattr(report, "_install_mathjax", refuse)
+    monkeypatch.setattr(report, "install_mathjax", refuse)
     assert build_report(only=["01"], **dirs) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"report: cannot write {dirs['build_dir'] / 'report' / 'mathjax'}: Permission denied"]
@@ -590,7 +594,8 @@ def test_ctrl_c_stops_editions_running_side_by_side(tmp_path):
 import sys, time
 sys.path.insert(0, {os.path.dirname(__file__)!r})
 from pathlib import Path
-from nfarm import report
+from nfarm.infra import notebook_runs
+from nfarm.publishing import report
 from test_report import make_chapter, fake_run
 root = Path({str(tmp_path)!r})
 notebooks = root / "notebooks"
@@ -598,12 +603,13 @@ notebooks.mkdir()
 make_chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"')
 make_chapter(notebooks / "02_compare.ipynb", 'study_files = ["sa.yaml"]')
 def slow(notebook, output, parameters, **options):
-    with report._interruptible():
+    with notebook_runs._interruptible():
         (root / f"started-{{parameters.get('robot_file', 'a')}}").touch()
         time.sleep(120)
 report.run_notebook = slow
 arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
-sys.exit(report.build_report(notebooks_dir=notebooks, figures_dir=root / "figures", build_dir=root / "build",
+from nfarm.__main__ import report_command
+sys.exit(report_command(notebooks_dir=notebooks, figures_dir=root / "figures", build_dir=root / "build",
                              arms=arms, parallel=True))
 """
     run = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
@@ -617,3 +623,24 @@ sys.exit(report.build_report(notebooks_dir=notebooks, figures_dir=root / "figure
     assert run.returncode == 130 and time.monotonic() - start < 30
     assert err.strip().splitlines()[-1].startswith("report: interrupted;"), err
     assert "Traceback" not in err, err
+
+
+@pytest.mark.notebook
+def test_the_library_reports_by_return_and_exception_and_prints_nothing(project, capsys):
+    """build_report returns what it wrote and raises what went wrong; the command line prints
+    (report_command) — the library itself says nothing unless given ``say``."""
+    from nfarm.infra.notebook_runs import ReportError
+    from nfarm.publishing.report import ReportUsageError, build_report as library_build
+
+    root, dirs = project
+    said = []
+    run = library_build(only=["01"], say=said.append, **dirs)
+    assert run.index == dirs["build_dir"] / "report" / "index.html" and run.index.exists()
+    assert said[0] == "01_first.ipynb …" and said[1].startswith("01_first.ipynb: ") and "published in" in said[1]
+    with pytest.raises(ReportUsageError, match=r"^no chapter 99 \(chapters: 01"):
+        library_build(only=["99"], **dirs)
+    make_notebook(dirs["notebooks_dir"] / "02_second.ipynb", "raise ValueError('bad joint')")
+    with pytest.raises(ReportError, match="02_second.ipynb failed in cell 3"):
+        library_build(only=["02"], **dirs)
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""

@@ -12,8 +12,8 @@ import yaml
 
 from conftest import ROBOT_FILES, load_quietly
 from nfarm.__main__ import main
-from nfarm.paths import ROOT
-from nfarm.robot import ParamsError, ParamsWarning, load_robot, robot_from_dict, robot_to_dict
+from nfarm.infra.paths import ROOT
+from nfarm.model.robot import ParamsError, ParamsWarning, load_robot, robot_from_dict, robot_to_dict
 
 INTELBOT5 = ROOT / "params" / "robots" / "intelbot5.yaml"
 PUMA560 = ROOT / "params" / "robots" / "puma560.yaml"
@@ -160,3 +160,9 @@ def test_check_params_cli(tmp_path):
     assert mixed.returncode == 2
     assert mixed.stderr.splitlines() == [f"{bad}: joints[2].mass: must be >= 0, got -1.0",
                                          f"{tmp_path / 'missing.yaml'}: file not found"]
+
+
+def test_a_robot_names_its_file_from_the_checkout_whatever_the_working_directory(tmp_path, monkeypatch):
+    robot = load_robot(ROOT / "params" / "robots" / "intelbot5.yaml")
+    monkeypatch.chdir(tmp_path)
+    assert "source='params/robots/intelbot5.yaml'" in repr(robot)

@@ -10,7 +10,7 @@ from hypothesis.extra.numpy import arrays
 
 from scipy.spatial.transform import Rotation
 
-from nfarm.rotations import (exp_so3, log_so3, matrix_to_quat, matrix_to_rpy, pose_error,
+from nfarm.model.rotations import (exp_so3, log_so3, matrix_to_quat, matrix_to_rpy, pose_error,
                              quat_to_matrix, quat_to_rpy, rpy_to_matrix, rpy_to_quat)
 
 unit_vectors = arrays(float, 3, elements=st.floats(-1, 1)).filter(
@@ -126,7 +126,7 @@ def test_log_map_matches_scipy_everywhere_including_next_to_pi():
 
 
 def test_relative_log_matches_scipy():
-    from nfarm.rotations import relative_log_T
+    from nfarm.model.rotations import relative_log_T
     rng = np.random.default_rng(3)
     R_b = Rotation.random(3000, rng=rng).as_matrix()
     delta = np.concatenate([Rotation.random(1000, rng=rng).as_rotvec(),

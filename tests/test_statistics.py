@@ -1,4 +1,4 @@
-"""Bootstrap spreads over trajectories (nfarm.statistics): the sums reproduce the direct NRMSE,
+"""Bootstrap spreads over trajectories (nfarm.study.statistics): the sums reproduce the direct NRMSE,
 intervals are seeded, contain the estimate and narrow with more trajectories."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.statistics import (bootstrap_nrmse, bootstrap_rows, nrmse_from_sums, trajectory_maxima, trajectory_sums,
+from nfarm.study.statistics import (bootstrap_nrmse, bootstrap_rows, nrmse_from_sums, trajectory_maxima, trajectory_sums,
                               worst_difference)
 
 
@@ -64,7 +64,7 @@ def test_paired_difference_tells_a_real_gap_from_noise():
 
 
 def test_ranges_separate_only_when_no_seed_overlaps():
-    from nfarm.statistics import ranges_separate, separation_level
+    from nfarm.study.statistics import ranges_separate, separation_level
     assert ranges_separate([1, 2, 3], [3.5, 4, 5]) and ranges_separate([4, 5], [1, 2])
     assert not ranges_separate([1, 2, 4], [3, 5, 6])
     assert separation_level(5, 5) == pytest.approx(2 / 252)

@@ -1,4 +1,4 @@
-"""The study's long summary (nfarm.summary): each row's value is the direct statistic of the
+"""The study's long summary (nfarm.study.summary): each row's value is the direct statistic of the
 held-out errors, its interval holds it, paired differences vanish for a method against itself,
 and the table is one line per task, method and metric."""
 
@@ -7,11 +7,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.statistics import trajectory_maxima, trajectory_sums
-from nfarm.statistics import bootstrap_nrmse
-from nfarm.summary import (IK_METRICS, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
+from nfarm.study.statistics import trajectory_maxima, trajectory_sums
+from nfarm.study.statistics import bootstrap_nrmse
+from nfarm.study.summary import (IK_METRICS, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
                            long_table, read_long_table, resolved_sums, wide_table, with_resolved_worst)
-from nfarm.sweep import Cell, CellResult, Replicates
+from nfarm.study.sweep import Cell, CellResult, Replicates
 
 
 def ik_errors(seed=0, n=500, joints=5):
@@ -153,3 +153,26 @@ def test_the_abstract_leaves_the_joints_below_noise_out_and_names_them(tmp_path)
     (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
     worst = next(r for r in rows if r.metric == WORST_ID)
     assert f"misses by {worst.value:.4g} %" in line and "τ2, whose torque is below the sensor noise, left out" in line
+
+
+def test_the_abstract_says_where_the_dissertations_recipe_beats_the_chosen_model(tmp_path):
+    """A loss to the recipe is not hidden behind the metric the choice was made on."""
+    chosen = ik_errors(7)
+    recipe = {k: v.copy() for k, v in ik_errors(8).items()}
+    recipe["position"] = recipe["position"] / 10                 # the recipe lands the tool closer
+    recipe["joint"] = recipe["joint"] * 10                       # but misses the joints by more
+    rows = ik_rows("ANFIS, chosen", "learned (chosen)", chosen, draws=300) + \
+        ik_rows("ANFIS, dissertation's recipe, region", "dissertation's recipe (assumed)", recipe, draws=300) + \
+        ik_rows("ANFIS, dissertation's recipe, full range", "dissertation's recipe (assumed)",
+                {k: 100 * v for k, v in chosen.items()}, draws=300)         # the first listed is the one compared
+    long_table(rows).save(tmp_path, "07_summary")
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
+    assert "it is better than the chosen model beyond both intervals on position median" in line
+    assert "worst joint RMSE (" not in line.split("it is better")[1]
+
+
+def test_a_maximum_is_written_without_an_interval(tmp_path):
+    long_table(ik_rows("m", "learned", ik_errors(), draws=300)).save(tmp_path, "07_summary")
+    rows = {r["metric"]: r for r in read_long_table(tmp_path / "tables" / "07_summary.csv")}
+    assert rows["position max"]["ci_low"] == rows["position max"]["ci_high"] == rows["position max"]["level"] == ""
+    assert rows["position median"]["ci_low"] and rows["position median"]["level"] == "0.95"

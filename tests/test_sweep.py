@@ -1,4 +1,4 @@
-"""Parameter sweeps (nfarm.sweep, nfarm.jobs): sweep files, cells, resuming, failures, and the
+"""Parameter sweeps (nfarm.study.sweep, nfarm.study.jobs): sweep files, cells, resuming, failures, and the
 same results in this process, on a local Dask cluster and on a scheduler with two workers
 started as separate processes on 127.0.0.1."""
 
@@ -16,9 +16,9 @@ import pytest
 import yaml
 
 from nfarm.__main__ import main
-from nfarm.paths import ROOT
-from nfarm.reading import ParamsError
-from nfarm.sweep import SWEEPS, load_sweep, run_sweep, run_sweeps, sweep_from_dict
+from nfarm.infra.paths import ROOT
+from nfarm.infra.reading import ParamsError
+from nfarm.study.sweep import SWEEPS, load_sweep, run_sweep, run_sweeps, sweep_from_dict
 
 SMOKE = SWEEPS / "smoke.yaml"
 NOTEBOOK = "tests/data/sweep_notebook.ipynb"
@@ -170,9 +170,9 @@ def test_resume_skips_finished_cells_and_reruns_failed_ones(tmp_path):
 def test_a_change_of_code_runs_the_cells_again(tmp_path, monkeypatch):
     sweep = sweep_from_dict(small(), "t.yaml")
     run_sweep(sweep, tmp_path, workers=0)
-    import nfarm.sweep
+    import nfarm.study.sweep
 
-    monkeypatch.setattr(nfarm.sweep, "code_key", lambda sweep: "another")
+    monkeypatch.setattr(nfarm.study.sweep, "code_key", lambda sweep: "another")
     assert not any(r.reused for r in run_sweep(sweep, tmp_path, workers=0))
 
 
@@ -321,7 +321,7 @@ def test_the_study_sweeps_run_five_seeds(name):
 
 
 def test_results_group_by_configuration_with_the_mean_and_range_over_seeds(tmp_path):
-    from nfarm.sweep import best_by, by_configuration
+    from nfarm.study.sweep import best_by, by_configuration
     sweep = sweep_from_dict(small(seeds=[0, 1, 2], fixed={"problem": "sinc", "epochs": 2, "partition": "fcm",
                                                          "mf": "gauss"},
                                   grid={"n_rules": [2, 3]}, metrics=["check_rmse", "rules"]))
@@ -352,7 +352,7 @@ def smoke_cell(tmp_path_factory):
 
 
 def test_a_learned_id_cell_trains_on_as_many_states_made_the_seeds_way(smoke_cell):
-    from nfarm.jobs import JOBS, id_training_data
+    from nfarm.study.jobs import JOBS, id_training_data
     import numpy as np
     cell = {**smoke_cell, "inputs": "own", "n_mfs": 2, "epochs": 1, "stride": 2}
     spec = {"duration_s": 6.0, "dt_s": 0.2, "seed": 7}
@@ -373,13 +373,13 @@ def test_a_learned_id_cell_trains_on_as_many_states_made_the_seeds_way(smoke_cel
     ({"duration_s": 6.0, "dt_s": 0.2, "seed": 7}, {"torques": "measured"}, "rigid-body torques only"),
 ])
 def test_bad_seed_like_trajectories_are_one_line_errors(smoke_cell, seed_like, more, message):
-    from nfarm.jobs import id_training_data
+    from nfarm.study.jobs import id_training_data
     with pytest.raises(ParamsError, match=message):
         id_training_data({**smoke_cell, "seed_like": seed_like, **more})
 
 
 def test_a_learned_ik_cell_trains_on_the_poses_it_names(smoke_cell):
-    from nfarm.jobs import JOBS
+    from nfarm.study.jobs import JOBS
     job = JOBS["learned_ik"]
     cell = {**smoke_cell, "encoding": "quat_xyz", "n_mfs": [2, 2, 1, 1, 1, 1, 1], "epochs": 1}
     region = job.function(job.complete(cell))
@@ -392,8 +392,8 @@ def test_a_learned_ik_cell_trains_on_the_poses_it_names(smoke_cell):
 def test_a_chapter_reads_a_cells_model_without_training_it_again(smoke_cell, monkeypatch):
     """The cell trains with one BLAS thread and caches on that environment; a chapter whose
     kernel has the machine's thread count gets the same model, not a second training."""
-    from nfarm.jobs import JOBS, ik_model
-    from nfarm.sweep import execute_cell
+    from nfarm.study.jobs import JOBS, ik_model
+    from nfarm.study.sweep import execute_cell
     cell = {**smoke_cell, "encoding": "arm_plane", "n_mfs": [1, 2, 2, 2, 2, 1], "epochs": 1,
             "max_out_of_plane_deg": 0.5, "seed": 3}
     record = execute_cell("learned_ik", None, JOBS["learned_ik"].complete(cell), ["worst_deg"], None)
@@ -430,7 +430,7 @@ def test_a_cell_whose_shared_preparation_fails_is_recorded_and_the_others_run(tm
     those parameters, each recorded, and the sweep goes on with the others."""
     from dataclasses import replace
 
-    from nfarm.jobs import JOBS
+    from nfarm.study.jobs import JOBS
 
     def prepare(p):
         if p["value"] == 1:
@@ -471,7 +471,7 @@ def test_a_cell_time_limit_is_a_positive_number_of_seconds(value, message):
 def test_time_limits_nest_and_stay_in_their_thread():
     import threading
 
-    from nfarm.limits import TimeLimitError, check_time, time_limit
+    from nfarm.infra.limits import TimeLimitError, check_time, time_limit
     with time_limit(0.05):
         time.sleep(0.08)
         seen = []

@@ -1,4 +1,4 @@
-"""Poses held relative to the arm's plane (nfarm.tool_paths): reached exactly by the closed form
+"""Poses held relative to the arm's plane (nfarm.solvers.tool_paths): reached exactly by the closed form
 and by LM on both study arms, the reference pose unchanged, bad input refused in one line."""
 
 from __future__ import annotations
@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from nfarm import ik
-from nfarm.geometric_ik import branch_margins
-from nfarm.kinematics import fk
-from nfarm.paths import ROOT
-from nfarm.robot import robot_from_dict, sample_configurations
-from nfarm.tool_paths import plane_held_poses
-from nfarm.trajectory import arm_plane_poses
+from nfarm.solvers.geometric_ik import branch_margins
+from nfarm.model.kinematics import fk
+from nfarm.infra.paths import ROOT
+from nfarm.model.robot import robot_from_dict, sample_configurations
+from nfarm.solvers.tool_paths import plane_held_poses
+from nfarm.solvers.trajectory import arm_plane_poses
 
 from conftest import load_quietly
 

@@ -11,11 +11,11 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from nfarm.dynamics import rnea
-from nfarm.kinematics import fk
-from nfarm.ik import solve
-from nfarm.recording import record_id_trajectory, record_ik_paths, record_trajectory
-from nfarm.trajectory import (TrajectoryLimitWarning, arm_plane_poses, cubic, line_path, quintic,
+from nfarm.model.dynamics import rnea
+from nfarm.model.kinematics import fk
+from nfarm.solvers.ik import solve
+from nfarm.presentation.recording import record_id_trajectory, record_ik_paths, record_trajectory
+from nfarm.solvers.trajectory import (TrajectoryLimitWarning, arm_plane_poses, cubic, line_path, quintic,
                               time_grid, via_points)
 
 Q0, QF = np.radians([0, 10, -20, 30, 0]), np.radians([90, 45, -60, 30, 120])

@@ -15,13 +15,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import random_chains
-from nfarm.dynamics import gravity_torques, mass_matrix, rnea
-from nfarm.kinematics import fk, jacobian
-from nfarm.paths import PARAMS
-from nfarm.pinocchio_ref import pinocchio_from_urdf, pinocchio_model
-from nfarm.reading import ParamsError, ParamsWarning
-from nfarm.rotations import quat_to_matrix, matrix_to_rpy
-from nfarm.urdf import from_urdf, to_urdf
+from nfarm.model.dynamics import gravity_torques, mass_matrix, rnea
+from nfarm.model.kinematics import fk, jacobian
+from nfarm.infra.paths import PARAMS
+from nfarm.model.pinocchio_ref import pinocchio_from_urdf, pinocchio_model
+from nfarm.infra.reading import ParamsError, ParamsWarning
+from nfarm.model.rotations import quat_to_matrix, matrix_to_rpy
+from nfarm.model.urdf import from_urdf, to_urdf
 
 TOL = 1e-12
 
@@ -286,7 +286,7 @@ def test_a_lock_position_must_be_a_finite_number(tmp_path):
 def test_robot_files_naming_a_urdf(tmp_path):
     """A YAML robot file takes a URDF relative to itself, its tip, locks, gravity and drive
     terms; check-params accepts it and the URDF; their mistakes are one-line errors."""
-    from nfarm.robot import load_robot
+    from nfarm.model.robot import load_robot
     (tmp_path / "two.urdf").write_text(GOOD)
     good = "name: two\nurdf: two.urdf\ntip: l2\ndrive: {viscous: 0.1, armature: [0.01, 0.02]}\n"
     (tmp_path / "two.yaml").write_text(good)
@@ -319,9 +319,9 @@ def test_a_urdf_robot_is_hashed_by_its_sources(tmp_path):
     loading gives another."""
     import dataclasses
 
-    from nfarm.robot import load_robot, robot_hash
+    from nfarm.model.robot import load_robot, robot_hash
     robot = load_robot(PARAMS / "robots" / "so101.yaml")
-    script = ("from nfarm.robot import load_robot, robot_hash; import sys; "
+    script = ("from nfarm.model.robot import load_robot, robot_hash; import sys; "
               "print(robot_hash(load_robot(sys.argv[1])))")
     env = {**__import__("os").environ, "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR AVX2 FMA3",
            "OPENBLAS_CORETYPE": "Sandybridge"}

@@ -1,4 +1,4 @@
-"""Words for numbers (nfarm.wording): every value a sentence can get reads well."""
+"""Words for numbers (nfarm.presentation.wording): every value a sentence can get reads well."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import nfarm.wording
-from nfarm.wording import about, sig, span, times, times_range
+import nfarm.presentation.wording
+from nfarm.presentation.wording import about, sig, span, times, times_range
 
 
 def test_the_examples_hold():
-    assert doctest.testmod(nfarm.wording).failed == 0
+    assert doctest.testmod(nfarm.presentation.wording).failed == 0
 
 
 @pytest.mark.parametrize("ratio, words", [
@@ -61,7 +61,7 @@ def test_timings_in_tables_have_three_significant_digits():
 
 
 def test_torque_columns_mark_the_joints_below_the_sensor_noise():
-    from nfarm.wording import torque_columns
+    from nfarm.presentation.wording import torque_columns
     headers, note = torque_columns([2.0, 0.0001], [0.005, 0.005], ["base", "roll"])
     assert headers == ["τ1 [%]", "τ2 [%] (below noise)"]
     assert note.startswith(". The torque of τ2 (roll: spread 0.0001 N·m, sensor noise σ 0.005 N·m) is below")
@@ -79,7 +79,7 @@ def test_torque_columns_mark_the_joints_below_the_sensor_noise():
     ((f"q{j}" for j in (2, 3, 4, 5)), "q2, q3, q4 and q5"),
 ])
 def test_names_in_a_sentence_end_with_and(items, words):
-    from nfarm.wording import listed
+    from nfarm.presentation.wording import listed
     assert listed(items) == words
 
 
@@ -92,6 +92,6 @@ def test_names_in_a_sentence_end_with_and(items, words):
     ([0.005, 0.1], [0.005, 0.005], [True, True], "worst"),             # at the noise: resolved
 ])
 def test_the_worst_joint_is_over_the_joints_a_sensor_resolves(spread, noise, resolved, words):
-    from nfarm.wording import resolved_joints, worst_of
+    from nfarm.presentation.wording import resolved_joints, worst_of
     assert resolved_joints(spread, noise).tolist() == resolved
     assert worst_of(resolved) == words

@@ -1,4 +1,4 @@
-"""Singular configurations computed from an arm's geometry (nfarm.workspace): the elbow's links
+"""Singular configurations computed from an arm's geometry (nfarm.solvers.workspace): the elbow's links
 in line and the tool point on that line, for every shipped arm in the closed form's class."""
 
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.kinematics import fk, fk_all, min_singular_value
-from nfarm.paths import PARAMS
-from nfarm.robot import load_robot
-from nfarm.workspace import near_stretched, singular_configurations
+from nfarm.model.kinematics import fk, fk_all, min_singular_value
+from nfarm.infra.paths import PARAMS
+from nfarm.model.robot import load_robot
+from nfarm.solvers.workspace import near_stretched, singular_configurations
 
 
 @pytest.mark.parametrize("name, stretched_elbow_deg", [("intelbot5", 90.0), ("so101", -73.82)])

@@ -9,25 +9,25 @@ import os
 import sys
 import warnings
 
-from .robot import ParamsError, ParamsWarning, load_robot
+from .model.robot import ParamsError, ParamsWarning, load_robot
 
 
 def _check_one(path: str) -> str:
     """Validate one robot, study or sweep file (told apart by their required fields); the
     summary."""
-    from .reading import load_yaml
+    from .infra.reading import load_yaml
 
     if path.lower().endswith(".urdf"):
         robot = load_robot(path)
         return f"{robot.name}, {robot.n} joints converted from the URDF to {robot.convention} DH"
     data = load_yaml(path)
     if isinstance(data, dict) and "metrics" in data and ("job" in data or "notebook" in data):
-        from .sweep import sweep_from_dict
+        from .study.sweep import sweep_from_dict
 
         sweep = sweep_from_dict(data, source=path)
         return f"sweep {sweep.name!r}: {len(sweep.cells)} cells of {sweep.target}"
     if isinstance(data, dict) and "robot_file" in data and "joints" not in data:
-        from .datasets import study_from_dict
+        from .study.datasets import study_from_dict
 
         study = study_from_dict(data, source=path)
         return (f"study {study.name!r} of {study.robot.name}, IK sizes "
@@ -103,8 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     panel.add_argument("--port", type=int, default=8866, metavar="PORT", help="default 8866")
     args = parser.parse_args(argv)
     if args.command == "panel":
-        from .panel_server import serve
-        return serve(args.port)
+        return panel_command(args.port)
     if args.command == "check-params":
         return check_params(args.files)
     if args.command == "verify":
@@ -112,13 +111,69 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "datasets":
         return make_datasets(args.study, args.out, args.force)
     if args.command == "course":
-        from .course import main as course_main
-        return course_main(args.out, args.smoke, args.only, not args.no_teacher)
+        return course_command(args.out, args.smoke, args.only, not args.no_teacher)
     if args.command == "sweep":
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
-    from .report import build_report
-    return build_report(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
-                        force=args.force, parallel=False if args.serial else None)
+    return report_command(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
+                          force=args.force, parallel=False if args.serial else None)
+
+
+def panel_command(port: int) -> int:
+    """``python -m nfarm panel``: the address, then the process becomes the Voilà server; 2 with
+    one line for a port that cannot be used."""
+    from .publishing.panel_server import check_port, serve
+
+    try:
+        check_port(port)
+    except ValueError as error:
+        print(f"panel: {error}", file=sys.stderr)
+        return 2
+    print(f"panel: http://127.0.0.1:{port}/ (the page takes a few seconds to start its kernel; "
+          f"Ctrl-C stops the server)", flush=True)
+    serve(port)
+    return 0   # not reached: serve replaces the process
+
+
+def course_command(out: str | None, smoke: bool, only, teacher: bool) -> int:
+    """``python -m nfarm course``: 0, or 1 with one line on standard error."""
+    from .infra.notebook_runs import ReportError
+    from .infra.paths import shown_path
+    from .publishing.course import build_course
+
+    try:
+        where = build_course(out, smoke=smoke, only=only, teacher=teacher,
+                             progress=lambda text: print(text, file=sys.stderr))
+    except (ValueError, ReportError) as exc:
+        print(f"course: {exc}", file=sys.stderr)
+        return 1
+    print(f"{shown_path(where)}: student/, teacher/ and index.html")
+    return 0
+
+
+def report_command(**options) -> int:
+    """``python -m nfarm report``: :func:`nfarm.publishing.report.build_report` with its progress
+    and its failure on stderr, one line each; the exit status (0; 1 for a failure; 2 for a bad
+    choice of chapters; 130 when interrupted)."""
+    from .infra.notebook_runs import ReportError
+    from .infra.paths import shown_path
+    from .publishing import report
+
+    def say(text: str) -> None:
+        print(f"report: {text}", file=sys.stderr, flush=True)
+
+    try:
+        run = report.build_report(say=say, **options)
+    except report.ReportUsageError as exc:
+        say(str(exc))
+        return 2
+    except report.ReportInterrupted as exc:
+        say(str(exc))
+        return 130
+    except ReportError as exc:
+        say(str(exc))
+        return 1
+    say(f"{shown_path(run.index)}; figures in {shown_path(run.figures_dir)}")
+    return 0
 
 
 def _seconds(text: str) -> float | None:
@@ -155,7 +210,7 @@ def _output_directory(option: str, out: str | None) -> str | None:
 
 def make_datasets(study_file: str, out: str | None, force: bool) -> int:
     """Build (or reuse) every data set of a study; one line per file."""
-    from .datasets import build_datasets, load_study
+    from .study.datasets import build_datasets, load_study
 
     problem = _output_directory("--out", out)
     if problem:
@@ -181,8 +236,8 @@ def run_sweep_file(path: str, scheduler: str | None, workers: int | None, out: s
                    smoke: bool) -> int:
     """Run a sweep; one line per failed cell and a closing line. 0 if every cell succeeded,
     1 if some failed, 2 for a bad sweep file or an unreachable scheduler."""
-    from .paths import BUILD, project_path, shown_path
-    from .sweep import load_sweep, run_sweep
+    from .infra.paths import BUILD, project_path, shown_path
+    from .study.sweep import load_sweep, run_sweep
 
     if workers is not None and workers < 0:
         print(f"--workers: must be >= 0, got {workers}", file=sys.stderr)
@@ -222,8 +277,8 @@ def verify_figures(figures: str | None) -> int:
     """Print what differs from the manifest; 0 when nothing does, else 1."""
     from pathlib import Path
 
-    from .paths import FIGURES
-    from .report import verify_manifest
+    from .infra.paths import FIGURES
+    from .publishing.manifest import verify_manifest
 
     directory = Path(figures) if figures else FIGURES
     problems = verify_manifest(directory)

@@ -1,0 +1,126 @@
+"""Feature bases of joint states for learning inverse dynamics without the arm's parameters
+(chapters 06 and 07).
+
+What holds for every rigid arm with revolute joints, whatever its masses and lengths:
+
+* the torque is **affine in the accelerations and quadratic in the velocities**,
+  ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q)``, so it is a sum of the terms ``1, q̈_k, q̇_k q̇_l``
+  (:func:`dynamic_terms`: ``1 + n + n(n + 1)/2`` of them, 21 for five joints) each times a
+  function of the configuration;
+* those functions are **trigonometric polynomials** of the joint angles: a link's rotation is a
+  product of the joints' ``Rz(q_i) Rx(α_i)``, its inertia enters ``M`` through products of two
+  rotation entries, gravity through one;
+* consecutive joints whose axes are **parallel** (a pitch chain: intelbot5's and the SO-101's
+  joints 2–4) turn the links beyond them by the *sum* of their angles, so the torques depend on
+  ``sin, cos`` of those sums (:func:`parallel_runs`, read off the kinematic structure — which
+  axes are parallel, not how long or heavy anything is).
+
+Bases (:func:`basis`; each is ``dynamic_terms ⊗ configuration terms``):
+
+* ``"generic"`` — the configuration terms ``1, sin q_i, cos q_i`` and every product of two of
+  them: ``1 + 2n + 2n(2n + 1)/2`` terms (66 for five joints; 1 386 features in all). Knows
+  nothing of the arm but its number of joints;
+* ``"chain"`` — the same over the joint angles *and* the sums of every stretch of parallel
+  joints (intelbot5: ``q2+q3``, ``q3+q4``, ``q2+q3+q4``; 153 terms, 3 213 features). For arms
+  like intelbot5 (a base yaw, a pitch chain, a roll) this span holds the rigid-body model
+  exactly, so a linear fit of it is an identification in disguise — chapter 06 says so;
+* ``"generic_linear"``, ``"chain_linear"`` — dynamic terms times ``1`` and the ``sin, cos`` of
+  the angles (and sums), *without* their products (231 and 357 features for intelbot5): what
+  one first-order rule of :class:`nfarm.learning.learned.LearnedID` with ``inputs="affine_generic"`` or
+  ``"affine"`` sees; the products it needs are left to the fuzzy rules over ``q``.
+
+All functions are pure and batched over the sample axis: ``q, qd, qdd (N, n)`` [rad, rad/s,
+rad/s²] → ``(N, F)``.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from ..model.kinematics import jacobian
+from ..model.robot import Robot
+
+__all__ = ["BASES", "parallel_runs", "angle_sums", "dynamic_terms", "configuration_terms",
+           "basis", "basis_width"]
+
+BASES = ("generic", "chain", "generic_linear", "chain_linear")
+
+
+@functools.lru_cache(maxsize=32)
+def _runs(robot: Robot, axis_tol: float) -> tuple[tuple[int, ...], ...]:
+    rng = np.random.default_rng(0)
+    lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
+    q = lo + (hi - lo) * rng.random((16, robot.n))
+    axes = np.moveaxis(jacobian(robot, q)[:, 3:, :], 1, 2)                 # (16, n, 3)
+    parallel = np.linalg.norm(np.cross(axes[:, :-1], axes[:, 1:]), axis=-1).max(axis=0) <= axis_tol
+    runs, start = [], 0
+    for j in range(1, robot.n + 1):
+        if j == robot.n or not parallel[j - 1]:
+            if j - start >= 2:
+                runs.append(tuple(range(start, j)))
+            start = j
+    return tuple(runs)
+
+
+def parallel_runs(robot: Robot, *, axis_tol: float = 1e-3) -> list[tuple[int, ...]]:
+    """The stretches of two or more consecutive joints (0-based indices) whose axes stay
+    parallel: ``|z_j × z_{j+1}| ≤ axis_tol`` at 16 seeded random configurations (the axes are
+    the angular rows of :func:`nfarm.model.kinematics.jacobian`). ``axis_tol`` [rad] accepts the
+    SO-101's URDF-derived pitch axes (3.7e-6 rad apart). intelbot5 and the SO-101: ``[(1, 2,
+    3)]``."""
+    return [tuple(r) for r in _runs(robot, float(axis_tol))]
+
+
+def _sum_columns(robot: Robot) -> list[tuple[int, ...]]:
+    """The joint sets whose angle sums the chain bases use: every joint alone, then every
+    stretch of two or more consecutive joints within a parallel run."""
+    sets = [(j,) for j in range(robot.n)]
+    for run in parallel_runs(robot):
+        for length in range(2, len(run) + 1):
+            sets += [run[i:i + length] for i in range(len(run) - length + 1)]
+    return sets
+
+
+def angle_sums(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """``(N, K)``: the joint angles, then the sums of every stretch of parallel joints."""
+    return np.column_stack([q[:, list(s)].sum(axis=1) for s in _sum_columns(robot)])
+
+
+def dynamic_terms(qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """``(N, 1 + n + n(n + 1)/2)``: ``1``, ``q̈_k``, ``q̇_k q̇_l`` (k ≤ l)."""
+    k, l = np.triu_indices(qd.shape[1])
+    return np.column_stack([np.ones(len(qd)), qdd, qd[:, k] * qd[:, l]])
+
+
+def configuration_terms(angles: np.ndarray, *, products: bool = True) -> np.ndarray:
+    """``(N, 1 + 2K [+ 2K(2K + 1)/2])``: ``1``, ``sin, cos`` of each of ``K`` angles and, with
+    ``products``, every product of two of those (squares included)."""
+    t = np.column_stack([np.sin(angles), np.cos(angles)])
+    columns = [np.ones((len(t), 1)), t]
+    if products:
+        i, j = np.triu_indices(t.shape[1])
+        columns.append(t[:, i] * t[:, j])
+    return np.concatenate(columns, axis=1)
+
+
+def basis(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, kind: str) -> np.ndarray:
+    """The basis ``kind`` (:data:`BASES`) of states ``q, qd, qdd (N, n)``: ``(N, F)``, the
+    outer product of :func:`dynamic_terms` and the configuration terms, dynamic term major."""
+    if kind not in BASES:
+        raise ValueError(f"basis must be one of {', '.join(BASES)}, got {kind!r}")
+    angles = q if kind.startswith("generic") else angle_sums(robot, q)
+    conf = configuration_terms(angles, products=not kind.endswith("_linear"))
+    dyn = dynamic_terms(qd, qdd)
+    return (dyn[:, :, None] * conf[:, None, :]).reshape(len(q), -1)
+
+
+def basis_width(robot: Robot, kind: str) -> int:
+    """Columns of :func:`basis` for ``robot``."""
+    n = robot.n
+    if kind not in BASES:
+        raise ValueError(f"basis must be one of {', '.join(BASES)}, got {kind!r}")
+    K = n if kind.startswith("generic") else len(_sum_columns(robot))
+    conf = 1 + 2 * K + (0 if kind.endswith("_linear") else 2 * K * (2 * K + 1) // 2)
+    return (1 + n + n * (n + 1) // 2) * conf

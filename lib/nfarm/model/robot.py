@@ -1,0 +1,575 @@
+"""Robot model: a serial chain of revolute joints described by Denavit–Hartenberg parameters.
+
+A :class:`Robot` is loaded from a YAML file (schema in ``params/README.md``) by
+:func:`load_robot`, which validates every field and raises :class:`ParamsError` with a message
+of the form ``FILE: joints[2].mass: must be >= 0, got -1.0``.
+
+Conventions (SI units, radians):
+
+* ``standard`` DH (Craig's "distal", Corke's ``RevoluteDH``)::
+
+      A_i = Rz(q_i + offset_i) · Tz(d_i) · Tx(a_i) · Rx(alpha_i)
+
+* ``modified`` DH (Craig's "proximal"); a joint's ``a, alpha`` are the a_{i-1}, alpha_{i-1}
+  that precede its rotation::
+
+      A_i = Rx(alpha_i) · Tx(a_i) · Rz(q_i + offset_i) · Tz(d_i)
+
+``com`` and ``inertia`` of link i are about the link's centre of mass, expressed in DH frame i.
+The chain hangs from the world frame at ``base`` (DH frame 0 in the world; default identity) and
+carries the ``tool``: ``T_0e = base · A_1 ··· A_n · tool``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..infra.paths import project_path, shown_path
+from ..infra.reading import ParamsError, ParamsWarning, Validator, load_yaml, show
+from ..infra.reading import read_bytes as _read_bytes
+
+__all__ = [
+    "ParamsError",
+    "ParamsWarning",
+    "Robot",
+    "load_robot",
+    "robot_from_dict",
+    "robot_to_dict",
+    "sample_configurations",
+    "robot_hash",
+    "joint_array",
+    "poses_for",
+    "dh_rows",
+    "DRIVE_DEFAULTS",
+    "register_reader",
+    "with_provenance",
+]
+
+CONVENTIONS = ("standard", "modified")
+TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
+            "tool": False, "base": False, "description": False}
+JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
+              "com": True, "inertia": True, "name": False, "viscous": False, "coulomb": False,
+              "coulomb_velocity": False, "armature": False, "effort": False, "velocity": False}
+#: Joint-drive terms (optional per joint; see :func:`nfarm.model.dynamics.joint_drive_torques`) and
+#: their defaults: viscous [N·m·s/rad], Coulomb [N·m], Coulomb smoothing speed [rad/s],
+#: armature (reflected rotor inertia) [kg·m²].
+DRIVE_DEFAULTS = {"viscous": 0.0, "coulomb": 0.0, "coulomb_velocity": 0.01, "armature": 0.0}
+ORTHONORMAL_TOL = 1e-9
+INERTIA_RTOL = 1e-12
+MAX_PLAUSIBLE_LENGTH = 10.0   # [m]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Robot:
+    """A validated serial chain of ``n`` revolute joints. Arrays are read-only.
+
+    Attributes:
+        name: robot name.
+        convention: ``"standard"`` or ``"modified"`` DH.
+        a, alpha, d, offset: ``(n,)`` DH parameters [m, rad, m, rad].
+        qlim: ``(n, 2)`` joint limits ``[lo, hi]`` [rad].
+        mass: ``(n,)`` link masses [kg].
+        com: ``(n, 3)`` centres of mass in link frames [m].
+        inertia: ``(n, 3, 3)`` inertia tensors about the centre of mass, link frame [kg m²].
+        gravity: ``(3,)`` gravity acceleration in the world frame [m/s²].
+        tool: ``(4, 4)`` pose of the tool frame in the last link frame.
+        base: ``(4, 4)`` pose of DH frame 0 in the world frame (identity unless the file or
+            the URDF gives one); poses, Jacobians, gravity and tip wrenches are in the world
+            frame.
+        joint_names: ``n`` names (``"q1"``… when the file gives none).
+        viscous, coulomb, coulomb_velocity, armature: ``(n,)`` joint-drive terms (viscous
+            [N·m·s/rad] and Coulomb [N·m] friction, the Coulomb smoothing speed [rad/s], the
+            reflected rotor inertia [kg·m²]); zero friction and armature unless the file gives
+            them. Used only where asked (``rnea(..., drive=True)``).
+        effort, velocity: ``(n,)`` the joints' torque [N·m] and speed [rad/s] limits (a URDF's
+            ``<limit effort velocity>``; ``inf`` unless given). Informative: no solver
+            enforces them.
+        source: the file the robot was loaded from, or a description.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> robot.name, robot.convention, robot.source
+        ('intelbot5', 'standard', 'params/robots/intelbot5.yaml')
+        >>> robot.n, robot.a.tolist(), robot.qlim.shape     # a [m], qlim [rad]
+        (5, [0.0, 0.2, 0.18, 0.0, 0.0], (5, 2))
+        >>> robot.a.flags.writeable
+        False
+    """
+
+    name: str
+    convention: str
+    a: np.ndarray
+    alpha: np.ndarray
+    d: np.ndarray
+    offset: np.ndarray
+    qlim: np.ndarray
+    mass: np.ndarray
+    com: np.ndarray
+    inertia: np.ndarray
+    gravity: np.ndarray
+    tool: np.ndarray
+    joint_names: tuple[str, ...]
+    source: str = "<dict>"
+    description: str = ""
+    viscous: np.ndarray | None = None
+    coulomb: np.ndarray | None = None
+    coulomb_velocity: np.ndarray | None = None
+    armature: np.ndarray | None = None
+    base: np.ndarray | None = None
+    effort: np.ndarray | None = None
+    velocity: np.ndarray | None = None
+    provenance: tuple[str, str] | None = dataclasses.field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        for key in ("effort", "velocity"):
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, np.full(self.a.shape[0], np.inf))
+        if self.base is None:
+            object.__setattr__(self, "base", np.eye(4))
+        for key, default in DRIVE_DEFAULTS.items():
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, np.full(self.a.shape[0], default))
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.a.shape[0]
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, {self.convention} DH, n={self.n}, source={shown_path(project_path(self.source))!r})"
+
+
+# --------------------------------------------------------------------------------------------
+# Loading
+
+
+#: Readers of robot descriptions in other formats, by file suffix. The URDF reader registers
+#: itself (:mod:`nfarm.model.urdf`, imported by the package), so that this model layer does not
+#: import the file-format layer.
+_READERS: dict[str, Any] = {}
+URDF_FILE_KEYS = {"name": True, "urdf": True, "tip": False, "lock": False, "gravity": False,
+                  "drive": False, "description": False}
+_DRIVE_KEYS = dict.fromkeys(DRIVE_DEFAULTS, False)
+
+
+def register_reader(suffix: str, reader) -> None:
+    """Let :func:`load_robot` read files ending in ``suffix`` with ``reader(path, tip=None,
+    lock=None, name=None) -> Robot``.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.urdf import from_urdf
+        >>> register_reader(".urdf", from_urdf)     # what importing nfarm.model.urdf does
+        >>> load_robot(PARAMS / "robots" / "so101.yaml").n     # a robot file naming a .urdf
+        5
+    """
+    _READERS[suffix.lower()] = reader
+
+
+def load_robot(path: str | Path) -> Robot:
+    """Load and validate a robot file: a DH parameter file (YAML; schema in
+    ``params/README.md``), a URDF (``.urdf``: :func:`nfarm.model.urdf.from_urdf`, its single leaf the
+    tip), or a YAML file naming a URDF with its ``tip``, the ``lock`` positions of joints off the
+    chain, and optional ``gravity``, joint ``drive`` terms and ``description``.
+
+    The file goes through :func:`nfarm.infra.reading.load_yaml` (regular file, size limit, no
+    duplicate keys, bounded aliases and nesting, YAML 1.2 decimal numbers).
+
+    Raises:
+        ParamsError: the file is missing, is not valid YAML, or breaks a schema rule; the
+            message names the file, the field and the rule (and the line for YAML errors).
+    Warns:
+        ParamsWarning: an inertia that violates the triangle inequality; an implausible
+            value (an angle beyond 2π, a length beyond 10 m: degrees or millimetres by mistake?).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> robot.joint_names
+        ('base_yaw', 'shoulder_pitch', 'elbow_pitch', 'wrist_pitch', 'wrist_roll')
+        >>> so101 = load_robot(PARAMS / "robots" / "so101.yaml")     # a YAML file naming a URDF
+        >>> so101.name, so101.n, so101.source
+        ('so101', 5, 'params/robots/so101.yaml')
+    """
+    path = Path(path)
+    if path.suffix.lower() in _READERS:
+        return _READERS[path.suffix.lower()](path)
+    data = load_yaml(path, what="robot file")
+    if isinstance(data, dict) and "urdf" in data and "joints" not in data:
+        return _from_described_urdf(data, path)
+    return robot_from_dict(data, source=shown_path(path))     # messages name it relative to the checkout
+
+
+def _from_described_urdf(data: dict, path: Path) -> Robot:
+    """A robot file naming a URDF (``urdf`` relative to the file) and what to take from it."""
+    v = _Validator(str(path))
+    v.mapping(data, "", URDF_FILE_KEYS)
+    name = v.string(data["name"], "name")
+    urdf = path.parent / v.string(data["urdf"], "urdf")
+    if urdf.suffix.lower() not in _READERS:
+        v.fail("urdf", f"must name a .urdf file, got {show(data['urdf'])}")
+    tip = v.string(data["tip"], "tip") if data.get("tip") is not None else None
+    lock = {}
+    if data.get("lock") is not None:
+        if not isinstance(data["lock"], dict):
+            v.fail("lock", f"must map joint names to positions, got {show(data['lock'])}")
+        lock = {str(k): v.number(x, f"lock.{k}") for k, x in data["lock"].items()}
+    robot = _READERS[urdf.suffix.lower()](urdf, tip=tip, lock=lock, name=name)
+    changes: dict[str, Any] = {"source": shown_path(path)}
+    if data.get("gravity") is not None:
+        changes["gravity"] = np.array(v.vector(data["gravity"], "gravity", 3))
+    if "description" in data:
+        changes["description"] = v.string(data["description"], "description", allow_empty=True)
+    if data.get("drive") is not None:
+        drive = v.mapping(data["drive"], "drive", _DRIVE_KEYS)
+        for key, value in drive.items():
+            values = value if isinstance(value, list) else [value] * robot.n
+            if len(values) != robot.n:
+                v.fail(f"drive.{key}", f"must be one number or {robot.n}, got {len(values)}")
+            numbers = [v.number(x, f"drive.{key}", lo=0.0, lo_open=key == "coulomb_velocity")
+                       for x in values]
+            changes[key] = np.array(numbers)
+    robot = dataclasses.replace(robot, **changes)
+    fields = json.dumps(data, sort_keys=True, default=str).encode("utf-8")
+    return with_provenance(robot, fields, _read_bytes(urdf))
+
+
+def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
+    """Validate a parameter mapping (as read from YAML) and build a :class:`Robot`.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> data = robot_to_dict(robot)
+        >>> robot_from_dict(data).a.tolist()     # [m]
+        [0.0, 0.2, 0.18, 0.0, 0.0]
+        >>> robot_from_dict({**data, "convention": "craig"})
+        Traceback (most recent call last):
+        ...
+        nfarm.infra.reading.ParamsError: <dict>: convention: must be one of standard, modified, got 'craig'
+    """
+    v = _Validator(source)
+    v.mapping(data, "", TOP_KEYS)
+    name = v.string(data["name"], "name")
+    convention = v.choice(data["convention"], "convention", CONVENTIONS)
+    gravity = np.array(v.vector(data["gravity"], "gravity", 3))
+    tool = v.pose(data["tool"], "tool") if data.get("tool") is not None else np.eye(4)
+    for k in range(3):
+        v.plausible(float(tool[k, 3]), f"tool[{k}][3]", "length")
+    base = v.pose(data["base"], "base") if data.get("base") is not None else np.eye(4)
+    for k in range(3):
+        v.plausible(float(base[k, 3]), f"base[{k}][3]", "length")
+    description = v.string(data["description"], "description", allow_empty=True) \
+        if "description" in data else ""
+
+    joints = data["joints"]
+    if not isinstance(joints, list) or not joints:
+        v.fail("joints", f"must be a non-empty list of joints, got {show(joints)}")
+    fields: dict[str, list] = {k: [] for k in JOINT_KEYS}
+    for i, joint in enumerate(joints):
+        at = f"joints[{i}]"
+        v.mapping(joint, at, JOINT_KEYS)
+        for key, kind in (("a", "length"), ("alpha", "angle"), ("d", "length"),
+                          ("offset", "angle")):
+            fields[key].append(v.number(joint[key], f"{at}.{key}"))
+            v.plausible(fields[key][-1], f"{at}.{key}", kind)
+        lo, hi = v.vector(joint["qlim"], f"{at}.qlim", 2)
+        if not lo < hi:
+            v.fail(f"{at}.qlim", f"must satisfy lo < hi, got [{lo!r}, {hi!r}]")
+        if max(abs(lo), abs(hi)) > 2 * math.pi:
+            v.fail(f"{at}.qlim", f"must lie within [-2π, 2π] rad, got [{lo!r}, {hi!r}] "
+                                 f"(degrees by mistake?)")
+        fields["qlim"].append((lo, hi))
+        mass = v.number(joint["mass"], f"{at}.mass")
+        if mass < 0:
+            v.fail(f"{at}.mass", f"must be >= 0, got {mass!r}")
+        fields["mass"].append(mass)
+        fields["com"].append(v.vector(joint["com"], f"{at}.com", 3))
+        for k, c in enumerate(fields["com"][-1]):
+            v.plausible(c, f"{at}.com[{k}]", "length")
+        fields["inertia"].append(v.inertia(joint["inertia"], f"{at}.inertia"))
+        jname = joint.get("name", f"q{i + 1}")
+        fields["name"].append(v.string(jname, f"{at}.name"))
+        for key, default in DRIVE_DEFAULTS.items():
+            value = v.number(joint.get(key, default), f"{at}.{key}")
+            if value < 0 or (key == "coulomb_velocity" and value == 0):
+                v.fail(f"{at}.{key}", f"must be {'> 0' if key == 'coulomb_velocity' else '>= 0'}, "
+                                      f"got {value!r}")
+            fields.setdefault(key, []).append(value)
+        for key in ("effort", "velocity"):
+            fields.setdefault(key, []).append(
+                v.number(joint[key], f"{at}.{key}", lo=0.0, lo_open=True) if key in joint else math.inf)
+
+    return Robot(
+        name=name, convention=convention,
+        a=np.array(fields["a"]), alpha=np.array(fields["alpha"]), d=np.array(fields["d"]),
+        offset=np.array(fields["offset"]), qlim=np.array(fields["qlim"], dtype=float),
+        mass=np.array(fields["mass"]), com=np.array(fields["com"]),
+        inertia=np.array(fields["inertia"]), gravity=gravity, tool=tool, base=base,
+        joint_names=tuple(fields["name"]), source=source, description=description,
+        **{key: np.array(fields[key]) for key in DRIVE_DEFAULTS},
+        effort=np.array(fields["effort"], dtype=float), velocity=np.array(fields["velocity"], dtype=float),
+    )
+
+
+def robot_to_dict(robot: Robot) -> dict:
+    """The parameter mapping of ``robot`` (plain Python types), as :func:`robot_from_dict` reads.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> data = robot_to_dict(robot)
+        >>> list(data)
+        ['name', 'convention', 'gravity', 'tool', 'joints', 'description']
+        >>> data["joints"][1]["a"], data["joints"][1]["qlim"]     # [m], [rad]
+        (0.2, [-1.5707963267948966, 1.5707963267948966])
+    """
+    joints = []
+    for i in range(robot.n):
+        inertia = robot.inertia[i]
+        joints.append({
+            "name": robot.joint_names[i],
+            "a": float(robot.a[i]), "alpha": float(robot.alpha[i]), "d": float(robot.d[i]),
+            "offset": float(robot.offset[i]), "qlim": robot.qlim[i].tolist(),
+            "mass": float(robot.mass[i]), "com": robot.com[i].tolist(),
+            "inertia": [float(inertia[0, 0]), float(inertia[1, 1]), float(inertia[2, 2]),
+                        float(inertia[0, 1]), float(inertia[1, 2]), float(inertia[0, 2])],
+        })
+        # Drive terms only where they differ from the defaults: a file without them keeps its
+        # hash (and its data sets and models stay valid).
+        joints[-1].update({key: float(getattr(robot, key)[i]) for key, default in
+                           DRIVE_DEFAULTS.items() if getattr(robot, key)[i] != default})
+        joints[-1].update({key: float(getattr(robot, key)[i]) for key in ("effort", "velocity")
+                           if np.isfinite(getattr(robot, key)[i])})
+    out = {"name": robot.name, "convention": robot.convention,
+           "gravity": robot.gravity.tolist(), "tool": robot.tool.tolist(), "joints": joints}
+    if not np.array_equal(robot.base, np.eye(4)):     # as the drive terms: old hashes kept
+        out["base"] = robot.base.tolist()
+    if robot.description:
+        out["description"] = robot.description
+    return out
+
+
+def _canonical(robot: Robot) -> str:
+    return json.dumps(robot_to_dict(robot), sort_keys=True, separators=(",", ":"))
+
+
+def robot_hash(robot: Robot) -> str:
+    """SHA-256 of the robot's parameters as loaded (canonical JSON of :func:`robot_to_dict`,
+    floats written exactly): two files that differ only in comments or layout are one robot.
+    Data sets and saved models record it, and refuse to be used with another robot.
+
+    A robot converted from a URDF is hashed by its sources instead (the URDF's bytes and what
+    the robot file takes from it, :func:`with_provenance`) as long as its parameters are the
+    ones converted: the conversion's last bits depend on the machine's floating point (BLAS
+    kernels, SIMD paths), and the same files must be the same robot everywhere. A robot
+    changed after loading (``dataclasses.replace``) is hashed by its parameters again.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> h = robot_hash(robot)
+        >>> len(h), h == robot_hash(robot_from_dict(robot_to_dict(robot)))     # hex digits; same robot
+        (64, True)
+    """
+    canonical = _canonical(robot)
+    if robot.provenance is not None and robot.provenance[1] == canonical:
+        return robot.provenance[0]
+    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def with_provenance(robot: Robot, *sources: bytes) -> Robot:
+    """``robot`` hashed by ``sources`` (e.g. a URDF's bytes and the robot file's canonical
+    fields) while its parameters stay as they are now (:func:`robot_hash`).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> tagged = with_provenance(robot, b"urdf bytes", b"fields")
+        >>> robot_hash(tagged) == robot_hash(robot), robot_to_dict(tagged) == robot_to_dict(robot)
+        (False, True)
+        >>> robot_hash(tagged) == robot_hash(with_provenance(robot, b"urdf bytes", b"fields"))
+        True
+    """
+    digest = hashlib.sha256()
+    for part in sources:
+        digest.update(hashlib.sha256(part).digest())
+    return dataclasses.replace(robot, provenance=(digest.hexdigest(), _canonical(robot)))
+
+
+def sample_configurations(robot: Robot, size: int | tuple[int, ...], seed: int | np.random.Generator,
+                          ) -> np.ndarray:
+    """Joint configurations drawn uniformly within the limits: ``(*size, n)`` [rad].
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> q = sample_configurations(robot, (2, 3), seed=0)
+        >>> q.shape                                                          # (*size, n) [rad]
+        (2, 3, 5)
+        >>> bool(((q >= robot.qlim[:, 0]) & (q <= robot.qlim[:, 1])).all())
+        True
+    """
+    rng = np.random.default_rng(seed)
+    size = (size,) if isinstance(size, int) else tuple(size)
+    lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
+    return lo + (hi - lo) * rng.random(size + (robot.n,))
+
+
+def joint_array(robot: Robot, value, name: str = "q") -> np.ndarray:
+    """``value`` as a float array of shape ``(..., n)``, or a one-line ``ValueError``: real
+    numbers only (booleans, complex numbers, strings and ``None`` are refused, not cast).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> joint_array(robot, [0, 0, 0, 0, 0]).dtype, joint_array(robot, np.zeros((3, 5))).shape
+        (dtype('float64'), (3, 5))
+        >>> joint_array(robot, [0.0, 0.0, 0.0])
+        Traceback (most recent call last):
+        ...
+        ValueError: intelbot5: q must have shape (..., 5), got (3,)
+    """
+    array = value if isinstance(value, np.ndarray) else np.asarray(value)
+    if array.dtype.kind not in "iuf":
+        kind = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
+                "O": "objects"}.get(array.dtype.kind, array.dtype.name)
+        raise ValueError(f"{robot.name}: {name} must hold real numbers, got {kind} ({show(value)})")
+    if array.ndim == 0 or array.shape[-1] != robot.n:
+        raise ValueError(f"{robot.name}: {name} must have shape (..., {robot.n}), got {array.shape}")
+    return array.astype(float, copy=False)
+
+
+def poses_for(robot: Robot, poses_deg: dict[str, Sequence[float]], seed: int = 0,
+              ) -> tuple[dict[str, np.ndarray], str]:
+    """Named configurations [rad] for a chapter, and a note for its reader.
+
+    ``poses_deg`` maps names to angles [deg]. When every pose has one angle per joint they are
+    used as given (an empty note); when they were written for another arm (another number of
+    joints), the home configuration (0 moved into the limits) and seeded random
+    configurations within the limits take their place, as many as were given, and the note
+    says so — a chapter run for another robot shows that robot instead of failing.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> poses, note = poses_for(robot, {"ready": [0, 30, 60, -90, 0]})     # [deg]
+        >>> (poses["ready"].round(6) + 0.0).tolist(), note                      # [rad]
+        ([0.0, 0.523599, 1.047198, -1.570796, 0.0], '')
+        >>> list(poses_for(robot, {"a": [0] * 6, "b": [10] * 6})[0])          # poses for 6 joints
+        ['home (q = 0)', 'random configuration 1']
+    """
+    if poses_deg and all(len(q) == robot.n for q in poses_deg.values()):
+        return {name: np.radians(np.asarray(q, dtype=float)) for name, q in poses_deg.items()}, ""
+    lengths = sorted({len(q) for q in poses_deg.values()})
+    rng = np.random.default_rng(seed)
+    home = np.clip(0.0, robot.qlim[:, 0], robot.qlim[:, 1])
+    poses = {"home (q = 0)": home}
+    for k in range(1, max(len(poses_deg), 1)):
+        poses[f"random configuration {k}"] = sample_configurations(robot, (), rng)
+    note = (f"The chapter's named poses have {', '.join(map(str, lengths))} angles; "
+            f"{robot.name} has {robot.n} joints, so its home configuration and "
+            f"{len(poses) - 1} random configuration{'s' if len(poses) != 2 else ''} within its limits (seed {seed}) are "
+            f"shown instead.")
+    return poses, note
+
+
+def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
+    """The DH table for people: column names and one row per joint, angles in degrees.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> columns, rows = dh_rows(robot)
+        >>> columns[:6]
+        ['joint', 'name', 'a [m]', 'alpha [deg]', 'd [m]', 'offset [deg]']
+        >>> print(*rows[1])
+        2 shoulder_pitch 0.2 0.0 0.0 90.0 -90.0 90.0 0.35
+    """
+    prime = "" if robot.convention == "standard" else "_{i-1}"
+    columns = ["joint", "name", f"a{prime} [m]", f"alpha{prime} [deg]", "d [m]",
+               "offset [deg]", "q min [deg]", "q max [deg]", "mass [kg]"]
+    deg = np.degrees
+    rows = [[i + 1, robot.joint_names[i], robot.a[i], deg(robot.alpha[i]), robot.d[i],
+             deg(robot.offset[i]), deg(robot.qlim[i, 0]), deg(robot.qlim[i, 1]), robot.mass[i]]
+            for i in range(robot.n)]
+    return columns, rows
+
+
+# --------------------------------------------------------------------------------------------
+# Validation
+
+
+class _Validator(Validator):
+    """The shared field checks plus a robot's own: poses and inertias."""
+
+    def pose(self, value: Any, at: str) -> np.ndarray:
+        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 4:
+            self.fail(at, f"must be a 4x4 matrix (list of 4 rows), got {show(value)}")
+        T = np.array([self.vector(row, f"{at}[{r}]", 4) for r, row in enumerate(value)])
+        if not np.array_equal(T[3], [0.0, 0.0, 0.0, 1.0]):
+            self.fail(f"{at}[3]", f"last row must be [0, 0, 0, 1], got {T[3].tolist()}")
+        R = T[:3, :3]
+        err = float(np.abs(R.T @ R - np.eye(3)).max())
+        if err > ORTHONORMAL_TOL:
+            self.fail(at, f"rotation part must be orthonormal (max |RᵀR − I| = {err:.3g} "
+                          f"> {ORTHONORMAL_TOL:g})")
+        if np.linalg.det(R) < 0:
+            self.fail(at, "rotation part must have determinant +1 (got a reflection)")
+        return T
+
+    def inertia(self, value: Any, at: str) -> np.ndarray:
+        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 6:
+            self.fail(at, f"must be a list of 6 numbers [Ixx, Iyy, Izz, Ixy, Iyz, Ixz], "
+                          f"got {show(value)}")
+        ixx, iyy, izz, ixy, iyz, ixz = (self.number(x, f"{at}[{k}]") for k, x in enumerate(value))
+        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        principal = np.linalg.eigvalsh(inertia)
+        # Relative to the inertia's own scale: a 1e-20 kg m² part is as much a body as a
+        # 1 kg m² one (eigvalsh is accurate to ~1e-16 of the largest moment).
+        tol = INERTIA_RTOL * float(np.abs(principal).max())
+        if principal[0] < -tol:
+            self.fail(at, f"must be positive semi-definite, got principal moments "
+                          f"{[float(f'{p:.6g}') for p in principal]}")
+        p1, p2, p3 = principal
+        if p1 + p2 < p3 - tol:
+            self.warn(at, f"principal moments {[float(f'{p:.6g}') for p in principal]} break "
+                          f"the triangle inequality (I1 + I2 >= I3): not a physical rigid body; "
+                          f"accepted as given")
+        return inertia
+
+    def warn(self, at: str, message: str) -> None:
+        warnings.warn(ParamsWarning(f"{self.source}: {at}: {message}"), stacklevel=5)
+
+    def plausible(self, value: float, at: str, kind: str) -> None:
+        """Warn about an angle beyond 2π or a length beyond 10 m (a unit slip?)."""
+        if kind == "angle" and abs(value) > 2 * math.pi:
+            self.warn(at, f"{value!r} rad is more than a full turn: an angle in degrees?")
+        elif kind == "length" and abs(value) > MAX_PLAUSIBLE_LENGTH:
+            self.warn(at, f"{value!r} m is over {MAX_PLAUSIBLE_LENGTH:g} m: a length in "
+                          f"millimetres?")

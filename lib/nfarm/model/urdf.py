@@ -1,0 +1,558 @@
+"""URDF export of a DH chain, so that Pinocchio and rerun load the same robot as nfarm.
+
+URDF places each joint at a fixed origin in its parent link and turns the child about an axis
+through that origin, so a DH link transform is split at the joint rotation:
+
+* standard DH, ``A_i = Rz(θ_i) · F_i`` with ``F_i = Rz(offset_i) Tz(d_i) Tx(a_i) Rx(α_i)``:
+  URDF joint i sits at ``F_{i-1}`` in link i−1 (``F_0 = I``); URDF link i is then DH frame i−1
+  turned by ``q_i``, and DH frame i is ``F_i`` in it;
+* modified DH, ``A_i = G_i · Rz(θ_i)`` with ``G_i = Rx(α_i) Tx(a_i) Tz(d_i) Rz(offset_i)``:
+  URDF joint i sits at ``G_i`` and URDF link i *is* DH frame i.
+
+Links: ``base_link``, ``link1``…``linkn`` (the moving bodies, with their inertials), and
+massless ``dh_frame1``…``dh_framen`` and ``tool`` on fixed joints, so the DH frames and the tool
+frame can be looked up by name. Visuals: a cylinder along each joint axis and cylinders along
+the links' common normals and offsets.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from .kinematics import joint_placements
+from .robot import Robot, register_reader
+from .rotations import matrix_to_rpy
+
+__all__ = ["to_urdf", "from_urdf"]
+
+
+def _f(x: float) -> str:
+    return repr(float(x)) if x != 0 else "0"
+
+
+def _limit(x: float) -> str:
+    """A URDF limit: 0 stands for none."""
+    return _f(x) if np.isfinite(x) else "0"
+
+
+def _origin(T: np.ndarray) -> str:
+    xyz = " ".join(_f(v) for v in T[:3, 3])
+    rpy = " ".join(_f(v) for v in matrix_to_rpy(T[:3, :3]))
+    return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
+
+
+def _cylinder(start: np.ndarray, end: np.ndarray, radius: float) -> str:
+    """A visual cylinder from ``start`` to ``end`` (points in the link frame)."""
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    z = axis / length
+    helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = (start + end) / 2
+    return (f'    <visual>{_origin(T)}<geometry><cylinder radius="{_f(radius)}" '
+            f'length="{_f(length)}"/></geometry><material name="link"/></visual>')
+
+
+def _link_visuals(points: list[np.ndarray], radius: float) -> list[str]:
+    out = [_cylinder(np.array([0, 0, -radius]), np.array([0, 0, radius]), 1.25 * radius)]
+    for start, end in zip(points, points[1:]):
+        if np.linalg.norm(end - start) > 1e-9:
+            out.append(_cylinder(start, end, radius))
+    return out
+
+
+def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float] = (0.85, 0.55, 0.15)
+            ) -> str:
+    """A URDF (XML string) of the chain: revolute joints with limits, inertials, visuals.
+
+    ``prefix`` goes before the robot's, every link's and every joint's name, so that two copies
+    of one arm can share a scene (frames are matched by name); ``color`` is the links' RGB.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> text = to_urdf(robot)
+        >>> text.splitlines()[1], text.count('type="revolute"')
+        ('<robot name="intelbot5">', 5)
+        >>> to_urdf(robot, prefix="left_").splitlines()[1]
+        '<robot name="left_intelbot5">'
+    """
+    J, B = joint_placements(robot)
+    n = robot.n
+    size = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d)))
+    radius = 0.04 * max(size, 0.25)  # visuals in proportion, and visible on a tiny chain
+    tool = B[-1] @ robot.tool
+    lines = ['<?xml version="1.0"?>', f'<robot name="{robot.name}">',
+             f'  <material name="link"><color rgba="{" ".join(_f(c) for c in color)} 1"/></material>',
+             '  <link name="base_link">',
+             _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>',
+             '  <joint name="dh_frame0_fixed" type="fixed">',
+             f'    <parent link="base_link"/><child link="dh_frame0"/>{_origin(robot.base)}',
+             '  </joint>',
+             '  <link name="dh_frame0"/>']
+    for i in range(n):
+        child = f"link{i + 1}"
+        parent = "base_link" if i == 0 else f"link{i}"
+        lo, hi = robot.qlim[i]
+        lines += [
+            f'  <joint name="{robot.joint_names[i]}" type="revolute">',
+            f'    <parent link="{parent}"/><child link="{child}"/>',
+            f'    {_origin(robot.base @ J[i] if i == 0 else J[i])}<axis xyz="0 0 1"/>',
+            f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="{_limit(robot.effort[i])}" '
+            f'velocity="{_limit(robot.velocity[i])}"/>',
+            '  </joint>',
+        ]
+        # Inertial: the centre of mass and inertia are given in DH frame i+1 = B[i] in the body.
+        com = B[i] @ np.append(robot.com[i], 1.0)
+        inertial = B[i].copy()
+        inertial[:3, 3] = com[:3]
+        I = robot.inertia[i]
+        # Visual path: from the joint to the next joint (or the tool) through the DH frame.
+        end = (J[i + 1] if i + 1 < n else tool)[:3, 3]
+        if robot.convention == "standard":  # along z by d, then along the new x by a
+            path = [np.zeros(3), np.array([0, 0, robot.d[i]]), B[i][:3, 3], end]
+        else:  # G = Rx(α) Tx(a) Tz(d) Rz(offset): along x by a, then along the new z by d
+            a_next = robot.a[i + 1] if i + 1 < n else 0.0
+            path = [np.zeros(3), np.array([a_next, 0, 0]), end]
+        lines += [
+            f'  <link name="{child}">',
+            f'    <inertial>{_origin(inertial)}<mass value="{_f(robot.mass[i])}"/>'
+            f'<inertia ixx="{_f(I[0, 0])}" ixy="{_f(I[0, 1])}" ixz="{_f(I[0, 2])}" '
+            f'iyy="{_f(I[1, 1])}" iyz="{_f(I[1, 2])}" izz="{_f(I[2, 2])}"/></inertial>',
+            *_link_visuals(path, radius),
+            '  </link>',
+            f'  <joint name="dh_frame{i + 1}_fixed" type="fixed">',
+            f'    <parent link="{child}"/><child link="dh_frame{i + 1}"/>{_origin(B[i])}',
+            '  </joint>',
+            f'  <link name="dh_frame{i + 1}"/>',
+        ]
+    lines += [
+        '  <joint name="tool_fixed" type="fixed">',
+        f'    <parent link="link{n}"/><child link="tool"/>{_origin(tool)}',
+        '  </joint>',
+        '  <link name="tool"/>',
+        '</robot>',
+    ]
+    text = "\n".join(lines) + "\n"
+    if prefix:
+        text = re.sub(r'(<robot name="|<link name="|<joint name="|link=")', lambda m: m[1] + prefix, text)
+    return text
+
+
+# --------------------------------------------------------------------------------------------
+# Reading: a URDF's serial chain as a DH robot
+
+#: Joint types a chain may hold (``fixed`` ones are folded into the geometry).
+_CHAIN_TYPES = ("revolute", "fixed")
+#: Joint types a side branch may hold: locked at the position ``lock`` gives (default 0).
+_LOCKABLE = ("revolute", "continuous", "prismatic", "fixed")
+#: Axes closer than this (the sine of their angle) are parallel; lines closer than
+#: ``_NEAR`` metres intersect.
+_PARALLEL = 1e-9
+_NEAR = 1e-12
+
+
+def _rpy_matrix(r: float, p: float, y: float) -> np.ndarray:
+    """URDF's fixed-axis roll, pitch, yaw: ``Rz(y) · Ry(p) · Rx(r)``."""
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rodrigues: rotation by ``angle`` about the unit ``axis``."""
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+class _Reader:
+    """The URDF's elements, validated, with one-line errors naming the file and element."""
+
+    def __init__(self, source: str, root):
+        from ..infra.reading import Validator
+        self.v = Validator(source)
+        if root.tag != "robot":
+            self.v.fail("<robot>", f"the root element must be <robot>, got <{root.tag}>")
+        self.name = root.get("name") or "urdf_robot"
+        self.links, self.joints = {}, {}
+        for link in root.findall("link"):
+            name = self._name(link, "link")
+            if name in self.links:
+                self.v.fail(f"link {name!r}", "is defined twice")
+            self.links[name] = self._inertial(link, f"link {name!r}")
+        for joint in root.findall("joint"):
+            name = self._name(joint, "joint")
+            if name in self.joints:
+                self.v.fail(f"joint {name!r}", "is defined twice")
+            self.joints[name] = self._joint(joint, f"joint {name!r}")
+        if not self.links:
+            self.v.fail("<robot>", "has no <link>")
+
+    def _name(self, element, kind: str) -> str:
+        name = element.get("name")
+        if not name:
+            self.v.fail(f"<{kind}>", "needs a non-empty name attribute")
+        return name
+
+    def _numbers(self, text, at: str, count: int, default=None) -> np.ndarray:
+        if text is None:
+            if default is None:
+                self.v.fail(at, "is required")
+            return np.array(default, dtype=float)
+        what = "a finite number" if count == 1 else f"{count} finite numbers"
+        try:
+            values = np.array([float(x) for x in text.split()])
+        except ValueError:
+            self.v.fail(at, f"must be {what}, got {text!r}")
+        if values.shape != (count,) or not np.isfinite(values).all():
+            self.v.fail(at, f"must be {what}, got {text!r}")
+        return values
+
+    def _origin(self, element, at: str) -> np.ndarray:
+        T = np.eye(4)
+        origin = element.find("origin")
+        if origin is not None:
+            xyz = self._numbers(origin.get("xyz"), f"{at} <origin xyz>", 3, (0, 0, 0))
+            rpy = self._numbers(origin.get("rpy"), f"{at} <origin rpy>", 3, (0, 0, 0))
+            T[:3, :3], T[:3, 3] = _rpy_matrix(*rpy), xyz
+        return T
+
+    def _inertial(self, link, at: str):
+        inertial = link.find("inertial")
+        if inertial is None:
+            return None
+        mass_el = inertial.find("mass")
+        mass = self._numbers(None if mass_el is None else mass_el.get("value"),
+                             f"{at} <inertial><mass value>", 1)[0]
+        if mass < 0:
+            self.v.fail(f"{at} <inertial><mass value>", f"must be >= 0, got {mass!r}")
+        el = inertial.find("inertia")
+        keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+        values = {k: self._numbers(None if el is None else el.get(k, "0"),
+                                   f"{at} <inertial><inertia {k}>", 1)[0] for k in keys}
+        I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
+                      [values["ixy"], values["iyy"], values["iyz"]],
+                      [values["ixz"], values["iyz"], values["izz"]]])
+        if np.linalg.eigvalsh(I).min() < -1e-9 * max(np.abs(I).max(), 1e-300):
+            self.v.fail(f"{at} <inertial><inertia>", "must be positive semi-definite")
+        T = self._origin(inertial, f"{at} <inertial>")
+        return mass, T, I          # inertia about the centre of mass, axes of T
+
+    def _joint(self, joint, at: str) -> dict:
+        kind = joint.get("type")
+        parent, child = joint.find("parent"), joint.find("child")
+        out = {"type": kind, "origin": self._origin(joint, at),
+               "parent": None if parent is None else parent.get("link"),
+               "child": None if child is None else child.get("link")}
+        for key in ("parent", "child"):
+            if not out[key]:
+                self.v.fail(f"{at} <{key} link>", "is required")
+        axis = self._numbers(None if joint.find("axis") is None else joint.find("axis").get("xyz"),
+                             f"{at} <axis xyz>", 3, (1, 0, 0))       # URDF's default axis
+        if kind in ("revolute", "continuous", "prismatic"):
+            norm = float(np.linalg.norm(axis))
+            if norm < 1e-12:
+                self.v.fail(f"{at} <axis xyz>", "must not be the zero vector")
+            axis = axis / norm
+        out["axis"] = axis
+        limit = joint.find("limit")
+        if kind == "revolute":
+            if limit is None:
+                self.v.fail(f"{at} <limit>", "is required for a revolute joint")
+            lo = self._numbers(limit.get("lower", "0"), f"{at} <limit lower>", 1)[0]
+            hi = self._numbers(limit.get("upper", "0"), f"{at} <limit upper>", 1)[0]
+            if not lo < hi:
+                self.v.fail(f"{at} <limit>", f"must satisfy lower < upper, got [{lo!r}, {hi!r}]")
+            out["limits"] = (lo, hi)
+            out["effort"] = self._numbers(limit.get("effort"), f"{at} <limit effort>", 1)[0]
+            out["velocity"] = self._numbers(limit.get("velocity"), f"{at} <limit velocity>", 1)[0]
+        return out
+
+
+def _parse(path: Path):
+    import xml.etree.ElementTree as ET
+
+    from ..infra.reading import ParamsError, read_bytes
+    raw = read_bytes(path, max_bytes=16 << 20, what="URDF")
+    if b"<!DOCTYPE" in raw or b"<!ENTITY" in raw:
+        raise ParamsError(f"{path}: <!DOCTYPE>/<!ENTITY> declarations are not accepted in a URDF")
+    try:
+        return ET.fromstring(raw)
+    except ET.ParseError as exc:
+        line, column = exc.position
+        raise ParamsError(f"{path}: not well-formed XML at line {line}, column {column + 1}") from None
+
+
+def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarray,
+                   x_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """DH frame origin on the line ``(p1, z1)`` and its x axis, from the line ``(o0, z0)``:
+    the foot of their common normal and its direction (skew lines); the intersection and
+    ``z0 × z1`` (intersecting); the foot of the normal through ``o0`` (parallel, so that
+    ``d = 0``); ``o0`` and ``x_prev`` (the same line)."""
+    cross = np.cross(z0, z1)
+    sine = float(np.linalg.norm(cross))
+    if sine < _PARALLEL:                                         # parallel or the same line
+        foot = p1 + np.dot(o0 - p1, z1) * z1
+        gap = foot - o0
+        gap -= np.dot(gap, z0) * z0
+        distance = float(np.linalg.norm(gap))
+        if distance < _NEAR:
+            return o0.copy(), x_prev.copy()
+        return o0 + gap, gap / distance
+    n = cross / sine
+    # Closest points o0 + t0 z0 and p1 + t1 z1.
+    w = o0 - p1
+    b = np.dot(z0, z1)
+    denom = 1 - b * b
+    t0 = (b * np.dot(z1, w) - np.dot(z0, w)) / denom
+    t1 = (np.dot(z1, w) - b * np.dot(z0, w)) / denom
+    f0, f1 = o0 + t0 * z0, p1 + t1 * z1
+    gap = f1 - f0
+    distance = float(np.linalg.norm(gap))
+    if distance < _NEAR:
+        return f1, n
+    return f1, gap / distance
+
+
+def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> list[np.ndarray]:
+    """World poses of DH frames 0..n from the joint axes (point, unit direction) at q = 0 and
+    the tip's origin (:func:`from_urdf`'s docstring)."""
+    n = len(axes)
+    z_0 = axes[0][1]
+    o_0 = axes[0][0] - np.dot(axes[0][0], z_0) * z_0          # on axis 1, nearest the origin
+    frames = [None] * (n + 1)
+    o, x = o_0, np.zeros(3)
+    for i in range(1, n):
+        o, x = _common_normal(o, axes[i - 1][1], *axes[i], x)
+        if not x.any():                                        # axes 1 and 2 the same line
+            x = _perpendicular(axes[0][1])
+        frames[i] = _frame(x, axes[i][1], o)
+    # Frame n at the tip's origin, z along axis n; x along the tip's offset from the axis.
+    z_n = axes[-1][1]
+    gap = p_tip - o
+    gap -= np.dot(gap, z_n) * z_n
+    if np.linalg.norm(gap) > _NEAR:
+        x = gap / np.linalg.norm(gap)
+    elif not x.any():
+        x = _perpendicular(z_n)
+    frames[n] = _frame(x, z_n, p_tip)
+    # Frame 0 on axis 1, x_0 = x_1 (offset_1 = 0).
+    x_1 = frames[1][:3, 0]
+    frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0)
+    frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
+    return frames
+
+
+def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = o
+    return T
+
+
+def _lump(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+    """One rigid body from bodies ``(mass, com, inertia about the com)`` in one frame."""
+    m = sum(b[0] for b in bodies)
+    if not bodies:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    # Massless bodies keep their rotational inertia (the Puma's first link is one).
+    com = sum(b[0] * b[1] for b in bodies) / m if m > 0 else bodies[0][1]
+    I = np.zeros((3, 3))
+    for mass, c, Ic in bodies:
+        r = c - com
+        I += Ic + mass * (r @ r * np.eye(3) - np.outer(r, r))
+    return m, com, I
+
+
+def from_urdf(path: str | os.PathLike, tip: str | None = None,
+              lock: Mapping[str, float] | None = None, *, name: str | None = None) -> Robot:
+    """The serial chain of a URDF from its root link to ``tip`` as an nfarm :class:`Robot`
+    (standard DH, a base and a tool transform).
+
+    Args:
+        path: the URDF file.
+        tip: the chain's last link (default: the single leaf; several leaves are an error that
+            lists them). The tool frame is this link's frame.
+        lock: positions [rad or m] of joints off the chain (e.g. a gripper's jaw), default 0.
+        name: the robot's name (default the URDF's).
+
+    The chain holds revolute and fixed joints. At ``q = 0`` each joint axis is a line in the
+    world; DH frame i sits on axis i+1 (standard DH, ``z_i`` along it), at the foot of the
+    common normal from axis i, ``x_i`` along that normal: for intersecting axes at the
+    intersection with ``x_i = z_{i−1} × z_i``, for parallel axes where the normal through the
+    previous origin meets it (``d_i = 0``), for one line continuing the previous frame. Frame 0
+    sits on axis 1 where it passes nearest the root's origin, with ``x_0`` along ``x_1`` (so
+    ``offset_1 = 0``); frame n at the tip's origin with ``z_n`` along axis n. Every DH row is
+    then read off consecutive frames; ``base`` is frame 0 in the root's frame, ``tool`` the tip
+    in frame n. Each moving link's inertia, with everything fixed or locked to it (side
+    branches, massless frames), becomes one rigid body in its DH frame (parallel axes);
+    bodies before joint 1 never move and are left out. Limits, effort and velocity carry over;
+    gravity is ``[0, 0, −9.81]`` in the root's frame.
+
+    Raises:
+        ParamsError: one line naming the file, the element and the rule (a prismatic or
+            continuous joint on the chain, a closed loop, a missing link, a malformed number…).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> so101 = from_urdf(PARAMS / "robots" / "so101" / "so101.urdf", tip="gripper_frame_link",
+        ...                   lock={"gripper": 0.0})     # the jaw, off the chain, closed
+        >>> so101
+        Robot('so101_new_calib', standard DH, n=5, source='params/robots/so101/so101.urdf')
+        >>> so101.a.round(4).tolist()     # [m]
+        [0.0304, 0.116, 0.135, 0.0, 0.0079]
+    """
+    from ..infra.reading import ParamsError, read_bytes
+    from .robot import robot_from_dict, with_provenance
+
+    path = Path(path)
+    source = str(path)
+    r = _Reader(source, _parse(path))
+    v = r.v
+    children: dict[str, list[str]] = {name_: [] for name_ in r.links}
+    parent_joint: dict[str, str] = {}
+    for jname, j in r.joints.items():
+        for key in ("parent", "child"):
+            if j[key] not in r.links:
+                v.fail(f"joint {jname!r} <{key} link>", f"names a link that does not exist: {j[key]!r}")
+        if j["child"] in parent_joint:
+            v.fail(f"joint {jname!r}", f"link {j['child']!r} already has parent joint "
+                                       f"{parent_joint[j['child']]!r}: a closed loop, not a tree")
+        parent_joint[j["child"]] = jname
+        children[j["parent"]].append(jname)
+    roots = [l for l in r.links if l not in parent_joint]
+    if len(roots) != 1:
+        v.fail("<robot>", f"must have one root link, got {len(roots)}: {', '.join(roots) or 'none (a loop)'}")
+    root = roots[0]
+    order = [root]                              # links, parents before children
+    for link in order:
+        order += [r.joints[jname]["child"] for jname in children[link]]
+    if len(order) != len(r.links):
+        v.fail("<robot>", f"links not connected to the root {root!r} (a loop): "
+                          f"{', '.join(sorted(set(r.links) - set(order)))}")
+    leaves = sorted(l for l in r.links if not children[l])
+    if tip is None:
+        if len(leaves) != 1:
+            v.fail("tip", f"the URDF has {len(leaves)} leaf links ({', '.join(leaves)}): name the "
+                          f"chain's last link")
+        tip = leaves[0]
+    elif tip not in r.links:
+        v.fail("tip", f"no link {tip!r} in the URDF (leaves: {', '.join(leaves)})")
+    chain, link = [], tip                       # joint names from the root to the tip
+    while link != root:
+        chain.append(parent_joint[link])
+        link = r.joints[chain[-1]]["parent"]
+    chain.reverse()
+    for jname in chain:
+        kind = r.joints[jname]["type"]
+        if kind not in _CHAIN_TYPES:
+            v.fail(f"joint {jname!r}", f"type {kind!r} on the chain to {tip!r}: only revolute and "
+                                       f"fixed joints are supported there")
+    moving = [j for j in chain if r.joints[j]["type"] == "revolute"]
+    if not moving:
+        v.fail("tip", f"the chain from {root!r} to {tip!r} has no revolute joint")
+    lock = dict(lock or {})
+    for jname, value in lock.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            v.fail(f"lock.{jname}", f"must be a finite number, got {value!r}")
+        if jname not in r.joints:
+            v.fail(f"lock.{jname}", "names no joint of the URDF")
+        if jname in chain:
+            v.fail(f"lock.{jname}", "is on the chain: only joints off it are locked")
+
+    # World poses at q = 0 (side joints at their lock positions) of every link.
+    pose = {root: np.eye(4)}
+    for link in order:
+        for jname in children[link]:
+            j = r.joints[jname]
+            T = pose[link] @ j["origin"]
+            value = float(lock.get(jname, 0.0)) if jname not in chain else 0.0
+            if j["type"] in ("revolute", "continuous") and value:
+                T[:3, :3] = T[:3, :3] @ _axis_rotation(j["axis"], value)
+            elif j["type"] == "prismatic" and value:
+                T[:3, 3] += T[:3, :3] @ j["axis"] * value
+            elif j["type"] not in _LOCKABLE:
+                v.fail(f"joint {jname!r}", f"type {j['type']!r} cannot be locked off the chain")
+            pose[j["child"]] = T
+
+    # Joint axes as world lines, then the DH frames.
+    axes = []
+    for jname in moving:
+        T = pose[r.joints[jname]["parent"]] @ r.joints[jname]["origin"]
+        axes.append((T[:3, 3], T[:3, :3] @ r.joints[jname]["axis"]))
+    n = len(moving)
+    frames = _dh_frames(axes, pose[tip][:3, 3])
+
+    rows = []
+    for i in range(1, n + 1):
+        F0, F1 = frames[i - 1], frames[i]
+        z0, x0, x1, z1 = F0[:3, 2], F0[:3, 0], F1[:3, 0], F1[:3, 2]
+        step = F1[:3, 3] - F0[:3, 3]
+        rows.append({"a": _snap(np.dot(step, x1)), "d": _snap(np.dot(step, z0)),
+                     "offset": _snap(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
+                     "alpha": _snap(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
+
+    # Inertias: each moving link with what is fixed or locked to it, in its DH frame.
+    owner = {}
+    for link in order:
+        if link == root:
+            continue
+        jname = parent_joint[link]
+        owner[link] = moving.index(jname) if jname in moving else owner.get(r.joints[jname]["parent"])
+    bodies = [[] for _ in range(n)]
+    for link, k in owner.items():
+        if k is None or r.links[link] is None:
+            continue
+        mass, T_in, I = r.links[link]
+        G = np.linalg.solve(frames[k + 1], pose[link] @ T_in)    # inertial frame in DH frame k
+        bodies[k].append((mass, G[:3, 3], G[:3, :3] @ I @ G[:3, :3].T))
+    joints = []
+    for k, jname in enumerate(moving):
+        m, com, I = _lump(bodies[k])
+        j = r.joints[jname]
+        joints.append({**rows[k], "name": jname, "qlim": list(j["limits"]), "mass": m,
+                       "com": com.tolist(),
+                       "inertia": [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]],
+                       **{key: j[key] for key in ("effort", "velocity") if j[key] > 0}})
+    tool = np.linalg.solve(frames[n], pose[tip])
+    try:
+        robot = robot_from_dict({"name": name or r.name, "convention": "standard",
+                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                "tool": tool.tolist(), "joints": joints,
+                                "description": f"from {path.name}, chain {root} → {tip}"},
+                               source=source)
+    except ParamsError as exc:
+        raise ParamsError(f"{exc} (converted from the URDF)") from None
+    how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
+    return with_provenance(robot, read_bytes(path, max_bytes=16 << 20, what="URDF"), how)
+
+
+def _snap(x: float, tol: float = 1e-12) -> float:
+    """A DH parameter, 0 when it is rounding (below 1e-12 m or rad): the frames are built
+    from products of rounded numbers, and a table of 1e-20 values reads as data."""
+    return 0.0 if abs(x) < tol else float(x)
+
+
+def _perpendicular(z: np.ndarray) -> np.ndarray:
+    helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = helper - np.dot(helper, z) * z
+    return x / np.linalg.norm(x)
+
+
+def _orthonormal(R: np.ndarray) -> np.ndarray:
+    U, _, Vt = np.linalg.svd(R)
+    return U @ Vt
+
+
+register_reader(".urdf", from_urdf)

@@ -1,0 +1,119 @@
+"""Tables of the study: saved as CSV (for machines) and Markdown (for people), shown in
+notebooks, byte-reproducible; numbers at the level of floating-point noise shown as such
+(:func:`shown`); a part of a project document shown from its one source
+(:func:`markdown_section`).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..infra.paths import atomic_path, shown_path
+
+__all__ = ["Table", "shown", "markdown_section", "DOCUMENTS"]
+
+
+_NEGATIVE_ZERO = re.compile(r"^-(0(\.0*)?(e[+-]?0+)?)$")
+
+
+def _cell(value, floatfmt: str) -> str:
+    if isinstance(value, (float, np.floating)):
+        text = format(float(value), floatfmt)
+        return _NEGATIVE_ZERO.sub(r"\1", text)  # -1e-17 shown as 0.0000, not -0.0000
+    if isinstance(value, (np.integer, np.bool_)):
+        return str(value.item())
+    return str(value)
+
+
+def shown(value: float, fmt: str = ".3g", *, floor: float = 1e-15) -> str:
+    """A number for people: ``format(value, fmt)``, or ``"< 1e-15"`` when it is at the level of
+    floating-point noise (|value| below ``floor``), which is not data."""
+    value = float(value)
+    if not np.isfinite(value) or value == 0:
+        return str(value) if value else "0"
+    if abs(value) < floor:
+        return f"< {floor:.0e}".replace("e-0", "e-")
+    return _NEGATIVE_ZERO.sub(r"\1", format(value, fmt))
+
+
+@dataclass
+class Table:
+    """A small table saved as CSV (for machines) and Markdown (for people), shown in notebooks.
+
+    Floats are written with ``floatfmt`` (one format, or one per column) so the files are
+    byte-reproducible.
+    """
+
+    columns: Sequence[str]
+    rows: Sequence[Sequence]
+    floatfmt: str | Sequence[str] = ".6g"
+    caption: str = ""
+    _text: list[list[str]] = field(init=False, repr=False)
+
+    def __post_init__(self):
+        for k, row in enumerate(self.rows):
+            if len(row) != len(self.columns):
+                raise ValueError(f"table row {k} has {len(row)} cells, expected "
+                                 f"{len(self.columns)} ({', '.join(self.columns)})")
+        formats = [self.floatfmt] * len(self.columns) if isinstance(self.floatfmt, str) \
+            else list(self.floatfmt)
+        if len(formats) != len(self.columns):
+            raise ValueError(f"floatfmt has {len(formats)} formats for {len(self.columns)} columns")
+        self._text = [[_cell(v, f) for v, f in zip(row, formats)] for row in self.rows]
+
+    def to_csv(self) -> str:
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(self.columns)
+        writer.writerows(self._text)
+        return buffer.getvalue()
+
+    def to_markdown(self) -> str:
+        escape = lambda s: s.replace("|", "\\|")  # noqa: E731
+        lines = ["| " + " | ".join(map(escape, self.columns)) + " |",
+                 "|" + "|".join("---" for _ in self.columns) + "|"]
+        lines += ["| " + " | ".join(map(escape, row)) + " |" for row in self._text]
+        if self.caption:
+            lines = [f"*{self.caption}*", ""] + lines
+        return "\n".join(lines) + "\n"
+
+    def _repr_markdown_(self) -> str:
+        return self.to_markdown()
+
+    def save(self, out_dir: str | os.PathLike, name: str) -> "Table":
+        """Write ``out_dir/tables/name.csv`` and ``.md`` atomically; return ``self`` (for display)."""
+        for suffix, text in ((".csv", self.to_csv()), (".md", self.to_markdown())):
+            with atomic_path(Path(out_dir) / "tables" / f"{name}{suffix}") as tmp:
+                tmp.write_text(text, encoding="utf-8")
+        return self
+
+
+DOCUMENTS = ("docs/STUDY.md",)   # project documents a chapter shows a part of (in every chapter's key)
+
+
+def markdown_section(path: str | os.PathLike, heading: str) -> str:
+    """The text of the section ``## heading`` of a Markdown file (up to the next heading of
+    the same or a higher level, without the heading line): a chapter shows a document's table
+    from its one source instead of a copy."""
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise ValueError(f"{shown_path(path)}: cannot read it ({exc.strerror})") from None
+    starts = [k for k, line in enumerate(lines) if line.strip() == f"## {heading}"]
+    if len(starts) != 1:
+        raise ValueError(f"{shown_path(path)}: heading '## {heading}': expected once, found {len(starts)} times")
+    body = []
+    for line in lines[starts[0] + 1:]:
+        if re.match(r"#{1,2} ", line):
+            break
+        body.append(line)
+    return "\n".join(body).strip() + "\n"

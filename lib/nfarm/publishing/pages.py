@@ -1,0 +1,384 @@
+"""The report's HTML pages: each executed chapter exported with nbconvert (captions under its
+figures, the arm in its title, navigation within its edition, MathJax from a local copy, no
+input of hidden cells), and the index that links every edition's chapters, figures, tables
+and recordings.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import html
+import json
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+
+from typing import TYPE_CHECKING
+
+from ..infra.notebook_runs import DropMessage
+from ..infra.paths import ROOT, atomic_path, shown_path
+from .manifest import chapter_files
+
+if TYPE_CHECKING:
+    from .report import Edition
+
+__all__ = ["write_pages", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS", "MATHJAX"]
+
+
+def chapter_title(notebook: Path) -> str:
+    cells = json.loads(notebook.read_text(encoding="utf-8"))["cells"]
+    for cell in cells:
+        if cell["cell_type"] == "markdown":
+            for line in "".join(cell["source"]).splitlines():
+                if line.startswith("# "):
+                    return line[2:].strip()
+    return notebook.stem
+
+
+#: Cells of the course edition (:mod:`nfarm.publishing.course`), left out of the report.
+COURSE_TAGS = ("exercise", "solution", "check")
+
+MATHJAX = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
+
+
+def install_mathjax(report_dir: Path) -> None:
+    """Copy MathJax from the ``jupyter_server_mathjax`` package beside the pages (once)."""
+    import jupyter_server_mathjax
+
+    source = Path(jupyter_server_mathjax.__file__).parent / "static"
+    target = report_dir / "mathjax"
+    if (target / "MathJax.js").is_file():
+        return
+    tmp = report_dir / ".mathjax.tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    shutil.copytree(source, tmp)
+    shutil.rmtree(target, ignore_errors=True)
+    os.rename(tmp, target)
+
+
+def _nav(links: dict[str, tuple[str, str] | None]) -> str:
+    parts = [f"<a href='{html.escape(href)}'>{label}: {html.escape(title)}</a>"
+             for label, link in links.items() if link for href, title in [link]]
+    return ("<nav style='font-family:sans-serif;margin:1em 2em;display:flex;gap:2em'>"
+            + "".join(parts) + "</nav>")
+
+
+def _merge_parameters(nb) -> None:
+    """One parameters cell on a page: the values papermill injected written into the chapter's
+    own parameters cell (its comments kept), and the injected cell dropped; a first comment
+    names the values this run changed. A reader sees the values the page was made with, once."""
+    import ast
+
+    tagged = lambda tag: [k for k, c in enumerate(nb.cells) if tag in c.metadata.get("tags", [])]  # noqa: E731
+    own, injected = tagged("parameters"), tagged("injected-parameters")
+    if len(own) != 1 or len(injected) != 1:
+        return
+    cell, given = nb.cells[own[0]], nb.cells[injected[0]].source
+    try:
+        values = {node.targets[0].id: ast.get_source_segment(given, node.value)
+                  for node in ast.parse(given).body
+                  if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name)}
+        tree = ast.parse(cell.source)
+    except SyntaxError:
+        return
+    lines = cell.source.split("\n")
+    changed = []
+    for node in sorted((n for n in tree.body if isinstance(n, ast.Assign) and len(n.targets) == 1
+                        and isinstance(n.targets[0], ast.Name) and n.targets[0].id in values),
+                       key=lambda n: n.lineno, reverse=True):
+        name = node.targets[0].id
+        if ast.get_source_segment(cell.source, node.value) == values[name]:
+            values.pop(name)
+            continue
+        rest = lines[node.end_lineno - 1][node.end_col_offset:]
+        lines[node.lineno - 1:node.end_lineno] = [f"{name} = {values.pop(name)}{rest}"]
+        changed.append(name)
+    lines += [f"{name} = {value}" for name, value in values.items()]
+    changed += list(values)
+    if changed:
+        lines.insert(0, f"# This page's run set: {', '.join(sorted(changed))}")
+    cell.source = "\n".join(lines)
+    del nb.cells[injected[0]]
+
+
+def _name_the_arm(nb, arm: str) -> None:
+    """The chapter's heading names the arm its page is for (an edition's pages look alike)."""
+    for cell in nb.cells:
+        if cell.cell_type == "markdown":
+            lines = cell.source.split("\n")
+            for k, line in enumerate(lines):
+                if line.startswith("# "):
+                    lines[k] = f"{line} · {arm}"
+                    cell.source = "\n".join(lines)
+                    return
+
+
+def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
+                 title: str = "", arm: str = "") -> None:
+    """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
+    output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
+    directory; a navigation bar between chapters; one parameters cell with the run's values
+    (:func:`_merge_parameters`); the heading naming ``arm`` when given."""
+    import nbformat
+    from nbconvert import HTMLExporter
+    from nbconvert.preprocessors import TagRemovePreprocessor
+    from traitlets.config import Config
+
+    config = Config()
+    config.TagRemovePreprocessor.remove_input_tags = {"remove-input"}
+    config.TagRemovePreprocessor.remove_cell_tags = {"remove-cell"}
+    config.TagRemovePreprocessor.enabled = True
+    exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=mathjax,
+                            require_js_url="", jquery_url="", widget_renderer_url="")
+    exporter.register_preprocessor(TagRemovePreprocessor(config=config), enabled=True)
+    # Figures carry their captions as alternative text (nfarm.presentation.plotting.save_figure); an image
+    # shown without one gets nbconvert's generic text and a warning, which the check of the
+    # smoke report (tests/test_pages.py) turns into a failure.
+    quiet = DropMessage("Alternative text is missing")
+    exporter.log.addFilter(quiet)
+    try:
+        nb = nbformat.read(executed, 4)
+        _merge_parameters(nb)
+        if arm:
+            _name_the_arm(nb, arm)
+        body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title or executed.stem}})
+    finally:
+        exporter.log.removeFilter(quiet)
+    body = body.replace('<script src=""></script>', "")       # the URLs switched off above
+    if nav:
+        body = re.sub(r"(<body[^>]*>)", lambda m: m.group(1) + nav, body, count=1)
+        body = body.replace("</body>", nav + "</body>", 1)
+    with atomic_path(target) as tmp:
+        tmp.write_text(body, encoding="utf-8")
+
+
+def _csv_to_html(path: Path) -> str:
+    rows = list(csv.reader(path.read_text(encoding="utf-8").splitlines()))
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in rows[0])
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>"
+                   for row in rows[1:])
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _caption(path: Path) -> str:
+    """A figure's caption (its PNG ``Description``) or a table's (the first line of its .md)."""
+    if path.suffix == ".png":
+        from PIL import Image
+
+        with Image.open(path) as image:
+            return image.text.get("Description", "")
+    md = path.with_suffix(".md")
+    if md.is_file():
+        first = md.read_text(encoding="utf-8").split("\n", 1)[0]
+        if first.startswith("*") and first.endswith("*"):
+            return first.strip("*")
+    return ""
+
+
+_STYLE = """body{font-family:sans-serif;max-width:70em;margin:2em auto;padding:0 1em;color:#222}
+img{max-width:100%;border:1px solid #ddd;margin:.5em 0}
+table{border-collapse:collapse;margin:.5em 0 1.5em;font-size:.9em}
+td,th{border:1px solid #ccc;padding:.2em .6em;text-align:right}th{background:#f3f3f3}
+h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
+figure{margin:1em 0 2em}figcaption{color:#444;margin:.2em 0}.file{color:#888;font-size:.8em}
+dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1em}dt{font-weight:bold}"""
+
+
+def _git(*args: str) -> str:
+    try:
+        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                              timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+
+
+# --------------------------------------------------------------------------------------------
+# The index
+
+
+def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> list[str]:
+    parts = []
+    for path in chapter_files(figures_dir / subdir, prefix):
+        if path.suffix == ".md":
+            continue
+        rel = path.relative_to(figures_dir)
+        caption = html.escape(_caption(path))
+        label = f"<span class='file'>{html.escape(rel.as_posix())}</span>"
+        if path.suffix == ".png":
+            (shown / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(path, shown / rel)
+            parts.append(f"<figure><img src='figures/{rel.as_posix()}' alt='{caption}'>"
+                         f"<figcaption>{caption} {label}</figcaption></figure>")
+        else:
+            parts.append(f"<figure><figcaption>{caption} {label}</figcaption>"
+                         f"{_csv_to_html(path)}</figure>")
+    return parts
+
+
+ABSTRACT_QUESTION = (
+    "Can adaptive neuro-fuzzy inference systems (ANFIS), trained with Jang's hybrid rule on data generated "
+    "from a 5-DOF arm's numerical models — the DH forward kinematics, Levenberg–Marquardt inverse "
+    "kinematics and recursive Newton–Euler inverse dynamics — compute the arm's inverse kinematics and "
+    "inverse dynamics, and how do they compare with the exact solutions and with strong baselines?")
+ABSTRACT_LIMITS = (
+    "The learned inverse kinematics covers one declared region of each arm, where the inverse map is "
+    "single-valued (chapter 05); over the full joint ranges it is many-valued and not learnable as one "
+    "function. The data are simulated: the rigid-body torques are exact, and the arm with friction is a "
+    "model whose law no learner assumes. The dissertation's text does not give its robot's numbers, data "
+    "settings, rule bases or budgets: those designs are assumed and labelled so (the deviations table of "
+    "chapter 05). The spreads are over the sweep files' seeds (data draws) for the comparisons made on "
+    "validation data and bootstrap intervals over the held-out poses or trajectories for the results.")
+
+
+def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
+    """The abstract: the study's question, each arm's answers read from its published
+    ``07_summary.csv`` (every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`),
+    and the study's limits."""
+    from ..study.summary import abstract_lines, read_long_table
+
+    parts = ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
+    answers = []
+    for edition in arms:
+        path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
+        if path.is_file():
+            try:
+                answers += abstract_lines(edition.name, read_long_table(path))
+            except (ValueError, KeyError) as exc:      # an older chapter 07's table: say so, not fail
+                answers.append(f"{edition.name}: no answers ({exc}); rerun chapter 07.")
+    if answers:
+        parts.append("<p><b>Answers</b> (on held-out data, with 95 % bootstrap intervals; from each arm's "
+                     "<code>tables/07_summary.csv</code>):</p><ul>")
+        parts += [f"<li>{html.escape(line)}</li>" for line in answers]
+        parts.append("</ul>")
+    else:
+        parts.append("<p><b>Answers.</b> Not yet computed: chapter 07 has not published its summary table.</p>")
+    parts.append(f"<p><b>Limits.</b> {html.escape(ABSTRACT_LIMITS)}</p>")
+    return parts
+
+
+def _write_index(report_dir: Path, figures_dir: Path,
+                 pages: dict[str, list[tuple[str, str, str]]], arms: list[Edition],
+                 compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool,
+                 recordings_dir: Path | None = None) -> None:
+    """``pages``: per edition name, (prefix, title, page path) of its chapters in order;
+    ``compared``: the same for the chapters comparing the editions. Each edition's section
+    links the rerun recordings its chapters wrote (:data:`RECORDINGS`, an edition's in its own
+    subdirectory) when ``recordings_dir`` holds any."""
+    shown = report_dir / "figures"
+    if shown.exists():
+        shutil.rmtree(shown)
+    commit = _git("rev-parse", "--short=12", "HEAD") or "unknown"
+    dirty = " (with uncommitted changes)" if _git("status", "--porcelain") else ""
+    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    kind = "smoke run (small parameters: not the published results)" if smoke else \
+        "published results (default parameters)" if not parameters else "a run with other parameters"
+    robots = "; ".join(f"{e.name}: {e.robot_file or 'the chapters’ default'}"
+                       + ("" if e.primary else f" (figures in {e.name}/)") for e in arms)
+    facts = {"what": kind, "arms": robots,
+             "parameters": ", ".join(f"{k} = {v!r}" for k, v in parameters.items()) or "defaults",
+             "commit": commit + dirty, "built": when,
+             "figures": shown_path(figures_dir) + " (checked by MANIFEST.sha256)"}
+    parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>nfarm — study report"
+             f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
+             "numerical methods and ANFIS</h1>"]
+    parts += _abstract_html(figures_dir, arms)
+    parts.append("<dl>")
+    parts += [f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in facts.items()]
+    parts.append("</dl>")
+    for prefix, title, page in compared:           # the arms side by side, first
+        parts.append(f"<h2 id='ch{prefix}'>{html.escape(title)}</h2>"
+                     f"<p><a href='{page}'>The chapter in full</a></p>")
+        parts += _figures_html(figures_dir, "", prefix, shown)
+
+    def own(edition: Edition, page: str) -> bool:
+        return page.startswith(edition.subdir + "/") if edition.subdir else "/" not in page
+
+    def anchor(edition: Edition, entry: tuple[str, str, str]) -> str:
+        if entry in compared:
+            return f"ch{entry[0]}"
+        return f"{(edition if own(edition, entry[2]) else arms[0]).name}-ch{entry[0]}"
+
+    def read_at(edition: Edition, entry: tuple[str, str, str]) -> str:
+        """A shared chapter is read in the edition's copy, whose navigation stays in the edition."""
+        if entry in compared or not edition.subdir or own(edition, entry[2]):
+            return entry[2]
+        return f"{edition.subdir}/{Path(entry[2]).name}"
+
+    for edition in arms:
+        entries = pages.get(edition.name, [])
+        if entries:
+            parts.append(f"<h2 id='{edition.name}'>Chapters for {html.escape(edition.name)}"
+                         f"{' (the dissertation’s arm)' if edition.primary else ''}</h2><ol>")
+            parts += [f"<li value='{int(e[0])}'><a href='{read_at(edition, e)}'>{html.escape(e[1])}</a> · <a "
+                      f"href='#{anchor(edition, e)}'>its figures and tables</a>"
+                      f"{'' if own(edition, e[2]) or e in compared else ' (the same for every arm)'}"
+                      f"</li>" for e in entries]
+            parts.append("</ol>")
+            found = sorted((recordings_dir / edition.subdir).glob("*.rrd")) if recordings_dir else []
+            if found:
+                parts.append("<p>Rerun recordings: " + ", ".join(
+                    f"<a href='{html.escape(os.path.relpath(f, report_dir))}'>{html.escape(f.name)}</a>"
+                    for f in found) + f" (open one with <code>.venv/bin/rerun "
+                    f"{html.escape(shown_path(found[0]))}</code>)</p>")
+    for edition in arms:
+        for entry in pages.get(edition.name, []):
+            prefix, title, page = entry
+            if entry in compared or not own(edition, page):
+                continue
+            parts.append(f"<h3 id='{edition.name}-ch{prefix}'>{html.escape(edition.name)} · "
+                         f"{html.escape(title)}</h3><p><a href='{page}'>The chapter in full "
+                         f"(prose, code and results)</a></p>")
+            parts += _figures_html(figures_dir, edition.subdir, prefix, shown)
+    parts.append("</body></html>\n")
+    with atomic_path(report_dir / "index.html") as tmp:
+        tmp.write_text("\n".join(parts), encoding="utf-8")
+
+
+def write_pages(everything, runs, comparing: set[str], arms, base: Path, report_dir: Path,
+                 figures_dir: Path, extra: dict, smoke: bool,
+                 recordings_dir: Path | None = None) -> None:
+    """HTML pages of every executed chapter, with navigation within each arm's chapters, and
+    the index."""
+    pages: dict[str, list[tuple[str, str, str]]] = {}
+    compared = []
+    per_arm = set()              # chapters run for more than one arm: their titles name it
+    for nb in everything:
+        if len(list(runs(nb))) > 1:
+            per_arm.add(nb.name[:2])
+        for arm, _ in runs(nb):
+            executed = base / "notebooks" / arm.subdir / nb.name
+            if not executed.exists():
+                continue
+            entry = (nb.name[:2], chapter_title(nb), f"{arm.subdir}/{nb.stem}.html".lstrip("/"))
+            if arm.primary and nb.name in comparing:
+                compared.append(entry)
+            pages.setdefault(arm.name, []).append(entry)
+    primary = pages.get(arms[0].name, []) if arms else []
+    for arm in arms:
+        own = pages.get(arm.name, [])
+        if not arm.primary:                   # the shared chapters, read in the primary's pages
+            shared = [e for e in primary if e[0] not in {o[0] for o in own} and e not in compared]
+            own = sorted(own + shared)
+        pages[arm.name] = own
+        up = "../" if arm.subdir else ""      # an edition's pages are one directory down
+        # A shared chapter is copied into the edition's directory with the edition's navigation,
+        # so that "previous" and "next" never leave the edition.
+        here = [f"{arm.subdir}/{Path(page).name}" if arm.subdir else page for _, _, page in own]
+        for k, (prefix, title, page) in enumerate(own):
+            # An edition's last chapter leads on to the chapter that compares the arms (one page,
+            # the primary's), which the reader of every edition meets last.
+            last = (up + compared[0][2], compared[0][1]) if compared and not arm.primary else None
+            links = {"index": (up + "index.html", "all chapters"),
+                     "previous": (up + here[k - 1], own[k - 1][1]) if k > 0 else None,
+                     "next": (up + here[k + 1], own[k + 1][1]) if k + 1 < len(own) else last}
+            executed = base / "notebooks" / page.replace(".html", ".ipynb")
+            page = here[k]
+            export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
+                         title=f"{title} · {arm.name}" if prefix in per_arm else title,
+                         arm=arm.name if prefix in per_arm else "")
+    _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
+                 compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)

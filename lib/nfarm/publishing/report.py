@@ -1,0 +1,419 @@
+"""The report pipeline: every chapter once per arm, published, and the pages.
+
+``python -m nfarm report`` (``make report``) runs every ``notebooks/NN_*.ipynb`` in order in
+the project's Jupyter kernel (:func:`nfarm.infra.notebook_runs.run_notebook`), each into a
+staging directory under ``build/stage/``, once per arm (:class:`Edition`, one per study file):
+the primary arm's results go to ``figures/``, another's to ``figures/<study>/``
+(:mod:`.manifest` publishes them atomically). A chapter whose inputs (:func:`_chapter_key`) and
+published files are those of its last run is not run again, so a second ``make report`` with
+nothing changed only rewrites the pages (:mod:`.pages`).
+
+**Explore freely, publish deliberately.** Only a run with the default parameters publishes
+into ``figures/``; a smoke run (``--smoke``) publishes into ``build/smoke/figures/`` and its
+pages into ``build/smoke/report/``, never into ``figures/``. A chapter run by hand (JupyterLab,
+papermill) writes where its ``out_dir`` parameter says, by default ``build/explore/<chapter>/``.
+
+**Editions side by side.** On two or more CPUs each edition's chapters run in a process of
+their own, in chapter order, and the chapters that compare the editions after both: a chapter
+runs in one kernel, mostly on one core (BLAS has one thread in the report), so one edition
+alone leaves a core idle outside chapter 6's sweeps. Publishing takes a lock (``flock`` on the
+figures directory's parent), so the editions publish one at a time; the published bytes are
+those of a run one edition after the other (``--serial``).
+
+A failing, hanging (``cell_timeout``) or crashing notebook stops the run with one line naming
+the notebook and the cell (counted as in the source notebook, without papermill's injected
+cell); the executed copy is kept for inspection. Executed notebooks hold no absolute paths of
+the checkout and no widget state; their HTML pages load MathJax from ``build/report/mathjax/``
+(from the ``jupyter-server-mathjax`` package), so the report reads offline.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import multiprocessing
+import os
+import re
+import shutil
+import signal
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..infra import provenance
+from ..infra.notebook_runs import ReportError, chapters, declared_parameters, run_notebook
+from ..infra.paths import BUILD, FIGURES, NOTEBOOKS, ROOT, atomic_path, shown_path
+from ..infra.provenance import digest_files as _digest_files
+from ..presentation.tables import DOCUMENTS
+from .manifest import chapter_files, publish_chapter, publishing_lock, recover_figures
+from .pages import COURSE_TAGS, install_mathjax, write_pages
+
+__all__ = ["Edition", "editions", "build_report", "ReportRun", "ReportUsageError", "ReportInterrupted",
+           "PRIMARY_STUDY", "RECORDINGS"]
+
+
+PRIMARY_STUDY = "intelbot5"      # the dissertation's arm: its edition publishes into figures/
+#: Where the chapters write their rerun recordings (their ``recordings_dir`` default); another
+#: edition's go to ``RECORDINGS/<name>/``.
+RECORDINGS = "build/recordings"
+
+
+@dataclass(frozen=True)
+class Edition:
+    """One arm's run of the chapters: a study file and its robot file (as the reader names
+    them). The primary edition runs every chapter with its default parameters and publishes
+    into ``figures/``; another runs the chapters that take a ``robot_file`` or ``study_file``
+    with its own and publishes into ``figures/<name>/``. A chapter that takes neither (04, on
+    Jang's benchmarks) is the same for every arm and runs once; a chapter that takes
+    ``study_files`` (08) compares the editions and runs once, after them."""
+
+    name: str
+    study_file: str
+    robot_file: str
+    primary: bool
+
+    @property
+    def subdir(self) -> str:
+        return "" if self.primary else self.name
+
+    def parameters(self, declared: Sequence[str]) -> dict | None:
+        """The parameters of this edition's run of a chapter declaring ``declared``, or None
+        when the chapter is not run for it."""
+        if self.primary:
+            return {}
+        chosen = {k: v for k, v in (("robot_file", self.robot_file),
+                                    ("study_file", self.study_file)) if k in declared}
+        if chosen and "recordings_dir" in declared:   # its recordings beside, not over, the primary's
+            chosen["recordings_dir"] = f"{RECORDINGS}/{self.name}"
+        return chosen or None
+
+
+def editions(params_dir: Path | None = None) -> list[Edition]:
+    """One edition per study file ``params/studies/*.yaml``, the primary (intelbot5) first;
+    a single primary edition with the chapters' defaults if there is no study file."""
+    from ..study.datasets import load_study          # the study's robot file, validated
+    from ..infra.paths import PARAMS
+
+    files = sorted(((params_dir or PARAMS) / "studies").glob("*.yaml"))
+    found = [Edition(f.stem, shown_path(f), load_study(f).robot_file, f.stem == PRIMARY_STUDY)
+             for f in files]
+    if not any(e.primary for e in found):
+        return [Edition(PRIMARY_STUDY, "", "", True)]
+    return sorted(found, key=lambda e: (not e.primary, e.name))
+
+
+def digest_files(h, paths) -> None:
+    """Feed each file's project-relative name and SHA-256 to the hash ``h`` (sorted)."""
+    _digest_files(h, paths, ROOT)
+
+
+_NFARM_IMPORT = re.compile(r"^\s*(?:from\s+nfarm\.([\w.]+)\s+import|import\s+nfarm\.([\w.]+)|"
+                           r"from\s+nfarm\s+import\s+(\([^)]*\)|[\w ,]+)|import\s+nfarm\s*$)", re.M)
+
+
+def notebook_modules(notebook: Path) -> list[str]:
+    """The package modules (dotted, ``"model.kinematics"``) a notebook's code cells import:
+    ``from nfarm.x.y import …``, ``import nfarm.x.y``, and ``from nfarm import name`` (the
+    module defining each public name, :data:`nfarm.PUBLIC`, or the subpackage named);
+    ``import nfarm`` alone means all of them."""
+    import nfarm
+
+    cells = json.loads(notebook.read_text(encoding="utf-8"))["cells"]
+    code = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+    root = provenance.PACKAGE
+    everything = sorted(".".join(p.relative_to(root).with_suffix("").parts) for p in root.rglob("*.py"))
+    found = set()
+    for sub, imported, names in _NFARM_IMPORT.findall(code):
+        if not (sub or imported or names):
+            return everything
+        if sub or imported:
+            found.add(sub or imported)
+            continue
+        for name in (n.split()[0] for n in names.strip("()").split(",") if n.split()):
+            found.add(nfarm.PUBLIC.get(name, name))
+    return sorted(m for m in found if provenance.module_file(m) is not None)
+
+
+def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
+    """SHA-256 of everything a chapter's results depend on: the notebook, its parameters, the
+    content of the package modules it imports and of this module (which runs it), with what
+    they import, transitively (:func:`nfarm.infra.provenance.code_modules`), every parameter file
+    (not the ``.md`` notes beside them), the locked environment and the numerics settings
+    (``make report``'s pinned kernels). A change to a module no chapter imports (the course's)
+    leaves the chapters as they are."""
+    from ..learning.learned import NUMERICS_ENV
+    from ..infra.paths import PARAMS
+
+    h = hashlib.sha256()
+    h.update(notebook.read_bytes())
+    h.update(json.dumps({"parameters": parameters, "smoke": smoke,
+                         "env": {k: os.environ.get(k) for k in NUMERICS_ENV},
+                         "python": sys.version}, sort_keys=True, default=str).encode())
+    modules = provenance.code_modules("publishing.report", *notebook_modules(notebook))
+    _digest_files(h, [provenance.module_file(m) for m in modules], provenance.PACKAGE)
+    digest_files(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"])
+    digest_files(h, [p for p in (ROOT / "environment.lock", *(ROOT / d for d in DOCUMENTS)) if p.is_file()])
+    return h.hexdigest()
+
+
+def _published_digests(figures_dir: Path, subdir: str, prefix: str) -> dict[str, str]:
+    return {p.relative_to(figures_dir).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in chapter_files(figures_dir / subdir, prefix)}
+
+
+def _up_to_date(stamp: Path, key: str, executed: Path, figures_dir: Path, subdir: str,
+                prefix: str) -> bool:
+    """Whether the chapter ran with these inputs (``key``) and its published files and
+    executed notebook are still what that run left."""
+    try:
+        record = json.loads(stamp.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return (isinstance(record, dict) and record.get("key") == key and executed.is_file()
+            and record.get("outputs") == _published_digests(figures_dir, subdir, prefix))
+
+
+# --------------------------------------------------------------------------------------------
+# The whole report
+
+
+class ReportUsageError(ReportError):
+    """A choice of chapters that names none (the command line's exit status 2)."""
+
+
+class ReportInterrupted(ReportError):
+    """The run was stopped by Ctrl-C; the figures directory holds what was published before."""
+
+
+@dataclass(frozen=True)
+class ReportRun:
+    """What a finished report wrote: its index page and the figures directory it published into."""
+
+    index: Path
+    figures_dir: Path
+
+
+def _select(notebooks_dir: Path, only: Sequence[str] | None) -> tuple[list[Path], list[Path]]:
+    everything = chapters(notebooks_dir)
+    if only is None:
+        return everything, everything
+    wanted = set(only)
+    if not wanted:
+        raise ReportUsageError("--only needs chapter numbers (e.g. --only 01 03)")
+    unknown = sorted(wanted - {nb.name[:2] for nb in everything})
+    if unknown:
+        raise ReportUsageError(f"no chapter {', '.join(unknown)} (chapters: "
+                               f"{', '.join(nb.name[:2] for nb in everything)})")
+    return everything, [nb for nb in everything if nb.name[:2] in wanted]
+
+
+def _quiet(text: str) -> None:
+    """The default progress sink: the library says nothing; the command line prints."""
+
+
+def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
+                 notebooks_dir: Path = NOTEBOOKS, figures_dir: Path = FIGURES,
+                 build_dir: Path = BUILD, extra_parameters: dict | None = None,
+                 cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
+                 force: bool = False, parallel: bool | None = None,
+                 say: Callable[[str], None] = _quiet) -> ReportRun:
+    """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
+    export HTML and write the index.
+
+    Only a run with the default parameters (not ``smoke``, no ``extra_parameters``)
+    publishes into ``figures_dir``; others publish into ``build_dir/<variant>/figures``. A run
+    with ``extra_parameters`` is one edition (the primary's, with those parameters). A chapter
+    whose inputs (:func:`_chapter_key`) are those of its last run, and whose published files
+    are still that run's, is not run again unless ``force``.
+
+    ``parallel`` (default: when this process may use two CPUs or more): the editions' chapters
+    run side by side, one process per edition, each in chapter order (module docstring); the
+    chapters that compare the editions run after them. Otherwise one after the other.
+
+    ``say`` receives a line per chapter as it starts, is found up to date, or is published
+    (``python -m nfarm report`` prints them).
+
+    Raises:
+        ReportUsageError: ``only`` names no chapter, or one that does not exist.
+        ReportInterrupted: Ctrl-C; the figures directory holds the chapters published before.
+        ReportError: a chapter failed (one line naming it and its cell), a notebook or study
+            file is not valid, or a directory cannot be written.
+    """
+    everything, notebooks = _select(notebooks_dir, only)
+    if not notebooks:
+        raise ReportError(f"no chapter notebooks NN_*.ipynb in {shown_path(notebooks_dir)}")
+    extra = dict(extra_parameters or {})
+    variant = "smoke" if smoke else "custom" if extra else None
+    base = build_dir / variant if variant else build_dir
+    if variant:
+        figures_dir = base / "figures"
+    report_dir = base / "report"
+    try:
+        arms = list(arms) if arms is not None else editions()
+    except ValueError as exc:                     # a study file (ParamsError)
+        raise ReportError(str(exc)) from None
+    if extra:
+        arms = [a for a in arms if a.primary]
+    declared = {nb.name: declared_parameters(nb) for nb in everything}
+
+    def runs(nb: Path) -> list[tuple[Edition, dict]]:
+        names = declared[nb.name]
+        if "study_files" in names:                # compares the arms: once, after them
+            if extra and "study_files" not in extra:
+                return []
+            files = {} if extra or len(arms) < 2 else \
+                {"study_files": [a.study_file for a in arms]}
+            return [(arms[0], files)]
+        return [(a, p) for a in arms if (p := a.parameters(names)) is not None]
+
+    comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
+    jobs = [(nb, arm, own) for nb in notebooks for arm, own in runs(nb)]
+    sequences = [[j for j in jobs if j[1] is arm and j[0].name not in comparing] for arm in arms]
+    sequences = [seq for seq in sequences if seq]
+    if parallel is None:
+        parallel = _cpus() >= 2
+    side_by_side = parallel and len(sequences) > 1
+
+    def chapter(nb: Path, arm: Edition, own: dict) -> None:
+        """Run and publish one chapter of one edition (raises :class:`ReportError`)."""
+        prefix = nb.name[:2]
+        label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
+        stage = build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
+        executed = base / "notebooks" / arm.subdir / nb.name
+        stamp = base / "stamps" / arm.name / f"{nb.stem}.json"
+        parameters = {"smoke": smoke, **own, **extra}
+        key = _chapter_key(nb, parameters, smoke)
+        if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
+            say(f"{label}: up to date (its inputs are unchanged)")
+            return
+        shutil.rmtree(stage, ignore_errors=True)
+        stage.mkdir(parents=True)
+        say(f"{label} …")
+        try:
+            run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
+                         progress=sys.stderr.isatty() and not side_by_side, cell_timeout=cell_timeout,
+                         remove_tags=COURSE_TAGS)
+            published = publish_chapter(stage, figures_dir, prefix, arm.subdir)
+        except ReportError:
+            stamp.unlink(missing_ok=True)
+            raise
+        shutil.rmtree(stage, ignore_errors=True)
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(stamp) as tmp:
+            tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
+                figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
+        say(f"{label}: {len(published)} figures and tables published in "
+            f"{shown_path(figures_dir / arm.subdir)}")
+
+    def in_order(sequence) -> None:
+        for job in sequence:
+            chapter(*job)
+
+    try:
+        with publishing_lock(figures_dir):
+            recover_figures(figures_dir)
+        install_mathjax(report_dir)
+        if side_by_side:
+            _side_by_side([functools.partial(in_order, seq) for seq in sequences])
+        else:
+            in_order([j for j in jobs if j[0].name not in comparing])
+        in_order([j for j in jobs if j[0].name in comparing])
+        write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke,
+                    None if smoke or extra else build_dir / "recordings")
+    except KeyboardInterrupt:
+        raise ReportInterrupted(f"interrupted; {shown_path(figures_dir)} holds the chapters published "
+                                f"before (its manifest matches)") from None
+    except OSError as exc:                        # a read-only or full build directory, …
+        raise ReportError(_cannot_write(exc)) from None
+    return ReportRun(report_dir / "index.html", figures_dir)
+
+
+def _cpus() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _wait(children, seconds: float) -> None:
+    """Join ``children`` for at most ``seconds`` in all, ignoring further Ctrl-C meanwhile."""
+    deadline = time.monotonic() + seconds
+    for child in children:
+        while child.is_alive() and time.monotonic() < deadline:
+            try:
+                child.join(max(0.0, min(0.5, deadline - time.monotonic())))
+            except KeyboardInterrupt:
+                pass
+
+
+def _side_by_side(tasks, grace: float = 10.0) -> None:
+    """Run each task (a callable) in a forked process of its own, all at once, and raise what
+    the first that failed raised (:class:`ReportInterrupted` when one was interrupted). Ctrl-C
+    reaches every process of the terminal's group: each child stops its notebook
+    (:func:`nfarm.infra.notebook_runs._interruptible`) and says so, and this process waits for
+    them. A child tells its end through a pipe, as (``"ok"``, ``""``), (``"failed"``,
+    message) or (``"interrupted"``, ``""``)."""
+    context = multiprocessing.get_context("fork")
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pipes = [context.Pipe(duplex=False) for _ in tasks]
+    children = [context.Process(target=_child, args=(task, sender), daemon=False)
+                for task, (_, sender) in zip(tasks, pipes)]
+    for child in children:
+        child.start()
+    for _, sender in pipes:
+        sender.close()                              # the children hold their ends
+    interrupted = False
+    while True:
+        try:
+            for child in children:
+                child.join()
+            break
+        except KeyboardInterrupt:
+            # From the terminal, the children got it too and are stopping; one still running
+            # after a grace period was not (the signal went to this process alone): pass it on,
+            # once (a second one would land in its kernel's shut-down).
+            interrupted = True
+            _wait(children, grace)
+            for child in children:
+                if child.is_alive():
+                    os.kill(child.pid, signal.SIGINT)
+    ends = []
+    for (receiver, _), child in zip(pipes, children):
+        try:
+            end = receiver.recv() if receiver.poll() else None
+        except (EOFError, OSError):
+            end = None
+        receiver.close()
+        if end is None:                             # it ended before it could tell
+            end = ("interrupted", "") if child.exitcode is None or child.exitcode < 0 else \
+                ("failed", f"an edition's process ended with status {child.exitcode} (its error is above)")
+        ends.append(end)
+    if interrupted or any(how == "interrupted" for how, _ in ends):
+        raise KeyboardInterrupt
+    failed = [message for how, message in ends if how == "failed"]
+    if failed:
+        raise ReportError("; ".join(failed))
+
+
+def _cannot_write(exc: OSError) -> str:
+    where = f" {shown_path(Path(exc.filename))}" if exc.filename else ""
+    return f"cannot write{where}: {exc.strerror or exc}"
+
+
+def _child(task, sender) -> None:
+    try:
+        task()
+        end = ("ok", "")
+    except KeyboardInterrupt:
+        end = ("interrupted", "")
+    except ReportError as exc:
+        end = ("failed", str(exc))
+    except OSError as exc:
+        end = ("failed", _cannot_write(exc))
+    try:
+        sender.send(end)
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)

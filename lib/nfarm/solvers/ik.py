@@ -1,0 +1,711 @@
+"""Inverse kinematics: joint angles for target tool poses, batched over targets.
+
+Two kinds of solver. :func:`closed_form` (module :mod:`nfarm.solvers.geometric_ik`) gives every
+solution of every pose in closed form for the arms it covers (a base yaw, three parallel
+pitch joints and a roll: both arms of the study); it is the exact reference. :func:`solve`
+iterates from a starting guess for any chain, as the dissertation does; its result says which
+closed-form branch it converged to where the robot has one.
+
+All targets are solved together: every iteration evaluates the pose and the Jacobian of the
+still-unsolved targets as one batch (component layout, samples last), and a target leaves
+the batch as soon as it converges. Four update rules (``e`` the pose error of
+:func:`nfarm.model.rotations.pose_error`, ``J`` the geometric Jacobian, both scaled by the square
+roots of ``weights``; ``E = ½ eᵀe``)::
+
+    "lm"    Levenberg–Marquardt   (JᵀJ + λI) Δq = Jᵀe, λ adaptive (see ``lm_damping``)
+    "dls"   damped least squares  (JᵀJ + μ²I) Δq = Jᵀe, μ fixed           (Wampler 1986)
+    "pinv"  Newton–Raphson        Δq = J⁺ e  (truncated-SVD pseudo-inverse)
+    "jt"    Jacobian transpose    Δq = α Jᵀe, α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖²       (Buss 2009)
+
+``lm_damping="sugihara"`` (default) is Sugihara's (2011) rule ``λ = s·E + w̄``: the damping
+vanishes with the error, so the last iterations are Gauss–Newton (quadratic convergence).
+``"marquardt"`` is the classic schedule (λ ÷ ν after a step that lowers E, × ν after one that
+does not). Both keep the last accepted point and retry from it with ν times the damping after
+a step that raised E (for Sugihara's rule, a multiplier ≥ 1 of s·E + w̄): far from a solution,
+and always for an unreachable target, the Gauss–Newton model is poor and an unguarded step can
+climb. Measured on 10 000 reachable intelbot5 targets (``benchmarks/bench_ik.py``), Sugihara's
+rule needs fewer steps for the same success (9.1 against 10.5 per target), so it is the
+default. Our constants differ from Sugihara's (s = 1, w̄ = 1e-3): s = 0.1 takes bolder steps
+far from the target (9.1 against 10.8 steps per target), and w̄ = 1e-12 lets the steps become
+Gauss–Newton near targets next to a singularity, where w̄ = 1e-8 slows convergence to a crawl
+(0.06 % of the targets then run out of steps).
+
+A 5-DOF arm cannot reach most 6-D poses. A target is ``success`` when the weighted position
+and orientation errors are within ``tol_pos`` and ``tol_rot`` at a configuration within the
+joint limits (each angle moved by a multiple of 2π into its range). The iterates themselves are
+not clamped — clamping stalls the search against a limit far more often than it helps (on
+intelbot5, 35 % of searches from the home pose instead of none) — but a search that ends outside
+the limits, or stops improving, restarts from a seeded random configuration within them. When
+the restarts are used up, the result holds the best (weighted least-squares closest)
+configuration within the limits seen on the way, and the reason: ``joint_limits`` (the pose was
+reached, but only outside the limits), ``unreachable`` (a residual no step reduces) or
+``max_iter`` (still improving when the steps ran out).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.kinematics import fk, pose_jacobian_T
+from ..model.linalg import cholesky_solve_T, gram_T
+from ..model.robot import Robot, sample_configurations
+from ..model.rotations import relative_log_T
+
+__all__ = ["IKResult", "solve", "solve_path", "check_targets", "METHODS", "REASONS"]
+
+METHODS = ("lm", "dls", "pinv", "jt")
+REASONS = ("converged", "max_iter", "unreachable", "joint_limits")
+DEFAULT_MAX_ITER = {"lm": 25, "dls": 100, "pinv": 50, "jt": 2000}
+_CONVERGED, _MAX_ITER, _UNREACHABLE, _LIMITS = range(4)
+_TABLE_STREAM = 0x1C7AB1E
+_FIELDS = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Result of :func:`solve` for a batch of targets of shape ``(...)``.
+
+    Attributes:
+        q: ``(..., n)`` joint angles [rad]: the solution, or the best configuration found.
+        success: ``(...)`` whether the weighted errors are within the tolerances.
+        iterations: ``(...)`` steps taken, over all attempts (attempts that ran side by side
+            each count).
+        restarts: ``(...)`` restarts used.
+        pos_error: ``(...)`` ``‖p_target − p(q)‖`` [m].
+        rot_error: ``(...)`` angle between the target and the reached orientation [rad].
+        reason: ``(...)`` one of :data:`REASONS`.
+        history: ``(..., K, 2)`` position and orientation error before each step (NaN after
+            the target stopped), or ``None`` unless ``record_history=True``.
+        branch: ``(...)`` the index in :data:`BRANCHES` of the branch ``q`` lies on, for a
+            robot of the closed form's class (:func:`closed_form`); ``None`` for others.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> result = solve(robot, fk(robot, np.zeros((2, 5))))     # two targets: the home pose
+        >>> result.success.tolist(), result.reason.tolist(), result.q.shape
+        ([True, True], ['converged', 'converged'], (2, 5))
+        >>> result.branch_name.tolist(), result.summary()["success"]
+        (['front, elbow up', 'front, elbow up'], 1.0)
+    """
+
+    q: np.ndarray
+    success: np.ndarray
+    iterations: np.ndarray
+    restarts: np.ndarray
+    pos_error: np.ndarray
+    rot_error: np.ndarray
+    reason: np.ndarray
+    history: np.ndarray | None = None
+    branch: np.ndarray | None = None
+
+    @property
+    def success_rate(self) -> float:
+        return float(np.mean(self.success))
+
+    @property
+    def branch_name(self) -> np.ndarray | None:
+        """``(...)`` the names of :attr:`branch` (:data:`BRANCHES`), or ``None``."""
+        return None if self.branch is None else np.array(BRANCHES)[self.branch]
+
+    def summary(self) -> dict:
+        """Success rate, iterations (median, 95th percentile), restarts per target, and the
+        median and largest errors of the solved targets, as plain numbers."""
+        ok = np.ravel(self.success)
+        solved = lambda x: np.ravel(x)[ok] if ok.any() else np.full(1, np.nan)  # noqa: E731
+        return {
+            "success": self.success_rate,
+            "median iterations": float(np.median(self.iterations)),
+            "p95 iterations": float(np.percentile(self.iterations, 95)),
+            "restarts per target": float(np.mean(self.restarts)),
+            "median position error [m]": float(np.median(solved(self.pos_error))),
+            "max position error [m]": float(np.max(solved(self.pos_error))),
+            "median orientation error [rad]": float(np.median(solved(self.rot_error))),
+            "max orientation error [rad]": float(np.max(solved(self.rot_error))),
+        }
+
+
+# --------------------------------------------------------------------------------------------
+# Input checks
+
+
+def _where(shape: tuple, flat_index: int) -> str:
+    if not shape:
+        return "T_target"
+    return f"T_target[{', '.join(map(str, np.unravel_index(flat_index, shape)))}]"
+
+
+_CHECK_CHUNK = 8192
+
+
+def check_targets(T_target, ortho_tol: float = 1e-9, *, map_chunks=map) -> np.ndarray:
+    """``T_target`` as a float array of rigid transforms ``(..., 4, 4)``, or a ``ValueError``
+    naming the first bad one (shape, NaN, last row, rotation not orthonormal to ``ortho_tol``,
+    reflection).
+
+    The poses are checked in chunks of 8192, so that the temporaries of each check stay in
+    the cache: checked whole, a batch of a million poses costs two to three times as much per
+    pose (the check is part of :func:`closed_form`'s time on 400 000 poses in
+    ``benchmarks/bench_ik_closed_form.py``). ``map_chunks(check, starts)`` applies the check to
+    each chunk in order (``map``, or an executor's ``map`` to check chunks side by side); the
+    first bad pose is named either way.
+
+    Example:
+        >>> check_targets(np.tile(np.eye(4), (2, 3, 1, 1))).shape     # (..., 4, 4)
+        (2, 3, 4, 4)
+        >>> check_targets(np.zeros((4, 4)))
+        Traceback (most recent call last):
+        ...
+        ValueError: T_target: last row must be [0, 0, 0, 1], got [0.0, 0.0, 0.0, 0.0]
+    """
+    def refused(what: str = "") -> ValueError:
+        return ValueError(f"T_target must be an array of numbers of shape (..., 4, 4), got "
+                          f"{what + ' ' if what else ''}({type(T_target).__name__} "
+                          f"{str(T_target)[:40]!r})")
+
+    try:
+        # Real numbers only: a complex pose would lose its imaginary part to the cast, and
+        # booleans or objects are no poses.
+        kind = (T_target if isinstance(T_target, np.ndarray) else np.asarray(T_target)).dtype.kind
+        T = np.asarray(T_target, dtype=float) if kind in "iuf" else None
+    except (TypeError, ValueError):
+        raise refused() from None
+    if T is None:
+        raise refused({"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
+                       "O": "objects or ragged lists"}.get(kind, f"dtype kind {kind!r}"))
+    if T.ndim < 2 or T.shape[-2:] != (4, 4):
+        raise ValueError(f"T_target must have shape (..., 4, 4), got {T.shape}")
+    batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
+
+    def check(start: int) -> None:
+        chunk = flat[start:start + _CHECK_CHUNK]
+        finite = np.isfinite(chunk)           # whole-chunk tests first, rows only on failure
+        if not finite.all():
+            bad = ~finite.all(axis=(1, 2))
+            raise ValueError(f"{_where(batch, start + np.argmax(bad))}: contains NaN or inf")
+        last = chunk[:, 3]
+        if not ((last[:, :3] == 0.0).all() and (last[:, 3] == 1.0).all()):
+            k = int(np.argmax((last != [0.0, 0.0, 0.0, 1.0]).any(axis=1)))
+            raise ValueError(f"{_where(batch, start + k)}: last row must be [0, 0, 0, 1], got "
+                             f"{chunk[k, 3].tolist()}")
+        # Columns x, y, z of every R as rows of the chunk's length (one copy): the dot products
+        # then run over contiguous samples (5× faster than an einsum over the 3 × 3 blocks).
+        x, y, z = chunk[:, :3, :3].transpose(2, 1, 0).copy()                  # (3, N) each
+        err = np.maximum.reduce([np.abs(np.einsum("kn,kn->n", u, v) - (1.0 if u is v else 0.0))
+                                 for u, v in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z))])
+        if (err > ortho_tol).any():                                           # |RᵀR − I|
+            k = int(np.argmax(err > ortho_tol))
+            raise ValueError(f"{_where(batch, start + k)}: rotation is not orthonormal "
+                             f"(max |RᵀR − I| = {err[k]:.3g} > {ortho_tol:g})")
+        det = np.einsum("kn,kn->n", np.cross(x, y, axis=0), z)                # (x × y)·z
+        if (det < 0).any():
+            raise ValueError(f"{_where(batch, start + int(np.argmax(det < 0)))}: rotation is "
+                             f"a reflection (determinant −1)")
+
+    for _ in map_chunks(check, range(0, len(flat), _CHECK_CHUNK)):
+        pass
+    return T
+
+
+def _check_q0(robot: Robot, q0, batch: tuple, respect_limits: bool) -> np.ndarray | None:
+    lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
+    if q0 is None:
+        return None
+    if isinstance(q0, str):
+        if q0 != "home":
+            raise ValueError(f"q0 must be None, 'home' or joint angles, got {q0!r}")
+        # The home configuration, as in the dissertation (0 moved into the limits).
+        return np.broadcast_to(np.clip(0.0, lo, hi), (*batch, robot.n)).reshape(-1, robot.n)
+    q0 = np.asarray(q0, dtype=float)
+    if q0.shape not in ((robot.n,), (*batch, robot.n)):
+        raise ValueError(f"q0 must have shape ({robot.n},) or {(*batch, robot.n)}, got {q0.shape}")
+    single = q0.shape == (robot.n,)
+    flat = q0.reshape(-1, robot.n)
+    bad = ~np.isfinite(flat).all(axis=1)
+    if respect_limits:
+        bad |= ((flat < lo - 1e-12) | (flat > hi + 1e-12)).any(axis=1)
+    if bad.any():
+        k = int(np.argmax(bad))
+        where = "q0" if single else f"q0[{', '.join(map(str, np.unravel_index(k, batch)))}]"
+        raise ValueError(f"{where}: must be finite and within the joint limits, got {flat[k].tolist()}")
+    return np.broadcast_to(q0, (*batch, robot.n)).reshape(-1, robot.n)
+
+
+def _check_weights(weights) -> np.ndarray:
+    if weights is None:
+        return np.ones(6)
+    w = np.asarray(weights, dtype=float)
+    if w.shape != (6,):
+        raise ValueError(f"weights must be 6 numbers (position x, y, z, then rotation x, y, z), "
+                         f"got shape {w.shape}")
+    if not np.isfinite(w).all() or (w < 0).any() or not w.any():
+        raise ValueError(f"weights must be finite, >= 0 and not all zero, got {w.tolist()}")
+    return w
+
+
+class _Seeds:
+    """Starting configurations: a seeded table of ``size`` random configurations within the
+    limits, ranked for each target by how near their tool poses are to it.
+
+    Distance: ``Σ w_p Δp² + ℓ² w̄_r ‖ΔR‖²_F`` (ℓ the mean link length, so that a radian of
+    orientation weighs like ℓ metres), for many targets at once through one matrix product
+    ``‖a − b‖² = ‖a‖² − 2 a·b + ‖b‖²``. The nearest entry is the default initial guess; the
+    next ones are the restarts: on intelbot5, an attempt from the k-th nearest entry succeeds
+    more often than one from a uniformly drawn configuration (57 % against 44 % for targets
+    whose first attempt failed) and in fewer steps (6.5 against 8.5).
+    """
+
+    def __init__(self, robot: Robot, T: np.ndarray, w: np.ndarray, size: int, seed: int,
+                 ranks: int):
+        # A stream of its own: targets drawn by a user with the same seed must not be the
+        # table's entries (that would make every such target trivially solved).
+        self.table = sample_configurations(robot, size, np.random.default_rng([_TABLE_STREAM, seed]))
+        ell = max(float(np.abs(robot.a).sum() + np.abs(robot.d).sum()) / robot.n, 1e-3)
+        self.scale = np.concatenate([np.sqrt(w[:3]), np.full(9, ell * np.sqrt(w[3:].mean()))])
+        self.targets = self._features(T)
+        self.entries = self._features(fk(robot, self.table))
+        self.norms = (self.entries * self.entries).sum(1)
+        # The `ranks` nearest entries of each target that restarts, nearest first (-1: not yet).
+        self.ranks = min(ranks, size)
+        self.order = np.full((T.shape[0], self.ranks), -1)
+
+    def _features(self, poses: np.ndarray) -> np.ndarray:
+        # float32: a near-nearest entry is as good a start, and the product is twice as fast.
+        features = np.concatenate([poses[:, :3, 3], poses[:, :3, :3].reshape(-1, 9)], axis=1)
+        return (features * self.scale).astype(np.float32)
+
+    def _distances(self, target: np.ndarray) -> np.ndarray:
+        return self.norms - 2.0 * self.targets[target] @ self.entries.T
+
+    def nearest(self, target: np.ndarray) -> np.ndarray:
+        """The nearest entry for each target: ``(len, n)``."""
+        return self.table[np.argmin(self._distances(target), axis=1)]
+
+    def ranked(self, target: np.ndarray, rank: np.ndarray) -> np.ndarray:
+        """The entry of the given rank (0 = nearest, < ``ranks``) for each target: ``(len, n)``."""
+        new = np.unique(target[self.order[target, 0] < 0])
+        if new.size:
+            d = self._distances(new)
+            k = self.ranks
+            part = np.argpartition(d, k - 1, axis=1)[:, :k] if k < d.shape[1] else \
+                np.broadcast_to(np.arange(d.shape[1]), d.shape)
+            rows = np.arange(new.size)[:, None]
+            self.order[new] = part[rows, np.argsort(d[rows, part], axis=1, kind="stable")]
+        return self.table[self.order[target, rank]]
+
+
+# --------------------------------------------------------------------------------------------
+# Steps (component layout: e (6, A), J (6, n, A), everything already scaled by sqrt(weights))
+
+
+def _step_lm(J, e, damping):
+    A = gram_T(J)
+    for i in range(J.shape[1]):
+        A[i, i] += damping
+    return cholesky_solve_T(A, np.einsum("kim,km->im", J, e))
+
+
+def _step_pinv(J, e, rcond):
+    Jn = np.moveaxis(J, -1, 0)
+    return np.einsum("mik,mk->im", np.linalg.pinv(Jn, rcond=rcond), e.T)
+
+
+def _step_jt(J, e):
+    g = np.einsum("kim,km->im", J, e)
+    Jg = np.einsum("kim,im->km", J, g)
+    denominator = np.einsum("km,km->m", Jg, Jg)
+    alpha = np.einsum("km,km->m", e, Jg) / np.where(denominator > 0, denominator, 1.0)
+    return alpha * g
+
+
+def _wrap_into_limits(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each angle outside its limits moved by a multiple of 2π into ``[mid − π, mid + π)`` of
+    its range (``q (n, A)``); returns the angles and, per target, whether all lie within."""
+    lo, hi = lo[:, None], hi[:, None]
+    inside = ((q >= lo) & (q <= hi)).all(axis=0)
+    out = np.flatnonzero(~inside)
+    if out.size == 0:
+        return q, inside
+    mid = 0.5 * (lo + hi)
+    wrapped = mid + np.remainder(q[:, out] - mid + np.pi, 2 * np.pi) - np.pi
+    q = q.copy()
+    q[:, out] = wrapped
+    inside[out] = ((wrapped >= lo) & (wrapped <= hi)).all(axis=0)
+    return q, inside
+
+
+# --------------------------------------------------------------------------------------------
+# The solver
+
+
+def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
+          tol_pos: float = 1e-9, tol_rot: float = 1e-9, max_iter: int | None = None,
+          restarts: int = 24, restart_batch: int = 16, respect_limits: bool = True,
+          seed: int = 0, guess_table: int = 256,
+          lm_damping: str = "sugihara", lm_scale: float = 0.1, lm_bias: float = 1e-12,
+          lm_lambda0: float = 1e-3,
+          lm_factor: float = 10.0, dls_damping: float = 0.05, pinv_rcond: float = 1e-6,
+          stall_rtol: float = 1e-2, stall_iters: int = 4, ortho_tol: float = 1e-9,
+          record_history: bool = False, chunk: int = 8192) -> IKResult:
+    """Solve ``fk(robot, q) = T_target`` for a batch of targets.
+
+    Args:
+        T_target: ``(..., 4, 4)`` target tool poses.
+        q0: initial guess ``(n,)`` or ``(..., n)`` [rad]; ``"home"`` for the home
+            configuration (as the dissertation); by default, per target, the nearest pose in a
+            seeded table of ``guess_table`` random configurations within the limits.
+        method: ``"lm"``, ``"dls"``, ``"pinv"`` or ``"jt"`` (module docstring).
+        weights: 6 weights on the squared errors, position x, y, z [1/m²] then rotation x, y, z
+            [1/rad²] (base axes); a zero drops that component. Default all ones.
+        tol_pos, tol_rot: success thresholds on the weighted components' position [m] and
+            orientation [rad] errors.
+        max_iter: steps per attempt (default 25 for lm, 50 for pinv, 100 for dls, 2000 for jt).
+        restarts: attempts from random configurations after the first one fails.
+        restart_batch: how many of those a target runs side by side.
+        respect_limits: accept only solutions within the joint limits, and return a
+            configuration within them.
+        seed: seed of the restart configurations.
+        lm_damping: ``"sugihara"`` (λ = lm_scale · E + lm_bias) or ``"marquardt"`` (λ from
+            lm_lambda0, divided or multiplied by lm_factor).
+        dls_damping: μ of ``"dls"`` [m].
+        pinv_rcond: relative cut-off of small singular values for ``"pinv"``.
+        stall_rtol, stall_iters: an attempt has stalled when E has not dropped by a factor
+            ``1 − stall_rtol`` below its best for ``stall_iters`` steps.
+        ortho_tol: largest accepted ``|RᵀR − I|`` of a target rotation.
+        record_history: keep the errors of every iteration (for small batches).
+        chunk: targets solved together. Memory is about 2.6 KB per target of a chunk (lanes,
+            Jacobians, the seed table's distances), so the default bounds a solve to ~25 MB
+            whatever the batch; each target's result does not depend on the chunk size.
+
+    Raises:
+        ValueError: a bad target, initial guess, weight vector or option; the message names
+            the first bad target's index.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> q = np.array([[0.3, 0.2, -0.4, 0.5, 0.1], [0.0, 0.5, 0.5, -0.5, 0.0]])     # (2, 5) [rad]
+        >>> result = solve(robot, fk(robot, q))                                       # targets (2, 4, 4)
+        >>> result.success.tolist(), np.allclose(fk(robot, result.q), fk(robot, q))
+        ([True, True], True)
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if lm_damping not in ("sugihara", "marquardt"):
+        raise ValueError(f"lm_damping must be 'sugihara' or 'marquardt', got {lm_damping!r}")
+    for name, value, lo, hi in (("tol_pos", tol_pos, 0, None), ("tol_rot", tol_rot, 0, None),
+                                ("dls_damping", dls_damping, 0, None),
+                                ("pinv_rcond", pinv_rcond, 0, 1), ("lm_lambda0", lm_lambda0, 0, None),
+                                ("lm_factor", lm_factor, 1, None), ("ortho_tol", ortho_tol, 0, 1),
+                                ("stall_rtol", stall_rtol, 0, 1)):
+        _check_number(name, value, lo, hi, open_lo=True)
+    for name, value in (("lm_scale", lm_scale), ("lm_bias", lm_bias)):
+        _check_number(name, value, 0, None, open_lo=False)
+    if lm_damping == "sugihara" and lm_scale == 0 and lm_bias == 0:
+        raise ValueError("lm_scale and lm_bias must not both be 0 (no damping at all)")
+    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else max_iter
+    for name, value, lo in (("max_iter", max_iter, 1), ("restarts", restarts, 0),
+                            ("restart_batch", restart_batch, 1), ("seed", seed, 0),
+                            ("guess_table", guess_table, 1), ("stall_iters", stall_iters, 1),
+                            ("chunk", chunk, 1)):
+        _check_integer(name, value, lo)
+    T = check_targets(T_target, ortho_tol)
+    batch = T.shape[:-2]
+    q_start = _check_q0(robot, q0, batch, respect_limits)
+    w = _check_weights(weights)
+    first_rank = 1 if q_start is None else 0  # the table rank of the first restart
+    if restarts + first_rank > guess_table:
+        raise ValueError(f"restarts ({restarts}) must be below guess_table ({guess_table})")
+    T = T.reshape(-1, 4, 4)
+    options = dict(lm_damping=lm_damping, lm_scale=lm_scale, lm_bias=lm_bias,
+                   lm_lambda0=lm_lambda0, lm_factor=lm_factor, dls_damping=dls_damping,
+                   pinv_rcond=pinv_rcond)
+    # Targets are independent: solving them in chunks bounds the memory and gives the same
+    # result for each target whatever the chunk size.
+    if T.shape[0] == 0:
+        empty = {f: np.zeros((*batch, robot.n) if f == "q" else batch,
+                             dtype={"success": bool, "iterations": int, "restarts": int,
+                                    "reason": np.array(REASONS).dtype}.get(f, float))
+                 for f in _FIELDS}
+        return _with_branch(robot, IKResult(
+            **empty, history=np.zeros((*batch, 0, 2)) if record_history else None))
+    results = []
+    for start in range(0, T.shape[0], chunk):
+        part = slice(start, start + chunk)
+        seeds = _Seeds(robot, T[part], w, guess_table, seed, restarts + first_rank)
+        q_part = seeds.nearest(np.arange(seeds.targets.shape[0])) if q_start is None \
+            else q_start[part]
+        run = _Run(robot, T[part], q_part, w, method, max_iter, restarts, restart_batch,
+                   respect_limits, seeds, first_rank, options, stall_rtol, stall_iters,
+                   tol_pos, tol_rot, record_history)
+        results.append(run.result((q_part.shape[0],)))
+    return _with_branch(robot, _concatenate(results, batch, robot.n))
+
+
+def _with_branch(robot: Robot, result: IKResult) -> IKResult:
+    """The result with the branch of each configuration, for a robot of the closed form's class."""
+    if not in_class(robot):
+        return result
+    return dataclasses.replace(result, branch=branch_of(robot, result.q))
+
+
+def _check_number(name, value, lo, hi, open_lo):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(value) or (value <= lo if open_lo else value < lo) \
+            or (hi is not None and value >= hi):
+        bounds = f"{'>' if open_lo else '>='} {lo}" + ("" if hi is None else f" and < {hi}")
+        raise ValueError(f"{name} must be a finite number {bounds}, got {value!r}")
+
+
+def _check_integer(name, value, lo):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise ValueError(f"{name} must be an integer >= {lo}, got {value!r}")
+
+
+def _concatenate(results: list[IKResult], batch: tuple, n: int) -> IKResult:
+    """The chunks' results as one result of shape ``batch``."""
+    if len(results) == 1:
+        r = results[0]
+        history = None if r.history is None else r.history.reshape((*batch, *r.history.shape[-2:]))
+        return IKResult(**{f: getattr(r, f).reshape((*batch, *getattr(r, f).shape[1:]))
+                           for f in _FIELDS}, history=history)
+    out = {f: np.concatenate([getattr(r, f) for r in results]) for f in _FIELDS}
+    history = None
+    if results[0].history is not None:
+        K = max(r.history.shape[1] for r in results)
+        history = np.concatenate([np.pad(r.history, ((0, 0), (0, K - r.history.shape[1]), (0, 0)),
+                                         constant_values=np.nan) for r in results])
+        history = history.reshape((*batch, K, 2))
+    return IKResult(**{f: v.reshape((*batch, *v.shape[1:])) for f, v in out.items()},
+                    history=history)
+
+
+class _Run:
+    """One batched solve. Work is organised in *lanes*: a lane is one attempt at one target,
+    and all live lanes step together. Every target starts with one lane from its initial
+    guess; when a target's last lane ends without a solution, new lanes start from its next
+    random configurations, 1, 2, 4, … (at most ``restart_batch``) at once, so that the few
+    hard targets at the end of a batch do not need many rounds one after another."""
+
+    def __init__(self, robot, T, q_start, w, method, max_iter, restarts, restart_batch,
+                 respect_limits, seeds, first_rank, options, stall_rtol, stall_iters, tol_pos, tol_rot,
+                 record_history):
+        M, n = q_start.shape
+        self.robot, self.method, self.options = robot, method, options
+        self.max_iter, self.restarts, self.restart_batch = max_iter, restarts, restart_batch
+        self.respect_limits = respect_limits
+        self.stall_rtol, self.stall_iters = stall_rtol, stall_iters
+        self.tol = np.array([tol_pos, tol_rot])
+        self.sw = np.sqrt(w)
+        self.mask = w > 0
+        self.lo, self.hi = robot.qlim[:, 0], robot.qlim[:, 1]
+        self.R_t = np.ascontiguousarray(np.moveaxis(T[:, :3, :3], 0, -1))
+        self.p_t = np.ascontiguousarray(T[:, :3, 3].T)
+        self.seeds, self.first_rank = seeds, first_rank
+        # LM keeps the last accepted point and retries from it with more damping after a step
+        # that raised E; ``lam`` is λ itself (Marquardt) or a multiplier of s·E + w̄ (Sugihara).
+        self.guarded = method == "lm"
+        self.marquardt = self.guarded and options["lm_damping"] == "marquardt"
+        self.lam0, self.lam_floor = (options["lm_lambda0"], 1e-15) if self.marquardt else (1.0, 1.0)
+        # Per target: the best configuration so far (within the limits when they are
+        # respected), how its attempts ended, and the outcome.
+        self.best_q, self.best_E = np.array(q_start.T, order="C"), np.full(M, np.inf)
+        self.best_err = np.full((2, M), np.inf)
+        self.attempts = np.zeros(M, int)          # attempts started beyond the first
+        self.live = np.ones(M, int)                # live lanes
+        self.iterations = np.zeros(M, int)
+        self.hit_max_iter = np.zeros(M, bool)
+        self.solved_outside = np.zeros(M, bool)
+        self.done = np.zeros(M, bool)
+        self.reason = np.full(M, _UNREACHABLE)
+        self.history = [] if record_history else None
+        # Per lane.
+        self.lanes = self._new_lanes(np.arange(M), q_start.T)
+        while self.lanes["target"].size:
+            self._iteration()
+
+    def _new_lanes(self, target, q):
+        L = target.size
+        lanes = dict(target=target, q=np.array(q, dtype=float).reshape(-1, L),
+                     best=np.full(L, np.inf), since=np.zeros(L, int), steps=np.zeros(L, int),
+                     lam=np.full(L, self.lam0))
+        if self.guarded:  # the last accepted point: q, E, scaled error and Jacobian
+            n = lanes["q"].shape[0]
+            lanes.update(acc_q=lanes["q"].copy(), acc_E=np.full(L, np.inf),
+                         acc_e=np.zeros((6, L)), acc_J=np.zeros((6, n, L)))
+        return lanes
+
+    def _errors(self, q, target):
+        """Pose error ``e (6, L)``, Jacobian ``(6, n, L)``, and per lane the position and
+        orientation errors, of the weighted components ``(2, L)`` and in full ``(2, L)``."""
+        T, J = pose_jacobian_T(self.robot, q)
+        e = np.empty((6, target.size))
+        e[:3] = self.p_t[:, target] - T[:3, 3]
+        e[3:] = relative_log_T(self.R_t[:, :, target], T[:3, :3])       # log(R_t Rᵀ)
+        square = e * e
+        full = np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)]))
+        if self.mask.all():
+            return e, J, full, full
+        square *= self.mask[:, None]
+        return e, J, np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)])), full
+
+    def _iteration(self):
+        lanes = self.lanes
+        t = lanes["target"]
+        e, J, weighted, full = self._errors(lanes["q"], t)
+        if self.mask.all() and (self.sw == 1).all():
+            es, Js = e, J
+        else:
+            es, Js = e * self.sw[:, None], J * self.sw[:, None, None]
+        E = 0.5 * (es * es).sum(0)
+        if self.history is not None:
+            row = np.full((2, self.best_E.size), np.inf)
+            np.minimum.at(row, (slice(None), t), full)
+            self.history.append(np.where(np.isinf(row), np.nan, row))
+        q, inside = lanes["q"], np.ones(t.size, bool)
+        if self.respect_limits:
+            q, inside = _wrap_into_limits(q, self.lo, self.hi)
+
+        # The best point of each target (of several lanes of a target, the lowest E).
+        eligible = np.flatnonzero(inside & (E < self.best_E[t]))
+        np.minimum.at(self.best_E, t[eligible], E[eligible])
+        eligible = eligible[E[eligible] == self.best_E[t[eligible]]]
+        self.best_q[:, t[eligible]] = q[:, eligible]
+        self.best_err[:, t[eligible]] = full[:, eligible]
+
+        solved = (weighted <= self.tol[:, None]).all(axis=0)
+        winners = np.flatnonzero(solved & inside)
+        winners = winners[np.unique(t[winners], return_index=True)[1]]
+        self.best_q[:, t[winners]], self.best_err[:, t[winners]] = q[:, winners], full[:, winners]
+        self.done[t[winners]], self.reason[t[winners]] = True, _CONVERGED
+        self.solved_outside[t[solved & ~inside]] = True
+
+        if self.guarded:
+            es, Js, E = self._accept_or_reject(es, Js, E)
+        improved = E < lanes["best"] * (1.0 - self.stall_rtol)
+        lanes["best"] = np.where(improved, E, lanes["best"])
+        lanes["since"] = np.where(improved, 0, lanes["since"] + 1)
+        stalled = (lanes["since"] >= self.stall_iters) & ~solved
+        out_of_steps = (lanes["steps"] >= self.max_iter) & ~solved & ~stalled
+        self.hit_max_iter[t[out_of_steps]] = True
+
+        keep = ~solved & ~stalled & ~out_of_steps & ~self.done[t]
+        if not keep.all():
+            np.subtract.at(self.live, t[~keep], 1)
+            g = np.flatnonzero(keep)
+            Js, es, E = Js[:, :, g], es[:, g], E[g]
+            for key, value in lanes.items():
+                lanes[key] = value[..., g]
+        lanes["q"] += self._step(Js, es, E, lanes["lam"])
+        lanes["steps"] += 1
+        np.add.at(self.iterations, lanes["target"], 1)     # lanes side by side each count
+        self._restart_or_stop()
+
+    def _step(self, Js, es, E, lam):
+        o = self.options
+        if self.method == "lm":
+            return _step_lm(Js, es, lam if self.marquardt else lam * (o["lm_scale"] * E + o["lm_bias"]))
+        if self.method == "dls":
+            return _step_lm(Js, es, o["dls_damping"] ** 2)
+        if self.method == "pinv":
+            return _step_pinv(Js, es, o["pinv_rcond"])
+        return _step_jt(Js, es)
+
+    def _accept_or_reject(self, es, Js, E):
+        """Accept the new point if it lowered E (damping ÷ ν), else go back to the last
+        accepted point (damping × ν). Returns the error, Jacobian and E to step from."""
+        lanes = self.lanes
+        accept = E < lanes["acc_E"]
+        factor = self.options["lm_factor"]
+        lanes["lam"] = np.where(accept, np.maximum(lanes["lam"] / factor, self.lam_floor),
+                                np.minimum(lanes["lam"] * factor, 1e15))
+        # The fresh arrays become the accepted ones, with the old values put back where the
+        # step was rejected (usually few lanes).
+        r = np.flatnonzero(~accept)
+        if r.size:
+            lanes["q"][:, r] = lanes["acc_q"][:, r]
+            es[:, r], Js[:, :, r], E[r] = lanes["acc_e"][:, r], lanes["acc_J"][:, :, r], lanes["acc_E"][r]
+        lanes["acc_q"], lanes["acc_E"], lanes["acc_e"], lanes["acc_J"] = lanes["q"].copy(), E, es, Js
+        return es, Js, E
+
+    def _restart_or_stop(self):
+        """Targets with no live lane: start their next batch of attempts, or stop them."""
+        idle = np.flatnonzero((self.live == 0) & ~self.done)
+        left = self.restarts - self.attempts[idle]
+        stop = idle[left == 0]
+        self.done[stop] = True
+        self.reason[stop] = np.where(self.solved_outside[stop], _LIMITS,
+                                     np.where(self.hit_max_iter[stop], _MAX_ITER, _UNREACHABLE))
+        # Rounds of 1, 2, 4, … lanes (at most restart_batch): cheap for the many targets that
+        # need one more try, parallel for the few that need many.
+        again = idle[left > 0]
+        count = np.minimum(left[left > 0], np.minimum(self.restart_batch, self.attempts[again] + 1))
+        if again.size == 0:
+            return
+        target = np.repeat(again, count)
+        attempt = self.attempts[target] + np.arange(target.size) - np.repeat(np.cumsum(count) - count, count)
+        self.attempts[again] += count
+        self.live[again] += count
+        q = self.seeds.ranked(target, attempt + self.first_rank)
+        new = self._new_lanes(target, q.T)
+        self.lanes = {key: np.concatenate([value, new[key]], axis=-1)
+                      for key, value in self.lanes.items()}
+
+    def result(self, batch: tuple) -> IKResult:
+        n = self.best_q.shape[0]
+        history = None
+        if self.history is not None:
+            history = np.stack(self.history, axis=-1).transpose(1, 2, 0).reshape(*batch, -1, 2)
+        return IKResult(
+            q=self.best_q.T.reshape(*batch, n).copy(),
+            success=(self.reason == _CONVERGED).reshape(batch),
+            iterations=self.iterations.reshape(batch),
+            restarts=self.attempts.reshape(batch),
+            pos_error=self.best_err[0].reshape(batch),
+            rot_error=self.best_err[1].reshape(batch),
+            reason=np.array(REASONS)[self.reason].reshape(batch),
+            history=history,
+        )
+
+
+def solve_path(robot: Robot, T_path, q0, **options) -> IKResult:
+    """Solve a sequence of poses ``T_path (K, 4, 4)`` one after another, each from the previous
+    solution (the first from ``q0 (n,)``), so that the joint path stays on one branch.
+
+    ``options`` are those of :func:`solve` (restarts default to 0 here: a restart would jump
+    to another branch). Returns the results stacked along the path, shapes ``(K, ...)``.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> q_path = np.linspace(np.zeros(5), [0.3, 0.2, -0.4, 0.5, 0.1], 5)     # (K, n) [rad]
+        >>> result = solve_path(robot, fk(robot, q_path), np.zeros(5))
+        >>> result.q.shape, bool(result.success.all()), np.allclose(result.q, q_path)
+        ((5, 5), True, True)
+    """
+    options = {"restarts": 0, **options}
+    T_path = check_targets(T_path, options.get("ortho_tol", 1e-9))
+    if T_path.ndim != 3:
+        raise ValueError(f"T_path must have shape (K, 4, 4), got {T_path.shape}")
+    results, q = [], np.asarray(q0, dtype=float)
+    for T in T_path:
+        result = solve(robot, T, q, **options)
+        results.append(result)
+        q = result.q
+    return _with_branch(robot, IKResult(**{f: np.stack([getattr(r, f) for r in results])
+                                           for f in _FIELDS}))
+
+
+# The closed form lives in its own module and uses this one's checks and LM: imported last,
+# when they exist.
+from .geometric_ik import (BRANCHES, ClosedFormResult, branch_of, class_refusal,  # noqa: E402
+                           closed_form, count_distinct, in_class)
+
+__all__ += ["closed_form", "ClosedFormResult", "BRANCHES", "branch_of", "in_class", "class_refusal",
+            "count_distinct"]

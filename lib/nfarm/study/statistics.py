@@ -1,0 +1,224 @@
+"""Spreads of the study's compared numbers (chapters 06–08).
+
+Held-out errors are averages over trajectories whose samples are strongly correlated (a
+trajectory of 1 000 states at 50 Hz is a handful of independent moves), so their spread is
+taken over **trajectories**: the percentile bootstrap (Efron & Tibshirani 1993, ch. 13)
+resamples the test trajectories with replacement and recomputes the statistic from per-trajectory
+sums (:func:`trajectory_sums`), ``draws`` times from one seeded generator.
+
+The NRMSE of joint j is ``sqrt(SSE_j / N) / std(τ_j)``, the standard deviation taken over the
+same (resampled) samples, so a resample's NRMSE is a function of the sums of its trajectories'
+``[count, SSE_j, Σ τ_j, Σ τ_j²]``.
+
+Over **seeds** (a sweep's configurations trained on several data draws and initialisations,
+:func:`nfarm.study.sweep.by_configuration`) a difference counts when the seeds' ranges do not
+overlap (:func:`ranges_separate`): if the two configurations' values came from one
+distribution, every value of one would lie below every value of the other with probability
+``1 / C(n_a + n_b, n_a)`` — for 5 seeds each, 2 / 252 = 0.8 % either way
+(:func:`separation_level`), a test that assumes no distribution.
+
+Over **independent samples** (the test poses of the learned IK, each drawn on its own; or the
+per-trajectory maxima of a torque error) :func:`bootstrap_rows` resamples rows with SciPy's
+``scipy.stats.bootstrap`` (percentile method, paired columns, batched so that 2 000 resamples of
+10 000 poses stay within a few tens of MB).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.stats
+
+__all__ = ["trajectory_sums", "trajectory_maxima", "nrmse_from_sums", "Interval", "bootstrap_nrmse",
+           "worst_difference", "Estimate", "bootstrap_rows", "ranges_separate", "separation_level"]
+
+
+def trajectory_sums(predicted: np.ndarray, tau: np.ndarray, trajectory: np.ndarray) -> np.ndarray:
+    """``(T, 1 + 3n)``: per trajectory (in order of their labels), the sample count, then per
+    joint the sum of squared errors, the sum of the torques and the sum of their squares.
+
+    Args:
+        predicted, tau: ``(N, n)`` torques [N·m].
+        trajectory: ``(N,)`` integer label of each sample's trajectory.
+    """
+    predicted, tau = np.asarray(predicted, float), np.asarray(tau, float)
+    if predicted.shape != tau.shape or predicted.ndim != 2:
+        raise ValueError(f"predicted and tau must be (N, n) arrays of one shape, got {predicted.shape} "
+                         f"and {tau.shape}")
+    labels, index = np.unique(np.asarray(trajectory), return_inverse=True)
+    if len(index) != len(tau):
+        raise ValueError(f"trajectory must label each of the {len(tau)} samples, got {len(index)} labels")
+    columns = np.concatenate([np.ones((len(tau), 1)), (predicted - tau) ** 2, tau, tau ** 2], axis=1)
+    sums = np.zeros((len(labels), columns.shape[1]))
+    np.add.at(sums, index, columns)
+    return sums
+
+
+def trajectory_maxima(predicted: np.ndarray, tau: np.ndarray, trajectory: np.ndarray) -> np.ndarray:
+    """``(T, n)``: per trajectory (in order of their labels) and joint, the largest absolute
+    torque error ``max |predicted - tau|`` [N·m] — the rows :func:`bootstrap_rows` resamples for
+    the largest error's interval. Arguments as :func:`trajectory_sums`."""
+    predicted, tau = np.asarray(predicted, float), np.asarray(tau, float)
+    if predicted.shape != tau.shape or predicted.ndim != 2:
+        raise ValueError(f"predicted and tau must be (N, n) arrays of one shape, got {predicted.shape} "
+                         f"and {tau.shape}")
+    labels, index = np.unique(np.asarray(trajectory), return_inverse=True)
+    if len(index) != len(tau):
+        raise ValueError(f"trajectory must label each of the {len(tau)} samples, got {len(index)} labels")
+    maxima = np.zeros((len(labels), tau.shape[1]))
+    np.maximum.at(maxima, index, np.abs(predicted - tau))
+    return maxima
+
+
+def nrmse_from_sums(sums: np.ndarray, *, normalised: bool = True) -> np.ndarray:
+    """``(..., n)`` NRMSE of the totals ``sums (..., 1 + 3n)`` (already summed over
+    trajectories); with ``normalised=False`` the RMSE itself [N·m]."""
+    n = (sums.shape[-1] - 1) // 3
+    count = sums[..., :1]
+    sse, total, squares = sums[..., 1:1 + n], sums[..., 1 + n:1 + 2 * n], sums[..., 1 + 2 * n:]
+    if not normalised:
+        return np.sqrt(sse / count)
+    variance = np.maximum(squares / count - (total / count) ** 2, 0.0)
+    return np.sqrt(sse / count) / np.sqrt(np.where(variance > 0, variance, np.nan))
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A statistic and its percentile-bootstrap interval over trajectories.
+
+    Attributes:
+        value: ``(n,)`` per joint, on the whole test set.
+        low, high: ``(n,)`` the interval's ends.
+        worst, worst_low, worst_high: the largest joint's value and the interval of the largest
+            joint's value (recomputed per resample, so the worst joint may change).
+        level, draws, trajectories: the coverage, the resamples and the trajectories resampled.
+    """
+
+    value: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    worst: float
+    worst_low: float
+    worst_high: float
+    level: float
+    draws: int
+    trajectories: int
+
+
+def _check(sums, draws, level) -> np.ndarray:
+    sums = np.asarray(sums, float)
+    if sums.ndim != 2 or sums.shape[0] < 2 or (sums.shape[1] - 1) % 3:
+        raise ValueError(f"sums must be (trajectories >= 2, 1 + 3n), got shape {sums.shape}")
+    if not (isinstance(draws, int) and draws >= 100):
+        raise ValueError(f"draws must be an integer >= 100, got {draws!r}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    return sums
+
+
+def _resampled(sums: np.ndarray, draws: int, seed: int, normalised: bool = True) -> np.ndarray:
+    """``(draws, n)`` NRMSE (or RMSE) of ``draws`` resamples of the trajectories; the resamples
+    depend on the seed and the number of trajectories only, so two models' are paired."""
+    picks = np.random.default_rng(seed).integers(0, len(sums), size=(draws, len(sums)))
+    return nrmse_from_sums(sums[picks].sum(axis=1), normalised=normalised)
+
+
+def bootstrap_nrmse(sums: np.ndarray, *, draws: int = 2000, level: float = 0.95, seed: int = 0,
+                    normalised: bool = True) -> Interval:
+    """Per-joint and worst-joint NRMSE (``normalised=False``: RMSE [N·m]) with
+    percentile-bootstrap intervals over the rows (trajectories) of ``sums (T, 1 + 3n)``
+    (:func:`trajectory_sums`)."""
+    sums = _check(sums, draws, level)
+    T = len(sums)
+    resampled = _resampled(sums, draws, seed, normalised)              # (draws, n)
+    value = nrmse_from_sums(sums.sum(axis=0), normalised=normalised)
+    tails = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
+    low, high = np.nanpercentile(resampled, tails, axis=0)
+    worst_low, worst_high = np.nanpercentile(np.nanmax(resampled, axis=1), tails)
+    return Interval(value, low, high, float(np.nanmax(value)), float(worst_low), float(worst_high),
+                    level, draws, T)
+
+
+def worst_difference(sums_a: np.ndarray, sums_b: np.ndarray, *, draws: int = 2000, level: float = 0.95,
+                     seed: int = 0, normalised: bool = True) -> tuple[float, float, float]:
+    """The worst-joint NRMSE of model a less that of model b on the same test trajectories, and
+    the percentile-bootstrap interval of that difference, both models judged on the same
+    resamples (paired). An interval that contains 0 is no difference."""
+    sums_a, sums_b = _check(sums_a, draws, level), _check(sums_b, draws, level)
+    if sums_a.shape != sums_b.shape:
+        raise ValueError(f"the two models must be judged on the same trajectories, got sums of shapes "
+                         f"{sums_a.shape} and {sums_b.shape}")
+    a = np.nanmax(_resampled(sums_a, draws, seed, normalised), axis=1)
+    b = np.nanmax(_resampled(sums_b, draws, seed, normalised), axis=1)
+    tails = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
+    low, high = np.nanpercentile(a - b, tails)
+    value = float(np.nanmax(nrmse_from_sums(sums_a.sum(axis=0), normalised=normalised))
+                  - np.nanmax(nrmse_from_sums(sums_b.sum(axis=0), normalised=normalised)))
+    return value, float(low), float(high)
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A statistic of independent rows and its percentile-bootstrap interval
+    (:func:`bootstrap_rows`): ``value``, ``low`` and ``high`` of the statistic's shape (a float
+    for a scalar statistic), ``level`` the coverage, ``draws`` the resamples, ``rows`` the rows
+    resampled."""
+
+    value: np.ndarray | float
+    low: np.ndarray | float
+    high: np.ndarray | float
+    level: float
+    draws: int
+    rows: int
+
+
+def bootstrap_rows(rows: np.ndarray, statistic, *, draws: int = 2000, level: float = 0.95, seed: int = 0,
+                   batch: int = 100) -> Estimate:
+    """A statistic of the rows of ``rows (N, k)`` and its percentile-bootstrap interval from
+    ``draws`` resamples of the rows with replacement (``scipy.stats.bootstrap``, the generator
+    seeded by ``seed``; the same seed and N resample two models' rows alike).
+
+    ``statistic(X)`` maps ``X (b, N, k)`` (``b`` resamples) to ``(b,)`` or ``(b, m)``; the
+    resamples are made ``batch`` at a time. The interval of an extreme (a maximum, a high
+    percentile of few rows) is the bootstrap's and no better: its upper end is the sample's.
+    """
+    rows = np.asarray(rows, float)
+    if rows.ndim == 1:
+        rows = rows[:, None]
+    if rows.ndim != 2 or len(rows) < 2 or not np.isfinite(rows).all():
+        raise ValueError(f"rows must be a finite (N >= 2, k) array, got shape {rows.shape}")
+    if not (isinstance(draws, int) and draws >= 100):
+        raise ValueError(f"draws must be an integer >= 100, got {draws!r}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+
+    def resampled(*columns, axis=-1):        # scipy hands each column as (b, N), wants (m, b)
+        return np.moveaxis(np.asarray(statistic(np.stack(columns, axis=-1))), 0, -1)
+
+    value = np.asarray(statistic(rows[None]))[0]
+    result = scipy.stats.bootstrap(tuple(rows.T), resampled, n_resamples=draws, confidence_level=level,
+                                   method="percentile", paired=True, vectorized=True, batch=batch,
+                                   rng=np.random.default_rng(seed))
+    low, high = result.confidence_interval
+    scalar = value.ndim == 0
+    as_out = (lambda v: float(v)) if scalar else (lambda v: np.asarray(v, float))   # noqa: E731
+    return Estimate(as_out(value), as_out(low), as_out(high), level, draws, len(rows))
+
+
+def ranges_separate(a, b) -> bool:
+    """Whether the values of two configurations over their seeds do not overlap (every value
+    of one below every value of the other): the rule by which a difference over seeds is
+    written as a difference. ``a``, ``b``: 1-D sequences of at least two values."""
+    a, b = np.asarray(a, float).ravel(), np.asarray(b, float).ravel()
+    if len(a) < 2 or len(b) < 2:
+        raise ValueError(f"a spread needs at least two seeds per configuration, got {len(a)} and {len(b)}")
+    return bool(a.max() < b.min() or b.max() < a.min())
+
+
+def separation_level(n_a: int, n_b: int) -> float:
+    """The probability that :func:`ranges_separate` holds (either way) for two configurations
+    whose ``n_a`` and ``n_b`` values come from one continuous distribution: ``2 / C(n_a + n_b,
+    n_a)``."""
+    return 2 / math.comb(n_a + n_b, n_a)

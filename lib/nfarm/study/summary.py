@@ -1,0 +1,453 @@
+"""The study's result in one long table (chapters 07 and 08): every method's errors on held-out
+data, each metric with its percentile-bootstrap interval, machine-readable.
+
+One :class:`Row` per task, method and metric, with ``value``, ``ci_low``, ``ci_high`` and ``n``
+(the resamples) and what was resampled (``spread``):
+
+* **inverse kinematics** (:func:`ik_rows`): the worst joint's RMSE [deg] and the median, 95th
+  percentile and largest tool position [mm] and orientation [deg] errors of ``fk(predicted q)``,
+  resampling the **test poses** (each drawn on its own, so independent);
+* **inverse dynamics** (:func:`id_rows`): each joint's NRMSE [%] (or RMSE [N·m] against measured
+  torques), the worst joint's — over the joints whose torque a sensor resolves
+  (:func:`nfarm.presentation.wording.resolved_joints`) — and the largest absolute torque error [N·m],
+  resampling the **test trajectories** (a trajectory's samples are correlated:
+  :mod:`nfarm.study.statistics`).
+
+:func:`ik_difference` and :func:`largest_difference` compare two methods on the same resamples
+(paired), so a chapter says where a baseline wins only when the interval of the difference
+excludes 0. The median and the 95th percentile are the reader's; the maximum is reported because
+the worst case is what a controller meets, **without an interval**: the percentile bootstrap of
+a sample's maximum has the maximum itself as its upper end (measured: "70.4 (27.7–70.4)"), an
+interval that says nothing of how much larger the next test set's worst case could be. Such a
+row has ``low == high == value`` and ``n == 0``; comparisons of maxima are made on paired
+differences only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..learning.baselines import label as baseline_label
+from ..learning.learned import Baseline
+from ..model.robot import Robot
+from ..presentation.tables import Table, shown
+from ..presentation.wording import resolved_joints, times
+from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows
+from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
+
+__all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
+           "long_table", "wide_table", "interval_text", "ik_baselines", "best_id_baseline",
+           "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID"]
+
+#: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
+WORST_ID = "worst resolved joint NRMSE"
+
+IK_BASELINES = {"nearest": "nearest neighbour", "rbf": "RBF interpolation", "linear": "linear least squares"}
+
+# (metric, unit) of the IK rows, in order; the first is left out for a method whose joint angles
+# are another branch's (LM: its "errors" reach the same pose).
+IK_METRICS = (("worst joint RMSE", "deg"), ("position median", "mm"), ("position p95", "mm"),
+              ("position max", "mm"), ("orientation median", "deg"), ("orientation p95", "deg"),
+              ("orientation max", "deg"))
+
+
+@dataclass(frozen=True)
+class Row:
+    """One method's value of one metric on held-out data and its interval (``low``, ``high``
+    at coverage ``level``, from ``n`` resamples of ``spread``); ``n == 0``: a maximum, shown
+    without an interval (``low == high == value``)."""
+
+    task: str
+    method: str
+    role: str
+    metric: str
+    unit: str
+    value: float
+    low: float
+    high: float
+    n: int
+    level: float
+    spread: str
+    arm: str = ""
+
+
+def _ik_columns(errors: Mapping[str, np.ndarray]) -> np.ndarray:
+    """``(N, n + 2)``: each pose's joint errors [deg], tool position [mm] and orientation [deg]
+    error (:func:`nfarm.learning.learned.ik_errors`' record)."""
+    joint = np.degrees(np.asarray(errors["joint"], float))
+    position = 1e3 * np.asarray(errors["position"], float)
+    orientation = np.degrees(np.asarray(errors["orientation"], float))
+    if joint.ndim != 2 or position.shape != (len(joint),) or orientation.shape != (len(joint),):
+        raise ValueError(f"errors must hold joint (N, n), position (N,) and orientation (N,), got shapes "
+                         f"{joint.shape}, {position.shape} and {orientation.shape}")
+    return np.column_stack([joint, position, orientation])
+
+
+def _ik_statistic(n: int) -> Callable[[np.ndarray], np.ndarray]:
+    """``X (b, N, n + 2) -> (b, 7)``: the metrics of :data:`IK_METRICS`."""
+    def statistic(X):
+        worst = np.sqrt((X[..., :n] ** 2).mean(axis=-2)).max(axis=-1)
+        out = [worst]
+        for column in (n, n + 1):
+            x = X[..., column]
+            out += [np.median(x, axis=-1), np.percentile(x, 95, axis=-1), x.max(axis=-1)]
+        return np.stack(out, axis=-1)
+    return statistic
+
+
+def ik_rows(method: str, role: str, errors: Mapping[str, np.ndarray], *, joint: bool = True,
+            task: str = "inverse kinematics", draws: int = 2000, level: float = 0.95,
+            seed: int = 0, arm: str = "") -> list[Row]:
+    """The IK metrics (:data:`IK_METRICS`) of one method's test-pose ``errors`` with their
+    intervals over the poses; ``joint=False`` leaves out the joint RMSE (another branch's);
+    ``arm`` names the arm when rows of several go in one table."""
+    columns = _ik_columns(errors)
+    n = columns.shape[1] - 2
+    est = bootstrap_rows(columns, _ik_statistic(n), draws=draws, level=level, seed=seed)
+    spread = f"bootstrap over {len(columns):,} test poses"
+    extreme = f"the largest of {len(columns):,} test poses (a maximum: no interval)"
+    return [Row(task, method, role, metric, unit, float(est.value[k]), float(est.value[k]), float(est.value[k]),
+                0, level, extreme, arm) if metric.endswith(" max") else
+            Row(task, method, role, metric, unit, float(est.value[k]), float(est.low[k]), float(est.high[k]),
+                draws, level, spread, arm)
+            for k, (metric, unit) in enumerate(IK_METRICS) if joint or k > 0]
+
+
+def ik_difference(errors_a: Mapping, errors_b: Mapping, *, draws: int = 2000, level: float = 0.95,
+                  seed: int = 0) -> Estimate:
+    """Each IK metric of method a less method b's on the **same** test poses, with the paired
+    interval (both recomputed on each resample of the poses): ``(7,)`` arrays in the order of
+    :data:`IK_METRICS`. An interval that holds 0 is no difference."""
+    a, b = _ik_columns(errors_a), _ik_columns(errors_b)
+    if a.shape != b.shape:
+        raise ValueError(f"the two methods must be judged on the same poses, got {a.shape} and {b.shape}")
+    width = a.shape[1]
+    stat = _ik_statistic(width - 2)
+    return bootstrap_rows(np.hstack([a, b]), lambda X: stat(X[..., :width]) - stat(X[..., width:]),
+                          draws=draws, level=level, seed=seed)
+
+
+def _largest(X):
+    return X.max(axis=(-2, -1))
+
+
+def resolved_sums(sums: np.ndarray, resolved) -> np.ndarray:
+    """The columns of ``sums (T, 1 + 3n)`` (:func:`nfarm.study.statistics.trajectory_sums`) of the
+    joints ``resolved (n,)`` bool marks: ``(T, 1 + 3k)``, so that a worst joint and its
+    interval (:func:`nfarm.study.statistics.bootstrap_nrmse`, ``worst_difference``) are taken over
+    those joints, on the same resamples as the whole."""
+    sums = np.asarray(sums, float)
+    n = (sums.shape[-1] - 1) // 3
+    resolved = np.asarray(resolved, bool)
+    if resolved.shape != (n,) or not resolved.any():
+        raise ValueError(f"resolved must mark at least one of the sums' {n} joints, got {resolved.tolist()}")
+    keep = np.flatnonzero(resolved)
+    return sums[:, np.concatenate([[0], 1 + keep, 1 + n + keep, 1 + 2 * n + keep])]
+
+
+def bootstrap_resolved(sums: np.ndarray, resolved=None, **options):
+    """:func:`nfarm.study.statistics.bootstrap_nrmse` of ``sums`` with its worst joint (value and
+    interval) taken over the ``resolved (n,)`` joints (``None``: every joint), on the same
+    resamples; ``options`` as that function's."""
+    whole = bootstrap_nrmse(sums, **options)
+    if resolved is None or np.all(resolved):
+        return whole
+    sub = bootstrap_nrmse(resolved_sums(sums, resolved), **options)
+    return replace(whole, worst=sub.worst, worst_low=sub.worst_low, worst_high=sub.worst_high)
+
+
+def id_rows(method: str, role: str, sums: np.ndarray, maxima: np.ndarray, joint_names: Sequence[str], *,
+            resolved=None, normalised: bool = True, task: str = "inverse dynamics", draws: int = 2000,
+            level: float = 0.95, seed: int = 0, arm: str = "") -> list[Row]:
+    """The ID metrics of one method on the test trajectories: each joint's NRMSE [%] (with
+    ``normalised=False`` its RMSE [N·m]), the worst joint's, and the largest absolute torque
+    error [N·m] (a maximum: no interval), with intervals over the trajectories.
+    ``sums (T, 1 + 3n)``: :func:`nfarm.study.statistics.trajectory_sums`; ``maxima (T, n)``:
+    :func:`nfarm.study.statistics.trajectory_maxima` of the same trajectories.
+
+    ``resolved (n,)`` bool (:func:`nfarm.presentation.wording.resolved_joints`): the joints whose torque a
+    sensor resolves. Given, the worst joint is taken over them (metric :data:`WORST_ID`) and
+    the others' metrics are marked "(below noise)"; ``None``: over every joint ("worst joint
+    NRMSE")."""
+    sums, maxima = np.asarray(sums, float), np.asarray(maxima, float)
+    if maxima.ndim != 2 or len(maxima) != len(sums) or maxima.shape[1] != len(joint_names):
+        raise ValueError(f"maxima must be (trajectories={len(sums)}, joints={len(joint_names)}), got {maxima.shape}")
+    ci = bootstrap_nrmse(sums, draws=draws, level=level, seed=seed, normalised=normalised)
+    scale, name, unit = (100.0, "NRMSE", "%") if normalised else (1.0, "RMSE", "N·m")
+    spread = f"bootstrap over {ci.trajectories} test trajectories"
+    below = np.zeros(len(joint_names), bool) if resolved is None else ~np.asarray(resolved, bool)
+    rows = [Row(task, method, role, f"τ{j + 1} {name}" + (" (below noise)" if below[j] else ""), unit,
+                scale * ci.value[j], scale * ci.low[j], scale * ci.high[j], draws, level, spread, arm)
+            for j in range(len(joint_names))]
+    worst = bootstrap_resolved(sums, resolved, draws=draws, level=level, seed=seed, normalised=normalised)
+    rows.append(Row(task, method, role, f"worst joint {name}" if resolved is None else f"worst resolved joint {name}",
+                    unit, scale * worst.worst, scale * worst.worst_low, scale * worst.worst_high, draws, level,
+                    spread, arm))
+    big = float(maxima.max())
+    rows.append(Row(task, method, role, "largest error", "N·m", big, big, big, 0, level,
+                    f"the largest over {ci.trajectories} test trajectories (a maximum: no interval)", arm))
+    return rows
+
+
+def with_resolved_worst(groups: Sequence[Replicates], resolved, source: str) -> list[Replicates]:
+    """A sweep's configurations (:func:`nfarm.study.sweep.by_configuration`) with each seed's
+    ``worst_nrmse`` taken over the ``resolved (n,)`` joints of its per-joint metric ``source``
+    (``"val_nrmse"`` of a learned-ID cell, ``"nrmse"`` of a baseline's); the all-joint value
+    kept as ``worst_nrmse_all``. Means, ranges and :func:`nfarm.study.sweep.best_by` then choose by
+    the joints a sensor resolves — the cells themselves are not touched (their results are
+    reused)."""
+    resolved = np.asarray(resolved, bool)
+    if not resolved.any():
+        raise ValueError("resolved must mark at least one joint")
+
+    def run(r):
+        if source not in r.metrics:
+            return r
+        values = np.asarray(r.metrics[source], float)
+        if values.shape != resolved.shape:
+            raise ValueError(f"{source} of a cell has {values.shape[0]} joints, resolved {len(resolved)}")
+        return replace(r, metrics={**r.metrics, "worst_nrmse_all": r.metrics.get("worst_nrmse"),
+                                   "worst_nrmse": float(values[resolved].max())})
+    return [Replicates(tuple(run(r) for r in g.runs)) for g in groups]
+
+
+def resolved_on_validation(study, directory) -> np.ndarray:
+    """``(n,)`` bool: the joints whose torque spread on the study's ID validation trajectories
+    (``id_val.npz`` in ``directory``) reaches its sensor noise (:func:`nfarm.presentation.wording.resolved_joints`)
+    — fixed on validation data, as every choice is, and used alike by chapters 06–08."""
+    from .datasets import load
+
+    val = load(directory / "id_val.npz", study.robot, study)
+    return resolved_joints(val["tau"].std(axis=0), study.id.noise)
+
+
+def largest_difference(maxima_a: np.ndarray, maxima_b: np.ndarray, *, draws: int = 2000, level: float = 0.95,
+                       seed: int = 0) -> Estimate:
+    """The largest torque error of method a less method b's on the same trajectories, with the
+    paired interval over resamples of the trajectories."""
+    a, b = np.asarray(maxima_a, float), np.asarray(maxima_b, float)
+    if a.shape != b.shape:
+        raise ValueError(f"the two methods must be judged on the same trajectories, got {a.shape} and {b.shape}")
+    width = a.shape[1]
+    return bootstrap_rows(np.hstack([a, b]), lambda X: _largest(X[..., :width]) - _largest(X[..., width:]),
+                          draws=draws, level=level, seed=seed)
+
+
+def _floor(row: Row, floors: Mapping[str, float]) -> float:
+    return floors.get(row.unit, 0.0)
+
+
+def long_table(rows: Sequence[Row], *, floors: Mapping[str, float] | None = None, caption: str = "") -> Table:
+    """The machine-readable table: one line per task, method and metric (columns ``task,
+    method, role, metric, unit, value, ci_low, ci_high, n, level, spread``). Values below a
+    unit's floor (``floors``: unit → level of rounding) are written as such (``< 1e-06``); a
+    maximum (``n`` 0) has no interval: its ``ci_low``, ``ci_high`` and ``level`` are empty."""
+    floors = floors or {}
+    fmt = lambda v, r: shown(v, ".4g", floor=_floor(r, floors))   # noqa: E731
+    arm = any(r.arm for r in rows)          # a column of arms when the rows are of several
+    return Table((["arm"] if arm else []) + ["task", "method", "role", "metric", "unit", "value", "ci_low", "ci_high",
+                                             "n", "level", "spread"],
+                 [([r.arm] if arm else []) + [r.task, r.method, r.role, r.metric, r.unit, fmt(r.value, r),
+                                              *((fmt(r.low, r), fmt(r.high, r)) if r.n else ("", "")), r.n,
+                                              f"{r.level:g}" if r.n else "", r.spread]
+                  for r in rows], caption=caption)
+
+
+def interval_text(row: Row, floors: Mapping[str, float] | None = None, digits: str = ".3g") -> str:
+    """``value (low–high)`` of a row for a reader; one value when the interval is a point."""
+    floor = _floor(row, floors or {})
+    value, low, high = (shown(v, digits, floor=floor) for v in (row.value, row.low, row.high))
+    return value if low == high == value else f"{value} ({low}–{high})"
+
+
+def wide_table(rows: Sequence[Row], task: str, *, floors: Mapping[str, float] | None = None,
+               caption: str = "") -> Table:
+    """For a reader: one line per method of ``task``, one column per metric, each cell the value
+    and its interval (``—`` where a method has no such metric)."""
+    chosen = [r for r in rows if r.task == task]
+    metrics = list(dict.fromkeys((r.metric, r.unit) for r in chosen))
+    methods = list(dict.fromkeys((r.arm, r.method, r.role) for r in chosen))
+    cell = {(r.arm, r.method, r.metric): r for r in chosen}
+    arm = any(r.arm for r in chosen)
+    return Table((["arm"] if arm else []) + ["method", "role", *(f"{m} [{u}]" for m, u in metrics)],
+                 [([a] if arm else []) + [m, role, *(interval_text(cell[a, m, metric], floors) if (a, m, metric) in cell
+                                                     else "—" for metric, _ in metrics)]
+                  for a, m, role in methods], caption=caption)
+
+
+def ik_baselines(robot: Robot, train: Mapping, val: Mapping, *, encoding: str = "arm_plane",
+                 neighbors: int = 32) -> dict[str, tuple[Baseline, float]]:
+    """The learned-IK baselines (:class:`nfarm.learning.learned.Baseline`: nearest neighbour, RBF
+    interpolation, linear least squares) fitted on ``train`` and each one's worst joint RMSE
+    [deg] on ``val``, by which a chapter chooses the best before it reads the test set. Keys
+    name the baseline and its inputs, e.g. ``"RBF interpolation (arm_plane)"``."""
+    out = {}
+    for kind, name in IK_BASELINES.items():
+        model = Baseline(kind, encoding, neighbors).fit(robot, train)
+        rmse = np.sqrt(((model.predict(val["T"]) - np.asarray(val["q"], float)) ** 2).mean(axis=0))
+        out[f"{name} ({encoding})"] = (model, float(np.degrees(rmse).max()))
+    return out
+
+
+def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None,
+                     resolved=None):
+    """The best scikit-learn baseline of a baselines sweep (``params/sweeps/id_baselines.yaml``,
+    restricted to one arm): each learner's best configuration by its mean worst-joint NRMSE
+    over the seeds on validation (over the ``resolved`` joints, :func:`with_resolved_worst`;
+    ``None``: every joint), the best of those (least squares on ``q, q̇, q̈``, the floor,
+    left out), and that configuration's run on the test split with ``seed`` (run now if it is
+    not in ``sweeps_dir``). Returns ``(name, validation Replicates, test CellResult)``, or
+    ``None`` if the sweep holds no learner but the floor."""
+    unseeded = lambda p: {k: v for k, v in p.items() if k != "seed"}          # noqa: E731
+    val = by_configuration(sweep_results(sweep, sweeps_dir, workers=workers))
+    if resolved is not None:
+        val = with_resolved_worst(val, resolved, "nrmse")
+    learners = [g for learner, g in best_by(val, "learner", "worst_nrmse").items() if learner != "linear"]
+    if not learners:
+        return None
+    best = min(learners, key=lambda g: g.metrics["worst_nrmse"])
+    config = unseeded(best.cell.params)
+    test = sweep_results(sweep.select(lambda p: unseeded(p) == config).restrict(split="test", seed=seed),
+                         sweeps_dir, workers=workers)
+    return baseline_label(best.cell.params), best, test[0]
+
+
+# --------------------------------------------------------------------------------------------
+# The report's abstract, from the published long tables
+
+
+def read_long_table(path) -> list[dict[str, str]]:
+    """The rows of a long table written by :func:`long_table` (``07_summary.csv``), as dicts
+    of its columns' text; a file without the table's columns is refused with a one-line error."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as f:
+        rows = list(csv.DictReader(f))
+    needed = {"task", "method", "role", "metric", "unit", "value", "ci_low", "ci_high"}
+    if rows and not needed <= set(rows[0]):
+        raise ValueError(f"{path}: not a summary table: columns {', '.join(sorted(needed - set(rows[0])))} missing")
+    return rows
+
+
+def _number(text: str) -> float:
+    """A table's value as a number; ``< 1e-06`` (below a floor) as 0."""
+    return 0.0 if text.startswith("<") else float(text)
+
+
+def _with_interval(row: Mapping[str, str]) -> str:
+    value, low, high = row["value"], row["ci_low"], row["ci_high"]
+    unit = {"deg": "°", "%": " %", "mm": " mm", "N·m": " N·m"}.get(row["unit"], f" {row['unit']}")
+    return f"{value}{unit}" if low == high == value or not (low or high) else f"{value}{unit} ({low}–{high})"
+
+
+def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
+    """-1 when ours is lower beyond both intervals, +1 when higher, 0 when they overlap or
+    either is a maximum without an interval (``n`` 0: compared on paired differences only)."""
+    if "0" in (ours.get("n"), theirs.get("n")):
+        return 0
+    if _number(ours["ci_high"]) < _number(theirs["ci_low"]):
+        return -1
+    if _number(ours["ci_low"]) > _number(theirs["ci_high"]):
+        return 1
+    return 0
+
+
+
+def _times_of(ours: Mapping[str, str], theirs: Mapping[str, str]) -> str:
+    """"2.2 times" or "85 % of": ours's value over theirs's, in words (:func:`times`)."""
+    return times(_number(ours["value"]) / _number(theirs["value"]))
+
+
+def _unchosen(method: str) -> str:
+    """A method's name after "the chosen model,": without its own ", chosen" ("ANFIS, chosen
+    (arm_plane)" → "ANFIS (arm_plane)")."""
+    return method.replace(", chosen", "")
+
+def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
+    """Plain-text sentences (one per task) of one arm's answers, every number read from its
+    summary rows: the chosen ANFIS, the dissertation's design (assumed), the best baseline and
+    the references, and on which metrics the baseline is better beyond both intervals."""
+    def find(task, role_start, metric):
+        return next((r for r in rows if r["task"] == task and r["role"].startswith(role_start)
+                     and r["metric"] == metric), None)
+
+    lines = []
+    task = "inverse kinematics"
+    chosen = [r for r in rows if r["task"] == task and r["role"] == "learned (chosen)"]
+    if chosen:
+        get = {r["metric"]: r for r in chosen}
+        text = (f"{arm}, inverse kinematics: the chosen model, {_unchosen(chosen[0]['method'])}, misses by "
+                f"{_with_interval(get['worst joint RMSE'])} on its worst joint; the tool lands "
+                f"{_with_interval(get['position median'])} from the target at the median, "
+                f"{_with_interval(get['position p95'])} at the 95th percentile and "
+                f"{_with_interval(get['position max'])} at worst.")
+        first = find(task, "dissertation's recipe", "worst joint RMSE")    # on the region's data: listed first
+        recipe = {r["metric"]: r for r in rows if first and r["task"] == task and r["method"] == first["method"]}
+        if "worst joint RMSE" in recipe:
+            text += (f" The dissertation's recipe (assumed) on the same data: {_with_interval(recipe['worst joint RMSE'])}"
+                     f" on its worst joint")
+            better = [f"{m} ({_with_interval(r)} against {_with_interval(get[m])})"
+                      for m, r in recipe.items() if m in get and _compare(r, get[m]) < 0]
+            text += ("; it is better than the chosen model beyond both intervals on " + "; ".join(better) + "."
+                     if better else ".")
+        base = [r for r in rows if r["task"] == task and r["role"].startswith("best baseline")]
+        if base:
+            wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
+                    for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) < 0]
+            losses = [r["metric"] for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) > 0]
+            text += (f" The best baseline on validation, {base[0]['method']}, is better beyond both intervals on "
+                     + "; ".join(wins) + "." if wins else
+                     f" The best baseline on validation, {base[0]['method']}, is better on no metric beyond both "
+                     f"intervals.")
+            if losses:
+                text += f" The ANFIS is better on {', '.join(losses)}."
+        exact = find(task, "exact reference", "position max")
+        if exact:
+            text += f" The closed form is exact (largest tool position error {_with_interval(exact)})."
+        lines.append(text)
+    task = "inverse dynamics"
+    worst = next((m for m in (WORST_ID, "worst joint NRMSE") if find(task, "learned (chosen)", m)), WORST_ID)
+    free = find(task, "learned (chosen)", worst)
+    if free:
+        below = [r["metric"].split()[0] for r in rows if r["task"] == task and r["role"] == "learned (chosen)"
+                 and r["metric"].endswith("(below noise)")]
+        text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {_unchosen(free['method'])}, "
+                f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE"
+                + (f"; {' and '.join(below)}, whose torque is below the sensor noise, left out" if below else "")
+                + f"), largest error {_with_interval(find(task, 'learned (chosen)', 'largest error'))}.")
+        base = find(task, "best baseline", worst)
+        if base:
+            verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
+                       0: "no different from the ANFIS within the intervals"}[_compare(base, free)]
+            text += f" The best baseline on validation, {base['method']}: {_with_interval(base)}, {verdict}."
+        recipe = find(task, "dissertation's design", worst)
+        if recipe:
+            text += f" The dissertation's design (assumed, each joint's own state): {_with_interval(recipe)}."
+        ident = find(task, "physics-informed", worst)
+        if ident:
+            text += f" Given the geometry, identifying the inertial parameters: {_with_interval(ident)}."
+        lines.append(text)
+    task = "ID, measured arm"
+    residual = find(task, "learned (chosen)", "worst joint RMSE")
+    if residual:
+        alone = find(task, "numerical reference", "worst joint RMSE")
+        ls = find(task, "baseline (friction", "worst joint RMSE")
+        learner = find(task, "baseline (learner", "worst joint RMSE")
+        text = (f"{arm}, an arm with friction (measured torques): Newton–Euler alone leaves {_with_interval(alone)} "
+                f"on the worst joint, Newton–Euler with an ANFIS residual {_with_interval(residual)}")
+        if ls:
+            verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(residual, ls)]
+            text += f", {verdict} the least-squares friction identification ({_with_interval(ls)})"
+        if learner:
+            verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(learner, residual)]
+            text += (f"; the best learner as a residual, {learner['method']}: {_with_interval(learner)}, "
+                     f"{verdict} the ANFIS residual")
+            if _compare(learner, residual) < 0:
+                text += f" (the ANFIS residual leaves {_times_of(residual, learner)} its error)"
+        lines.append(text + ".")
+    return lines

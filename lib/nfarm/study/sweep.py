@@ -1,0 +1,873 @@
+"""Parameter sweeps: a grid of library jobs or notebook runs, one Dask task per cell.
+
+A **sweep file** (YAML, ``params/sweeps/``; README "Running sweeps on a cluster") says what
+runs — ``job:`` a library job of :mod:`nfarm.study.jobs`, or ``notebook:`` a notebook executed by
+papermill — and over which parameters::
+
+    name: smoke                    # the results' directory: build/sweeps/<name>/
+    job: anfis_benchmark
+    fixed: {problem: sinc, epochs: 5}
+    grid: {n_mfs: [2, 3]}          # cartesian product of the lists ...
+    cells:                         # ... with each of these cells (optional)
+      - {mf: gbell}
+      - {mf: gauss}
+    seeds: [0]                     # one more axis, the parameter "seed"
+    metrics: [check_rmse, rules]
+    smoke: {fixed: {epochs: 2}}    # a smaller version (--smoke), replacing these fields
+
+A cell's parameters are ``fixed``, then the cell's own, then the grid's and the seed (a grid
+parameter may not be set anywhere else). A cell is identified by the SHA-256 of its job (or
+notebook) and complete parameters (:meth:`nfarm.study.jobs.Job.complete`): its results go to
+``OUT/<cell key>/`` — ``cell.json`` (parameters, metrics, status, seconds, worker), ``log.txt``
+(what the job printed and warned), ``error.txt`` (the traceback of a failed cell) and, for a
+notebook, the executed ``notebook.ipynb`` and the files it wrote under ``files/``. A cell
+whose ``cell.json`` says it succeeded with the same **code** (:func:`code_key`: the sources of
+the job's modules and of what they import, transitively — :mod:`nfarm.infra.provenance` — or for a
+notebook the whole library and the notebook; the parameter files (not ``params/sweeps/``), the
+lock file and the numerics settings) is not run again: an interrupted sweep resumes, and a widened grid runs only its
+new cells.
+
+Cells run on Dask's ``distributed``: a :class:`~distributed.LocalCluster` of one
+single-threaded worker process per core by default, or any running scheduler
+(``tcp://host:8786``: ``dask scheduler`` / ``dask worker``, dask-jobqueue, Kubernetes). The
+workers only compute; the client writes every cell's directory as its result arrives
+(atomically: a directory renamed into place), so workers need the same checkout and
+environment, not the same disk. ``workers=0`` runs the cells one by one in this process.
+
+Every cell runs with one BLAS thread (``threadpoolctl``; ``OPENBLAS_NUM_THREADS=1`` as Dask's
+nannies set it), so its results are the same bits in a worker process, on a remote worker with
+the same environment and in this process (tested), and a worker's cell does not compete with
+its neighbours for the cores. Measured in ``benchmarks/bench_sweep.py``: the machinery's own
+cost per cell, and the speed-up of a grid of ANFIS trainings with one and two workers.
+
+A metric is a number, a text or a list of numbers (one per joint, say); ``results.csv``
+spreads a list over the columns ``name[1]``, ``name[2]``, …. A notebook records metrics with
+:func:`record_metrics` (an output of MIME type :data:`METRICS_MIME`, read back from the
+executed notebook).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import datetime
+import functools
+import hashlib
+import io
+import itertools
+import json
+import math
+import os
+import shutil
+import sys
+import tempfile
+import time
+import traceback
+import warnings
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from ..infra import provenance
+from ..infra.limits import time_limit
+from ..infra.paths import BUILD, NOTEBOOKS, PARAMS, ROOT, atomic_path, project_path, shown_path
+from ..infra.provenance import digest_files
+from ..infra.reading import ParamsError, Validator, json_ready, load_yaml, show
+from .jobs import CELL_ENV, JOBS
+from .jobs import cell_threads as _cell_threads
+
+__all__ = ["Sweep", "Cell", "CellResult", "Replicates", "SweepError", "load_sweep", "sweep_from_dict",
+           "run_sweep", "run_sweeps", "sweep_results", "sweeps_results", "by_configuration", "best_by",
+           "code_key", "record_metrics", "write_summary", "METRICS_MIME", "SWEEPS"]
+
+SWEEPS = PARAMS / "sweeps"
+METRICS_MIME = "application/vnd.nfarm.metrics+json"
+MAX_CELLS = 100_000
+
+_TOP = {"name": True, "description": False, "job": False, "notebook": False, "fixed": False,
+        "grid": False, "cells": False, "seeds": False, "metrics": True, "smoke": False,
+        "cell_timeout_s": False}
+_SMOKE = {"fixed": False, "grid": False, "cells": False, "seeds": False}
+_RUNNER_SET = ("out_dir",)      # a notebook's parameters the runner sets itself
+
+
+class SweepError(RuntimeError):
+    """A cell a chapter needs failed; the message names it, its parameters and the error."""
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One point of a sweep: its complete parameters and its key (the directory name)."""
+
+    params: Mapping[str, Any]
+    key: str
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A validated sweep file (:func:`load_sweep`): what runs, its cells and metrics."""
+
+    name: str
+    source: str
+    job: str | None
+    notebook: str | None            # project-relative path
+    metrics: tuple[str, ...]
+    cells: tuple[Cell, ...]
+    description: str = ""
+    #: Seconds each cell may run (the file's ``cell_timeout_s``); ``None``: the runner's.
+    timeout: float | None = None
+
+    @property
+    def target(self) -> str:
+        return f"job {self.job}" if self.job else f"notebook {self.notebook}"
+
+    @property
+    def varying(self) -> list[str]:
+        """The parameters whose values differ between cells, in the order of the first cell."""
+        if not self.cells:
+            return []
+        first = self.cells[0].params
+        return [k for k in first if any(_canonical(c.params.get(k)) != _canonical(first[k])
+                                        for c in self.cells)]
+
+    def restrict(self, **params) -> "Sweep":
+        """The same sweep with ``params`` set in every cell (cells made equal merge): a chapter
+        takes its own arm's cells, or sets a run's directories."""
+        v = Validator(self.source)
+        cells = _make_cells(v, self, [{**c.params, **params} for c in self.cells],
+                            "restrict(...)")
+        return replace(self, cells=cells)
+
+    def select(self, keep: Callable[[Mapping[str, Any]], bool]) -> "Sweep":
+        """The cells whose parameters ``keep`` accepts."""
+        return replace(self, cells=tuple(c for c in self.cells if keep(c.params)))
+
+    def with_cells(self, params: Iterable[Mapping[str, Any]], name: str | None = None) -> "Sweep":
+        """The same sweep's job with these cells instead, each completed by the job's defaults
+        and checked as a file's cells are, and every metric the job returns: a chapter's cells
+        that no file lists (a model chosen on validation, trained over the seeds). ``name``: the
+        results' directory (default: this sweep's)."""
+        v = Validator(self.source)
+        if name is not None:
+            _check_sweep_name(v, name)
+        sweep = replace(self, name=self.name if name is None else name,
+                        metrics=JOBS[self.job].metrics if self.job else self.metrics)
+        return replace(sweep, cells=_make_cells(v, sweep, list(params), "with_cells(...)"))
+
+
+@dataclass(frozen=True)
+class CellResult:
+    """What one cell gave. ``status``: ``"ok"`` or ``"failed"``; ``reused``: read from an
+    earlier run's ``cell.json`` rather than run now."""
+
+    cell: Cell
+    status: str
+    metrics: Mapping[str, Any]
+    seconds: float
+    worker: str
+    error: str = ""
+    reused: bool = False
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+@dataclass(frozen=True)
+class Replicates:
+    """One configuration's results over its seeds (:func:`by_configuration`): the cells of a
+    sweep whose parameters differ in ``seed`` only.
+
+    ``metrics`` holds each metric's **mean** over the seeds (a list metric per element; a
+    metric equal in every seed, or not a number, as it is), so a chapter reads a configuration
+    as it reads one cell; :meth:`low` and :meth:`high` give the range over the seeds.
+    """
+
+    runs: tuple[CellResult, ...]
+
+    @property
+    def cell(self) -> Cell:
+        """The first seed's cell (its parameters name the configuration)."""
+        return self.runs[0].cell
+
+    @property
+    def seeds(self) -> list[int]:
+        return [r.cell.params.get("seed", 0) for r in self.runs]
+
+    @property
+    def n(self) -> int:
+        return len(self.runs)
+
+    @property
+    def reused(self) -> bool:
+        return all(r.reused for r in self.runs)
+
+    def values(self, name: str) -> Any:
+        """``(seeds, ...)`` array of a numeric metric, one row per seed."""
+        import numpy as np
+        return np.array([r.metrics[name] for r in self.runs], dtype=float)
+
+    @functools.cached_property
+    def metrics(self) -> dict[str, Any]:
+        out = {}
+        for name, first in self.runs[0].metrics.items():
+            same = all(_canonical(r.metrics.get(name)) == _canonical(first) for r in self.runs)
+            numeric = isinstance(first, (int, float)) and not isinstance(first, bool) or \
+                isinstance(first, list) and all(isinstance(v, (int, float)) for v in first)
+            out[name] = first if same or not numeric else self.values(name).mean(axis=0).tolist()
+        return out
+
+    def low(self, name: str) -> Any:
+        """The least value of a numeric metric over the seeds (per element of a list)."""
+        return self.values(name).min(axis=0).tolist()
+
+    def high(self, name: str) -> Any:
+        """The largest value of a numeric metric over the seeds (per element of a list)."""
+        return self.values(name).max(axis=0).tolist()
+
+
+def by_configuration(results: Iterable[CellResult]) -> list[Replicates]:
+    """Group a sweep's results by their parameters other than ``seed``, in the order of each
+    configuration's first cell; each group's runs in the order of their seeds."""
+    groups: dict[str, list[CellResult]] = {}
+    for r in results:
+        key = _canonical({k: v for k, v in r.cell.params.items() if k != "seed"})
+        groups.setdefault(key, []).append(r)
+    return [Replicates(tuple(sorted(runs, key=lambda r: r.cell.params.get("seed", 0))))
+            for runs in groups.values()]
+
+
+def best_by(groups: Iterable[Replicates], parameter: str, metric: str) -> dict[Any, Replicates]:
+    """For each value of ``parameter`` (a learner, an input set), the configuration of least
+    mean ``metric`` over its seeds: the choice made on validation results."""
+    best: dict[Any, Replicates] = {}
+    for g in groups:
+        value = g.cell.params[parameter]
+        if value not in best or g.metrics[metric] < best[value].metrics[metric]:
+            best[value] = g
+    return best
+
+
+# --------------------------------------------------------------------------------------------
+# Sweep files
+
+
+def _canonical(value: Any) -> str:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
+
+
+def _plain(v: Validator, value: Any, at: str) -> Any:
+    """A parameter value: JSON types (numbers finite; mapping keys texts)."""
+    try:
+        value = json_ready(value)
+    except ValueError:
+        v.fail(at, f"must be a finite number, got {show(value)}")
+    if isinstance(value, dict):
+        for key, item in value.items():
+            v.string(key, f"{at}: key")
+            _plain(v, item, f"{at}.{key}")
+    elif isinstance(value, list):
+        for k, item in enumerate(value):
+            _plain(v, item, f"{at}[{k}]")
+    elif value is not None and not isinstance(value, (bool, int, float, str)):
+        v.fail(at, f"must be a number, text, list or mapping, got {show(value)}")
+    return value
+
+
+def _parameters(v: Validator, value: Any, at: str) -> Mapping[str, Any]:
+    """A mapping of parameter names (texts) to values."""
+    if not isinstance(value, Mapping):
+        v.fail(at, f"must be a mapping of parameters, got {show(value)}")
+    for key in value:
+        if not isinstance(key, str) or not key.isidentifier():
+            v.fail(at, f"parameter names must be identifiers, got {show(key)}")
+    return value
+
+
+def _allowed(v: Validator, sweep: Sweep) -> Mapping[str, Any] | list[str]:
+    if sweep.job:
+        return JOBS[sweep.job].params
+    from ..infra.notebook_runs import declared_parameters
+
+    try:
+        names = declared_parameters(project_path(sweep.notebook))
+    except Exception as exc:  # noqa: BLE001 — ReportError: not a valid notebook
+        v.fail("notebook", str(exc))
+    return [n for n in names if n not in _RUNNER_SET]
+
+
+def _check_name(v: Validator, sweep: Sweep, allowed, name: str, where: str) -> None:
+    if name in _RUNNER_SET and not sweep.job:
+        v.fail(f"{where}.{name}", "is set by the sweep runner (each cell writes to its own "
+                                  "directory)")
+    if name not in allowed:
+        v.fail(f"{where}.{name}", f"unknown parameter of {sweep.target} (allowed: "
+                                  f"{', '.join(allowed)})")
+
+
+def _make_cells(v: Validator, sweep: Sweep, params: Iterable[Mapping], at: str,
+                origin: Callable[[int, str], str] | None = None) -> tuple[Cell, ...]:
+    """The cells of these parameter mappings, each completed by its job (:meth:`Job.complete`:
+    defaults, kinds, normal form); equal completed parameters make one cell. ``origin(k,
+    name)``: where in the file cell k's parameter ``name`` was given, for messages."""
+    allowed = _allowed(v, sweep)
+    cells: dict[str, Cell] = {}
+    for k, given in enumerate(params):
+        where = f"{at}[{k}]" if at.endswith("cells") else at
+        for name in given:
+            _check_name(v, sweep, allowed, name, where)
+        if sweep.job:
+            try:
+                complete = JOBS[sweep.job].complete(given)
+            except KeyError as exc:
+                v.fail(where, f"{sweep.target} needs the parameter(s) {exc.args[0]}")
+            except ParamsError as exc:          # "<name>: <rule>", a value of the wrong kind
+                name, rule = str(exc).split(": ", 1)
+                v.fail(origin(k, name) if origin and name in given else f"{where}.{name}", rule)
+        else:
+            complete = dict(given)
+        target = {"job": sweep.job} if sweep.job else {"notebook": sweep.notebook}
+        key = hashlib.sha256(_canonical({**target, "params": complete}).encode()).hexdigest()[:16]
+        cells.setdefault(key, Cell(complete, key))
+    return tuple(cells.values())
+
+
+def _check_sweep_name(v: Validator, name: Any) -> str:
+    name = v.string(name, "name")
+    if not all(c.isalnum() or c in "-_." for c in name) or name.startswith("."):
+        v.fail("name", f"must be letters, digits, '-', '_' or '.' (a directory name), got {show(name)}")
+    return name
+
+
+def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -> Sweep:
+    """Validate a sweep mapping (as read from YAML) and expand its cells; ``smoke`` applies its
+    ``smoke`` section."""
+    v = Validator(source)
+    v.mapping(data, "", _TOP)
+    name = _check_sweep_name(v, data["name"])
+    description = v.string(data.get("description", ""), "description", allow_empty=True)
+    if ("job" in data) == ("notebook" in data):
+        v.fail("", "must name either a job or a notebook")
+    job = notebook = None
+    if "job" in data:
+        job = v.choice(data["job"], "job", sorted(JOBS))
+    else:
+        path = project_path(v.string(data["notebook"], "notebook"))
+        if path.suffix != ".ipynb" or not path.is_file():
+            v.fail("notebook", f"must be an existing .ipynb file, got {show(data['notebook'])}")
+        notebook = shown_path(path)
+    metrics = v.sequence(data["metrics"], "metrics", min_len=1)
+    for k, metric in enumerate(metrics):
+        v.string(metric, f"metrics[{k}]")
+        if job and metric not in JOBS[job].metrics:
+            v.fail(f"metrics[{k}]", f"job {job} returns no metric {metric!r} "
+                                    f"(it returns {', '.join(JOBS[job].metrics)})")
+    if len(set(metrics)) != len(metrics):
+        v.fail("metrics", "lists a metric twice")
+    fields = dict(data)
+    if "smoke" in data:
+        v.mapping(data["smoke"], "smoke", _SMOKE)
+        if smoke:
+            fields.update(data["smoke"])
+        else:       # the smaller version must be valid too
+            sweep_from_dict(data, source, smoke=True)
+    at = lambda key: f"smoke.{key}" if smoke and key in data.get("smoke", {}) else key  # noqa: E731
+
+    fixed = {k: _plain(v, x, f"{at('fixed')}.{k}")
+             for k, x in _parameters(v, fields.get("fixed", {}), at("fixed")).items()}
+    axes = {}
+    for key, values in _parameters(v, fields.get("grid", {}), at("grid")).items():
+        values = v.sequence(values, f"{at('grid')}.{key}", min_len=1)
+        axes[key] = [_plain(v, x, f"{at('grid')}.{key}[{k}]") for k, x in enumerate(values)]
+    cells = v.sequence(fields.get("cells", [{}]), at("cells"), min_len=1)
+    own = [{key: _plain(v, x, f"{at('cells')}[{k}].{key}")
+            for key, x in _parameters(v, cell, f"{at('cells')}[{k}]").items()}
+           for k, cell in enumerate(cells)]
+    if "seeds" in fields:
+        seeds = v.sequence(fields["seeds"], at("seeds"), min_len=1)
+        axes_seed = [v.integer(s, f"{at('seeds')}[{k}]", lo=0, hi=2**32 - 1) for k, s in enumerate(seeds)]
+        if "seed" in axes:
+            v.fail(at("seeds"), "the grid sets seed too: give the seeds in one place")
+        axes["seed"] = axes_seed
+    for key in axes:
+        if key in fixed:
+            v.fail(f"{at('grid')}.{key}", "is also in fixed: a parameter is fixed or varied, not both")
+        for k, cell in enumerate(own):
+            if key in cell:
+                v.fail(f"{at('cells')}[{k}].{key}", "is also a grid parameter")
+    count = len(own) * math.prod(len(x) for x in axes.values())
+    if count > MAX_CELLS:
+        v.fail(at("grid"), f"makes {count:,} cells; at most {MAX_CELLS:,}")
+    timeout = None
+    if data.get("cell_timeout_s") is not None:
+        timeout = v.number(data["cell_timeout_s"], "cell_timeout_s", lo=0.0, lo_open=True, hi=7 * 24 * 3600.0)
+    sweep = Sweep(name, source, job, notebook, tuple(metrics), (), description, timeout)
+    allowed = _allowed(v, sweep)
+    for where, names in [(at("fixed"), fixed), (at("grid"), axes),
+                         *((f"{at('cells')}[{k}]", cell) for k, cell in enumerate(own))]:
+        for key in names:
+            _check_name(v, sweep, allowed, key, where if key != "seed" or "seeds" not in fields
+                        else at("seeds"))
+    points = [{**fixed, **cell, **dict(zip(axes, values))}
+              for cell in own for values in itertools.product(*axes.values())]
+    per_cell = math.prod(len(x) for x in axes.values())
+
+    def origin(k: int, name: str) -> str:
+        if name in fixed:
+            return f"{at('fixed')}.{name}"
+        if name == "seed" and "seeds" in fields:
+            return at("seeds")
+        if name in axes:
+            return f"{at('grid')}.{name}"
+        return f"{at('cells')}[{k // per_cell}].{name}"
+
+    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if "cells" in fields else at("grid"),
+                                            origin))
+
+
+def load_sweep(path: str | os.PathLike, *, smoke: bool = False) -> Sweep:
+    """Read and validate a sweep file (module docstring); :class:`ParamsError` in one line."""
+    path = project_path(path)
+    return sweep_from_dict(load_yaml(path), shown_path(path), smoke=smoke)
+
+
+# --------------------------------------------------------------------------------------------
+# Code identity
+
+
+def code_key(sweep: Sweep) -> str:
+    """SHA-256 of the code a cell's results depend on (module docstring): a finished cell with
+    another code key runs again.
+
+    For a job: the content of :mod:`nfarm.study.jobs` and of every package module it imports,
+    transitively (:func:`nfarm.infra.provenance.code_digest`), and this module's own file (it runs the
+    cell); a change to a presentation module (plotting, report) keeps the cells. For a
+    notebook: the whole library, which a notebook may import at will, and the notebook."""
+    from ..learning.learned import NUMERICS_ENV
+
+    h = hashlib.sha256()
+    env = {k: os.environ.get(k) for k in NUMERICS_ENV} | CELL_ENV
+    h.update(_canonical({"env": env, "python": sys.version, "target": sweep.target}).encode())
+    if sweep.job:
+        modules = {*provenance.code_modules("study.jobs"), "study.sweep"}
+        digest_files(h, [provenance.module_file(m) for m in modules], provenance.PACKAGE)
+    else:
+        digest_files(h, provenance.PACKAGE.rglob("*.py"), provenance.PACKAGE)
+        digest_files(h, [project_path(sweep.notebook)], ROOT)
+    digest_files(h, [p for p in PARAMS.rglob("*") if p.is_file() and p.suffix != ".md"
+                     and not p.is_relative_to(SWEEPS)], ROOT)
+    digest_files(h, [p for p in (ROOT / "environment.lock",) if p.is_file()], ROOT)
+    return h.hexdigest()
+
+
+# --------------------------------------------------------------------------------------------
+# One cell (runs on a worker)
+
+
+def record_metrics(**values) -> None:
+    """In a notebook run by a sweep: record these metrics of the cell (numbers, texts or lists
+    of numbers). Shown as one line of text; the sweep reads them from the executed notebook."""
+    from IPython.display import display
+
+    values = json_ready(values)
+    text = "metrics: " + ", ".join(f"{k} = {v}" for k, v in values.items())
+    display({METRICS_MIME: values, "text/plain": text}, raw=True)
+
+
+def _notebook_metrics(executed: Path) -> dict:
+    found: dict = {}
+    for cell in json.loads(executed.read_text(encoding="utf-8"))["cells"]:
+        for output in cell.get("outputs", []):
+            found.update(output.get("data", {}).get(METRICS_MIME, {}))
+    return found
+
+
+def _run_notebook_cell(notebook: str, params: dict, timeout: float | None) -> tuple[dict, dict]:
+    from ..infra.notebook_runs import declared_parameters, run_notebook
+
+    path = project_path(notebook)
+    with tempfile.TemporaryDirectory(prefix="nfarm-cell-") as tmp:
+        tmp = Path(tmp)
+        given = dict(params)
+        if "out_dir" in declared_parameters(path):
+            given["out_dir"] = str(tmp / "files")
+        run_notebook(path, tmp / "notebook.ipynb", given, cell_timeout=timeout)
+        files = {"notebook.ipynb": (tmp / "notebook.ipynb").read_bytes()}
+        for item in sorted((tmp / "files").rglob("*")):
+            if item.is_file():
+                files[f"files/{item.relative_to(tmp / 'files').as_posix()}"] = item.read_bytes()
+        return _notebook_metrics(tmp / "notebook.ipynb"), files
+
+
+def _metric(name: str, value: Any) -> Any:
+    value = json_ready(value)
+    ok = isinstance(value, (int, float, str)) and not isinstance(value, bool) or \
+        isinstance(value, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                        for x in value)
+    if not ok:
+        raise TypeError(f"metric {name!r} must be a number, a text or a list of numbers, "
+                        f"got {show(value)}")
+    return value
+
+
+def _worker_name() -> str:
+    """The Dask worker's name (tuning its allocator as nfarm does: :mod:`nfarm.infra._allocator`),
+    or ``"in-process"``."""
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):
+        return "in-process"
+    from ..infra._allocator import tune
+
+    tune(worker=True)
+    return str(worker.name if worker.name is not None else worker.address)
+
+
+def execute_cell(job: str | None, notebook: str | None, params: dict, metrics: Sequence[str],
+                 timeout: float | None = None) -> dict:
+    """Run one cell and return its record (never raises for the cell's own failure): status,
+    metrics, seconds, worker, log, error (traceback) and, for a notebook, its files."""
+    start = time.perf_counter()
+    log = io.StringIO()
+    record: dict = {"worker": _worker_name(), "files": {}, "metrics": {}}
+    try:
+        with _cell_threads(), contextlib.redirect_stdout(log), contextlib.redirect_stderr(log), \
+                warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                if job:
+                    with time_limit(timeout):       # the library's long loops check it
+                        values = JOBS[job].function(dict(params))
+                else:
+                    values, record["files"] = _run_notebook_cell(notebook, params, timeout)
+            finally:
+                for w in caught:
+                    log.write(f"{w.category.__name__}: {w.message} ({w.filename}:{w.lineno})\n")
+        missing = [m for m in metrics if m not in values]
+        if missing:
+            raise KeyError(f"the {'job' if job else 'notebook'} gave no metric "
+                           f"{', '.join(map(repr, missing))} (it gave {', '.join(values) or 'none'})")
+        record.update(status="ok", metrics={m: _metric(m, values[m]) for m in metrics}, error="")
+    except BaseException as exc:  # noqa: BLE001 — a cell's failure is its result
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        record.update(status="failed", error=traceback.format_exc())
+    record.update(seconds=time.perf_counter() - start, log=log.getvalue())
+    return record
+
+
+# --------------------------------------------------------------------------------------------
+# Results on disk
+
+
+def _error_line(error: str) -> str:
+    """The line of a traceback that names the exception (its last), at most 300 characters."""
+    lines = [line for line in error.strip().splitlines() if line.strip()]
+    return lines[-1].strip()[:300] if lines else ""
+
+
+def _write_cell(out: Path, sweep: Sweep, cell: Cell, record: dict, code: str) -> None:
+    """``out/<key>/`` from ``record``, atomically (a directory renamed into place)."""
+    target = out / cell.key
+    tmp = Path(tempfile.mkdtemp(prefix=f".{cell.key}.", dir=out))
+    try:
+        summary = {"sweep": sweep.name, **({"job": sweep.job} if sweep.job else
+                                           {"notebook": sweep.notebook}),
+                   "params": dict(cell.params), "status": record["status"],
+                   "metrics": record["metrics"], "seconds": round(record["seconds"], 3),
+                   "worker": record["worker"], "error": _error_line(record.get("error", "")),
+                   "code": code,
+                   "finished": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+        (tmp / "log.txt").write_text(record.get("log", ""), encoding="utf-8")
+        if record.get("error"):
+            (tmp / "error.txt").write_text(record["error"], encoding="utf-8")
+        for name, data in record.get("files", {}).items():
+            (tmp / name).parent.mkdir(parents=True, exist_ok=True)
+            (tmp / name).write_bytes(data)
+        (tmp / "cell.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
+        os.chmod(tmp, 0o755)
+        old = None
+        if target.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{cell.key}.old.", dir=out))
+            os.replace(target, old / "cell")
+        os.replace(tmp, target)
+        if old:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _finished(out: Path, cell: Cell, code: str, metrics: Sequence[str]) -> CellResult | None:
+    try:
+        data = json.loads((out / cell.key / "cell.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not (isinstance(data, dict) and data.get("status") == "ok" and data.get("code") == code
+            and isinstance(data.get("metrics"), dict) and all(m in data["metrics"] for m in metrics)
+            and _canonical(data.get("params")) == _canonical(cell.params)):
+        return None
+    return CellResult(cell, "ok", {m: data["metrics"][m] for m in metrics},
+                      float(data.get("seconds", 0.0)), str(data.get("worker", "")), reused=True)
+
+
+def _csv_value(value: Any) -> Any:
+    if isinstance(value, (dict, list)):
+        return _canonical(value)
+    if isinstance(value, float):
+        return repr(value)
+    return "" if value is None else value
+
+
+def write_summary(out: Path, sweep: Sweep, results: Sequence[CellResult]) -> list[Path]:
+    """``out/results.csv`` (one row per cell), ``out/summary.md`` and ``out/summary.png``."""
+    from ..presentation.plotting import plot_sweep, save_figure
+    from ..presentation.tables import Table
+
+    names = list(dict.fromkeys(k for r in results for k in r.cell.params))
+    columns: list[tuple[str, str, int | None]] = []       # (header, metric, list index)
+    for m in sweep.metrics:
+        width = max((len(r.metrics[m]) for r in results if isinstance(r.metrics.get(m), list)),
+                    default=None)
+        columns += [(m, m, None)] if width is None else \
+            [(f"{m}[{i + 1}]", m, i) for i in range(width)]
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["cell", *names, *(c[0] for c in columns), "status", "seconds", "worker", "error"])
+    for r in results:
+        values = []
+        for _, m, i in columns:
+            value = r.metrics.get(m)
+            values.append(value[i] if i is not None and isinstance(value, list) and i < len(value)
+                          else value if i is None else None)
+        writer.writerow([r.cell.key, *(_csv_value(r.cell.params.get(k)) for k in names),
+                         *map(_csv_value, values), r.status, f"{r.seconds:.3f}", r.worker,
+                         _error_line(r.error)])
+    written = []
+    with atomic_path(out / "results.csv") as tmp:
+        tmp.write_text(buffer.getvalue(), encoding="utf-8")
+    written.append(out / "results.csv")
+
+    varying = sweep.varying
+    labels = [", ".join(f"{k}={_csv_value(r.cell.params[k])}" for k in varying) or r.cell.key
+              for r in results]
+    scalar = [m for m in sweep.metrics
+              if any(isinstance(r.metrics.get(m), (int, float)) for r in results)]
+    rows = [[label, *(r.metrics.get(m, "") if r.ok else "" for m in scalar), r.status,
+             r.seconds] for label, r in zip(labels, results)]
+    failed = sum(not r.ok for r in results)
+    table = Table(["cell", *scalar, "status", "seconds"], rows, floatfmt=".4g",
+                  caption=f"Sweep {sweep.name} ({sweep.target}): {len(results)} cells, "
+                          f"{failed} failed; seconds: each cell's run, on its worker")
+    with atomic_path(out / "summary.md") as tmp:
+        tmp.write_text(table.to_markdown(), encoding="utf-8")
+    written.append(out / "summary.md")
+    if scalar:
+        values = {m: [r.metrics.get(m) if r.ok and isinstance(r.metrics.get(m), (int, float))
+                      else math.nan for r in results] for m in scalar}
+        fig = plot_sweep(labels, values, title=f"Sweep {sweep.name}: {sweep.target}")
+        written.append(Path(save_figure(fig, out, "summary",
+                                        caption=f"Metrics of each cell of sweep {sweep.name}")))
+        import matplotlib.pyplot as plt
+        plt.close(fig)
+    return written
+
+
+# --------------------------------------------------------------------------------------------
+# Running
+
+
+def _client(scheduler: str | None, workers: int | None):
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ParamsError(f"cannot reach the Dask scheduler at {scheduler}: "
+                              f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    # silence_logs=CRITICAL: a worker whose scheduler is shutting down logs an ERROR with a
+    # traceback from its heartbeat (seen once in a make report, printed into a chapter's
+    # output with the machine's paths); a cell's own failure is in its cell.json, not the log.
+    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                           processes=True, silence_logs=50,
+                           # no fixed port (its HTTP server starts anyway; clusters side by side)
+                           dashboard_address="127.0.0.1:0")
+    return Client(cluster)
+
+
+def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: str | None = None,
+              workers: int | None = None, client=None, progress: bool = False,
+              summary: bool = True, timeout: float | None = 1800,
+              prepare: bool = True) -> list[CellResult]:
+    """Run every cell of ``sweep`` not finished in ``out`` (default ``build/sweeps/<name>/``),
+    and return every cell's result in the sweep's order.
+
+    Args:
+        scheduler: address of a running Dask scheduler; ``None`` starts a local cluster of
+            ``workers`` processes (default: one per core); ``workers=0`` runs the cells one by
+            one in this process, without Dask.
+        client: a ``distributed.Client`` of your own (a ``SLURMCluster``'s, say), used as it
+            is and left open; instead of ``scheduler`` and ``workers``.
+        progress: a progress bar of finished cells on standard error.
+        summary: write ``results.csv``, ``summary.md`` and ``summary.png`` (a chapter that runs
+            part of a sweep skips them: the files describe the whole sweep's run).
+        timeout: seconds a cell may run: a job's whole cell (its training stops at the next
+            epoch past it, :mod:`nfarm.infra.limits`), each code cell of a notebook's; ``None``: no
+            limit. A sweep file's ``cell_timeout_s`` takes its place for that sweep's cells.
+        prepare: do the job's shared work once, here, before the workers start
+            (:attr:`nfarm.study.jobs.Job.prepare`: the data sets of the learned jobs).
+    """
+    return run_sweeps([sweep], [out], scheduler=scheduler, workers=workers, client=client,
+                      progress=progress, summary=summary, timeout=timeout, prepare=prepare)[0]
+
+
+def run_sweeps(sweeps: Sequence[Sweep], outs: Sequence[str | os.PathLike | None] | None = None, *,
+               scheduler: str | None = None, workers: int | None = None, client=None,
+               progress: bool = False, summary: bool = True, timeout: float | None = 1800,
+               prepare: bool = True) -> list[list[CellResult]]:
+    """:func:`run_sweep` for several sweeps at once: the unfinished cells of all of them go to
+    one cluster, in the order given (Dask starts earlier submissions first), and each sweep's
+    results come back in its own order. One cluster for a chapter's sweeps keeps every worker
+    busy until the last cell instead of idling at the tail of each sweep, and starts once. A
+    cell listed twice (the same directory and key) runs once. ``outs``: one directory per
+    sweep (``None``: ``build/sweeps/<name>/``); the other arguments as :func:`run_sweep`'s."""
+    from tqdm.auto import tqdm
+
+    outs = [None] * len(sweeps) if outs is None else list(outs)
+    if len(outs) != len(sweeps):
+        raise ValueError(f"give one directory per sweep: {len(sweeps)} sweeps, {len(outs)} directories")
+    if workers is not None and workers < 0:
+        raise ValueError(f"workers must be >= 0, got {workers}")
+    dirs = [project_path(o) if o is not None else BUILD / "sweeps" / s.name for s, o in zip(sweeps, outs)]
+    codes = [code_key(s) for s in sweeps]
+    results: dict[tuple[Path, str], CellResult] = {}
+    pending: dict[tuple[Path, str], tuple[int, Cell]] = {}
+    for i, (sweep, out) in enumerate(zip(sweeps, dirs)):
+        out.mkdir(parents=True, exist_ok=True)
+        for cell in sweep.cells:
+            where = (out, cell.key)
+            if where in results or where in pending:
+                continue
+            done = _finished(out, cell, codes[i], sweep.metrics)
+            if done:
+                results[where] = done
+            else:
+                pending[where] = (i, cell)
+    bar = tqdm(total=len(results) + len(pending), initial=len(results), unit="cell",
+               disable=not progress, desc=", ".join(dict.fromkeys(s.name for s in sweeps)),
+               file=sys.stderr, dynamic_ncols=True)
+
+    def finish(i: int, cell: Cell, record: dict) -> None:
+        sweep = sweeps[i]
+        _write_cell(dirs[i], sweep, cell, record, codes[i])
+        results[(dirs[i], cell.key)] = CellResult(cell, record["status"], record["metrics"],
+                                                  record["seconds"], record["worker"],
+                                                  record.get("error", ""))
+        bar.update()
+        if record["status"] != "ok":
+            bar.write(f"{sweep.name}: cell {cell.key} failed: {_error_line(record['error'])}",
+                      file=sys.stderr)
+
+    todo = list(pending.values())
+    try:
+        if todo and prepare:
+            for job in dict.fromkeys(sweeps[i].job for i, _ in todo):
+                if job and JOBS[job].prepare:
+                    _prepare(JOBS[job], [c for i, c in todo if sweeps[i].job == job])
+        if todo and workers == 0 and not scheduler and client is None:
+            for i, cell in todo:
+                finish(i, cell, execute_cell(sweeps[i].job, sweeps[i].notebook, dict(cell.params),
+                                             sweeps[i].metrics, _timeout(sweeps[i], timeout)))
+        elif todo:
+            _run_on_dask(sweeps, todo, scheduler, workers, client, timeout, finish)
+    finally:
+        bar.close()
+    every = []
+    for sweep, out in zip(sweeps, dirs):
+        ordered = [results[(out, c.key)] for c in sweep.cells if (out, c.key) in results]
+        if summary and len(ordered) == len(sweep.cells):
+            write_summary(out, sweep, ordered)
+        every.append(ordered)
+    return every
+
+
+def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
+                  workers: int | None = None) -> list[CellResult]:
+    """The results of every cell of ``sweep`` for a chapter: read from
+    ``<sweeps_dir>/<name>/`` (default ``build/sweeps/``) where finished, the others run now on
+    a local cluster of ``workers`` processes (``0``: in this process).
+
+    Raises:
+        SweepError: a cell failed (its record is kept in its directory).
+    """
+    return sweeps_results([sweep], sweeps_dir, workers=workers)[0]
+
+
+def sweeps_results(sweeps: Sequence[Sweep], sweeps_dir: str | os.PathLike | None = None, *,
+                   workers: int | None = None) -> list[list[CellResult]]:
+    """:func:`sweep_results` of several sweeps, their unfinished cells run on one cluster
+    (:func:`run_sweeps`): a chapter runs everything it will show first, then reads it back."""
+    base = project_path(sweeps_dir) if sweeps_dir is not None else BUILD / "sweeps"
+    every = run_sweeps(sweeps, [base / s.name for s in sweeps], workers=workers, summary=False)
+    for sweep, results in zip(sweeps, every):
+        for r in results:
+            if not r.ok:
+                raise SweepError(f"sweep {sweep.name}: cell {r.cell.key} {dict(r.cell.params)} "
+                                 f"failed: {_error_line(r.error)} (see "
+                                 f"{shown_path(base / sweep.name / r.cell.key / 'error.txt')})")
+    return every
+
+
+def _timeout(sweep: Sweep, given: float | None) -> float | None:
+    """A cell's time limit: its sweep file's ``cell_timeout_s``, else the runner's."""
+    return sweep.timeout if sweep.timeout is not None else given
+
+
+def _prepare(job, cells: Sequence[Cell]) -> None:
+    """The job's shared work, once per distinct value of its ``shared`` parameters; a cell whose
+    parameters it fails on (any exception) fails later with that error, recorded with its
+    parameters, and the other cells go on."""
+    seen = set()
+    for cell in cells:
+        key = _canonical([cell.params[k] for k in job.shared])
+        if key not in seen:
+            seen.add(key)
+            # Whatever it raises (a path that is no study file, a region the arm cannot reach):
+            # the cells of these parameters fail with it, recorded, and the others run.
+            with contextlib.suppress(Exception):
+                job.prepare(dict(cell.params))
+
+
+def _run_on_dask(sweeps: Sequence[Sweep], pending: Sequence[tuple[int, Cell]], scheduler: str | None,
+                 workers: int | None, given, timeout: float | None,
+                 finish: Callable[[int, Cell, dict], None]) -> None:
+    from distributed import as_completed
+
+    client = given if given is not None else _client(scheduler, workers)
+    try:
+        futures = {}
+        for i, cell in pending:
+            sweep = sweeps[i]
+            future = client.submit(execute_cell, sweep.job, sweep.notebook, dict(cell.params),
+                                   list(sweep.metrics), _timeout(sweep, timeout),
+                                   key=f"nfarm-{sweep.name}-{cell.key}", pure=False, retries=0)
+            futures[future] = (i, cell)
+        for future in as_completed(futures):
+            i, cell = futures[future]
+            try:
+                record = future.result()
+            except Exception as exc:  # noqa: BLE001 — a worker died, or the task was lost
+                record = {"status": "failed", "metrics": {}, "seconds": 0.0, "worker": "",
+                          "log": "", "files": {},
+                          "error": f"{type(exc).__name__}: the cell's worker failed ({exc})"}
+            finish(i, cell, record)
+    finally:
+        if given is None:
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None and not scheduler:
+                cluster.close()
