@@ -68,3 +68,15 @@ def test_figures_are_numbered_by_chapter_in_the_order_shown(tmp_path):
     assert plotting.figure_number(str(tmp_path / "06_ik_curves.png")) == "Figure 6.1."    # shown again
     assert plotting.figure_number(str(tmp_path / "07_id_torques.png")) == "Figure 7.1."
     assert plotting.figure_number(str(tmp_path / "arm.png")) == "Figure."
+
+
+def test_the_error_maps_colour_bar_reads_plain_numbers():
+    """A log colour scale over one decade or two is labelled 5, 7, 10, 15, 20, not "2 × 10⁰"."""
+    from nfarm.presentation.plotting import plot_error_map
+
+    rng = np.random.default_rng(0)
+    fig = plot_error_map(rng.uniform(0.1, 0.3, (3000, 3)), rng.uniform(1.5, 25, 3000), label="position error [mm]")
+    fig.canvas.draw()
+    labels = [t.get_text() for t in fig.axes[1].get_yticklabels() if t.get_text()]
+    assert "10" in labels and not any("×" in s or "$" in s for s in labels), labels
+    plt.close(fig)
