@@ -35,13 +35,22 @@ def _cell(value, floatfmt: str) -> str:
 
 def shown(value: float, fmt: str = ".3g", *, floor: float = 1e-15) -> str:
     """A number for people: ``format(value, fmt)``, or ``"< 1e-15"`` when it is at the level of
-    floating-point noise (|value| below ``floor``), which is not data."""
+    floating-point noise (|value| below ``floor``), which is not data. A general format (``g``)
+    writes thousands up to a million as plain digits, rounded to its precision ("14100", not
+    "1.41e+04"), which a machine still reads as a number.
+
+    >>> shown(14_123.4), shown(0.000123), shown(2.5e7), shown(1e-17)
+    ('14100', '0.000123', '2.5e+07', '< 1e-15')
+    """
     value = float(value)
     if not np.isfinite(value) or value == 0:
         return str(value) if value else "0"
     if abs(value) < floor:
         return f"< {floor:.0e}".replace("e-0", "e-")
-    return _NEGATIVE_ZERO.sub(r"\1", format(value, fmt))
+    text = format(value, fmt)
+    if fmt.endswith("g") and "e+" in text and 1e3 <= abs(float(text)) < 1e6:
+        text = f"{float(text):.0f}"
+    return _NEGATIVE_ZERO.sub(r"\1", text)
 
 
 @dataclass
