@@ -15,8 +15,6 @@ import re
 import shutil
 import subprocess
 from pathlib import Path
-
-
 from typing import TYPE_CHECKING
 
 from ..infra.notebook_runs import DropMessage

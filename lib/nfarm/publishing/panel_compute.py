@@ -27,7 +27,7 @@ from ..infra.reading import ParamsError
 from ..learning.learned import LearnedID, LearnedIK
 from ..model.dynamics import coriolis, gravity_torques, mass_matrix, rnea
 from ..model.kinematics import fk, manipulability, min_singular_value
-from ..model.robot import Robot, load_robot
+from ..model.robot import Robot
 from ..model.rotations import matrix_to_quat, matrix_to_rpy, pose_error, rpy_to_matrix
 from ..solvers.geometric_ik import class_refusal, closed_form
 from ..solvers.ik import check_targets, solve
