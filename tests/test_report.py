@@ -448,7 +448,10 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     index = (build / "report" / "index.html").read_text()
     assert "href='b/02_shared.html'" in index and "href='02_shared.html'" in index   # each edition's copy
     assert "<title>Chapter 01_robot · a</title>" in (build / "report" / "01_robot.html").read_text()
-    assert "<title>Chapter 02_shared</title>" in (build / "report" / "02_shared.html").read_text()
+    assert "<title>Chapter 02_shared · the same for every arm</title>" in (build / "report" / "02_shared.html").read_text()
+    assert "<title>Chapter 02_shared · the same for every arm</title>" in shared_b
+    compare = (build / "report" / "04_compare.html").read_text()     # back to each edition's last chapter
+    assert "href='03_study.html'>previous (a):" in compare and "href='b/03_study.html'>previous (b):" in compare
     index = (build / "report" / "index.html").read_text()
     assert index.index("04_compare.html") < index.index("Chapters for a")      # comparison first
     assert "Chapters for b" in index and "b/tables/01_given.csv" in index

@@ -362,21 +362,37 @@ def write_pages(everything, runs, comparing: set[str], arms, base: Path, report_
             shared = [e for e in primary if e[0] not in {o[0] for o in own} and e not in compared]
             own = sorted(own + shared)
         pages[arm.name] = own
+
+    def copies(arm) -> list[str]:
+        """The edition's pages as its reader opens them: a shared chapter is copied into the
+        edition's directory with the edition's navigation, so "previous" and "next" never leave it."""
+        return [f"{arm.subdir}/{Path(page).name}" if arm.subdir else page for _, _, page in pages[arm.name]]
+
+    for arm in arms:
+        own, here = pages[arm.name], copies(arm)
         up = "../" if arm.subdir else ""      # an edition's pages are one directory down
-        # A shared chapter is copied into the edition's directory with the edition's navigation,
-        # so that "previous" and "next" never leave the edition.
-        here = [f"{arm.subdir}/{Path(page).name}" if arm.subdir else page for _, _, page in own]
         for k, (prefix, title, page) in enumerate(own):
             # An edition's last chapter leads on to the chapter that compares the arms (one page,
-            # the primary's), which the reader of every edition meets last.
+            # the primary's), which the reader of every edition meets last; that page leads back
+            # to each edition's last chapter.
             last = (up + compared[0][2], compared[0][1]) if compared and not arm.primary else None
             links = {"index": (up + "index.html", "all chapters"),
                      "previous": (up + here[k - 1], own[k - 1][1]) if k > 0 else None,
                      "next": (up + here[k + 1], own[k + 1][1]) if k + 1 < len(own) else last}
+            if (prefix, title, page) in compared and k > 0 and len(arms) > 1:
+                del links["previous"]
+                for other in arms:
+                    theirs = [e for e in pages[other.name] if e not in compared]
+                    if theirs:
+                        links[f"previous ({other.name})"] = (copies(other)[pages[other.name].index(theirs[-1])],
+                                                             theirs[-1][1])
+                links["next"] = links.pop("next")
             executed = base / "notebooks" / page.replace(".html", ".ipynb")
             page = here[k]
+            same_for_all = prefix not in per_arm and (prefix, title, own[k][2]) not in compared and len(arms) > 1
             export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
-                         title=f"{title} · {arm.name}" if prefix in per_arm else title,
-                         arm=arm.name if prefix in per_arm else "")
+                        title=f"{title} · {arm.name}" if prefix in per_arm else
+                        f"{title} · the same for every arm" if same_for_all else title,
+                        arm=arm.name if prefix in per_arm else "")
     _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
                  compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)

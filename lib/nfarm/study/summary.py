@@ -339,8 +339,14 @@ def _number(text: str) -> float:
     return 0.0 if text.startswith("<") else float(text)
 
 
+def _three(text: str) -> str:
+    """A table's number (written to four significant digits) to three, as the chapters write
+    them; ``< 1e-06`` and empty cells as they are."""
+    return text if not text or text.startswith("<") else shown(float(text), ".3g")
+
+
 def _with_interval(row: Mapping[str, str]) -> str:
-    value, low, high = row["value"], row["ci_low"], row["ci_high"]
+    value, low, high = (_three(row[k]) for k in ("value", "ci_low", "ci_high"))
     unit = {"deg": "°", "%": " %", "mm": " mm", "N·m": " N·m"}.get(row["unit"], f" {row['unit']}")
     return f"{value}{unit}" if low == high == value or not (low or high) else f"{value}{unit} ({low}–{high})"
 
