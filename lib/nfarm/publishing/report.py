@@ -347,8 +347,9 @@ def _wait(children, seconds: float) -> None:
 
 
 def _side_by_side(tasks, grace: float = 10.0) -> None:
-    """Run each task (a callable) in a forked process of its own, all at once, and raise what
-    the first that failed raised (:class:`ReportInterrupted` when one was interrupted). Ctrl-C
+    """Run each task (a callable) in a forked process of its own, all at once; raise
+    ``KeyboardInterrupt`` when one was interrupted (:func:`build_report` says it as
+    :class:`ReportInterrupted`), else a :class:`ReportError` with every failed task's line. Ctrl-C
     reaches every process of the terminal's group: each child stops its notebook
     (:func:`nfarm.infra.notebook_runs._interruptible`) and says so, and this process waits for
     them. A child tells its end through a pipe, as (``"ok"``, ``""``), (``"failed"``,
