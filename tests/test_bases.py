@@ -1,8 +1,7 @@
-"""Model-free inverse dynamics (nfarm.learning.bases, nfarm.learning.baselines, LearnedID's affine input sets):
-the bases hold what they claim (the chain basis spans the rigid-body model of arms like
-intelbot5, the generic one does not), the rules over the configuration add what one rule lacks,
-the scikit-learn baselines are seeded functions of their options, and bad options are refused
-in one line."""
+"""Model-free inverse dynamics (nfarm.learning.bases, LearnedID's affine input sets): the bases
+hold what they claim (the chain basis spans the rigid-body model of arms like intelbot5, the
+generic one does not) and the rules over the configuration add what one rule lacks. The
+scikit-learn baselines are in test_baselines.py."""
 
 from __future__ import annotations
 
@@ -12,7 +11,6 @@ import numpy as np
 import pytest
 
 from nfarm.learning import bases
-from nfarm.learning.baselines import DEFAULTS, LEARNERS, BaselineID
 from nfarm.study.datasets import load_study, random_trajectories
 from nfarm.model.dynamics import rnea
 from nfarm.learning.learned import LearnedID, id_features
@@ -122,104 +120,3 @@ def test_rules_over_the_configuration_add_what_one_rule_lacks(random_states, tmp
     model.save(tmp_path)
     loaded = LearnedID.load(tmp_path, ROBOT)
     np.testing.assert_array_equal(loaded.predict(v["q"], v["qd"], v["qdd"]), model.predict(v["q"], v["qd"], v["qdd"]))
-
-
-# -- scikit-learn baselines --------------------------------------------------------------------
-
-SMALL = {"linear": {}, "ridge": {"basis": "generic"}, "kernel": {"n_components": 50},
-         "boosting": {"max_iter": 5}, "mlp": {"hidden": [8], "max_iter": 5}, "friction": {}}
-
-
-@pytest.mark.parametrize("learner", LEARNERS)
-def test_baselines_are_seeded_functions_of_their_options(learner, trajectories):
-    train, val = trajectories["train"], trajectories["val"]
-    fit = lambda: BaselineID(learner, SMALL[learner], residual=learner == "friction",   # noqa: E731
-                             random_state=3).fit(ROBOT, train)
-    a, b = fit(), fit()
-    pa = a.predict(val["q"], val["qd"], val["qdd"])
-    assert pa.shape == val["tau"].shape and np.isfinite(pa).all()
-    np.testing.assert_array_equal(pa, b.predict(val["q"], val["qd"], val["qdd"]))
-    assert set(DEFAULTS[learner]) >= set(SMALL[learner])
-
-
-def test_ridge_on_the_chain_basis_identifies_the_arm_and_the_linear_floor_does_not(random_states):
-    train, val = random_states["train"], random_states["val"]
-    exact = BaselineID("ridge", {"basis": "chain", "alpha": 1e-9}).fit(ROBOT, train)
-    floor = BaselineID("linear").fit(ROBOT, train)
-    X = (val["q"], val["qd"], val["qdd"])
-    assert nrmse(exact.predict(*X), val["tau"]).max() < 1e-3
-    assert nrmse(floor.predict(*X), val["tau"]).max() > 0.3
-
-
-def test_residual_baseline_adds_newton_euler(trajectories):
-    """On torques that are Newton–Euler's plus a viscous term, a linear residual learns the term;
-    the friction identification recovers each joint's armature, viscous and Coulomb values."""
-    train = dict(trajectories["train"])
-    train["tau"] = train["tau"] + 0.05 * train["qd"]
-    model = BaselineID("linear", residual=True).fit(ROBOT, train)
-    v = trajectories["val"]
-    np.testing.assert_allclose(model.predict(v["q"], v["qd"], v["qdd"]), v["tau"] + 0.05 * v["qd"], atol=1e-9)
-    law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
-    train["tau"] = trajectories["train"]["tau"] + np.einsum(
-        "njk,jk->nj", np.stack([train["qdd"], train["qd"], np.sign(train["qd"])], axis=-1), law)
-    friction = BaselineID("friction", residual=True).fit(ROBOT, train)
-    np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
-
-
-@pytest.mark.parametrize("learner, options, message", [
-    ("forest", None, "learner must be one of linear, ridge, kernel, boosting, mlp, friction, got 'forest'"),
-    ("friction", None, "learner 'friction' identifies the drives beside Newton–Euler: give residual=True"),
-    ("ridge", {"degree": 2}, "unknown option 'degree' for learner 'ridge'; valid: basis, alpha"),
-    ("ridge", {"alpha": -1}, "ridge: alpha must be a positive number, got -1"),
-    ("ridge", {"basis": "fourier"}, "ridge: basis must be one of"),
-    ("kernel", {"n_components": 1.5}, "kernel: n_components must be an integer from 2 to 10,000, got 1.5"),
-    ("kernel", {"n_components": 10**6}, "kernel: n_components must be an integer from 2 to 10,000, got 1000000"),
-    ("boosting", {"max_iter": 10**9}, "boosting: max_iter must be an integer from 2 to 100,000"),
-    ("boosting", {"max_leaf_nodes": True}, "boosting: max_leaf_nodes must be an integer from 2 to 4,096"),
-    ("mlp", {"hidden": 32}, "mlp: hidden must be a list of 1 to 16 layer widths"),
-    ("mlp", {"hidden": [10**6]}, "mlp: hidden must be a list of 1 to 16 layer widths from 1 to 4,096"),
-    ("mlp", {"hidden": [True]}, "mlp: hidden must be a list of 1 to 16 layer widths"),
-    ("linear", {"alpha": 1.0}, "unknown option 'alpha' for learner 'linear'; valid: none"),
-])
-def test_bad_baseline_options_are_refused_before_any_work(learner, options, message, trajectories):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        BaselineID(learner, options).fit(ROBOT, trajectories["train"])
-    with pytest.raises(ValueError, match="not fitted yet"):
-        BaselineID().predict(*np.zeros((3, 2, 5)))
-
-
-@pytest.mark.parametrize("learner, options", [("boosting", {"max_iter": 12}), ("mlp", {"hidden": [16], "max_iter": 12})])
-def test_the_time_limited_learners_compute_what_scikit_learn_does(learner, options, trajectories):
-    """The hooks that check the time limit change no arithmetic: the same predictions, bit for bit,
-    as the plain scikit-learn estimators with the same options and seed."""
-    from sklearn.ensemble import HistGradientBoostingRegressor
-    from sklearn.neural_network import MLPRegressor
-
-    from nfarm.learning import baselines
-
-    train, val = trajectories["train"], trajectories["val"]
-    ours = BaselineID(learner, options, random_state=4).fit(ROBOT, train)
-    plain = {"boosting": HistGradientBoostingRegressor, "mlp": MLPRegressor}[learner]
-    timed = baselines._timed_learners()[learner == "mlp"]
-    assert timed is not plain and issubclass(timed, plain)
-    original = baselines._timed_learners
-    try:
-        baselines._timed_learners = lambda: (HistGradientBoostingRegressor, MLPRegressor)
-        reference = BaselineID(learner, options, random_state=4).fit(ROBOT, train)
-    finally:
-        baselines._timed_learners = original
-    X = (val["q"], val["qd"], val["qdd"])
-    np.testing.assert_array_equal(ours.predict(*X), reference.predict(*X))
-
-
-@pytest.mark.parametrize("learner, options, what", [
-    ("boosting", {"max_iter": 100_000, "max_leaf_nodes": 4}, "boosting: an iteration"),
-    ("mlp", {"hidden": [4], "max_iter": 100_000}, "mlp: an epoch")])
-def test_a_time_limit_stops_an_iterative_baseline_within_an_iteration(learner, options, what, trajectories):
-    """A sweep cell's deadline reaches inside scikit-learn's loops (without the hook these fits
-    run 100 000 iterations)."""
-    from nfarm.infra.limits import TimeLimitError, time_limit
-
-    small = {k: v[:200] for k, v in trajectories["train"].items()}
-    with pytest.raises(TimeLimitError, match=f"{what}: over the time limit of 0.2 s"), time_limit(0.2):
-        BaselineID(learner, options).fit(ROBOT, small)
