@@ -13,7 +13,9 @@ import time
 import numpy as np
 
 from common import seconds_per_call  # noqa: F401 — sets the benchmark environment
-from nfarm.study.datasets import ik_samples, load_study, random_trajectories
+from nfarm.study.regions import ik_samples
+from nfarm.study.study_files import load_study
+from nfarm.study.id_trajectories import random_trajectories
 from nfarm.model.dynamics import rnea
 from nfarm.model.kinematics import fk
 from nfarm.infra.paths import PARAMS

@@ -14,7 +14,7 @@ import numpy as np
 import papermill
 
 from common import best_of
-from nfarm.study import datasets
+from nfarm.study import datasets, study_files
 from nfarm import ik
 from nfarm.learning.learned import Baseline, LearnedIK
 from nfarm.infra.paths import NOTEBOOKS, PARAMS
@@ -33,7 +33,7 @@ N_LM = 2000
 
 
 def main() -> None:
-    study = datasets.load_study(PARAMS / "studies" / "intelbot5.yaml")
+    study = study_files.load_study(PARAMS / "studies" / "intelbot5.yaml")
     robot = study.robot
     datasets.build_datasets(study)
     directory = datasets.dataset_dir(study)

@@ -17,7 +17,7 @@ import numpy as np
 import papermill
 
 from common import best_of
-from nfarm.study import datasets
+from nfarm.study import datasets, study_files
 from nfarm.model.dynamics import regressor, rnea
 from nfarm.learning.learned import LearnedID
 from nfarm.infra.paths import NOTEBOOKS, PARAMS
@@ -39,7 +39,7 @@ def chapter_options() -> dict[str, dict]:
 
 
 def main() -> None:
-    study = datasets.load_study(PARAMS / "studies" / "intelbot5.yaml")
+    study = study_files.load_study(PARAMS / "studies" / "intelbot5.yaml")
     robot = study.robot
     datasets.build_datasets(study)
     directory = datasets.dataset_dir(study)

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from nfarm.learning import bases
-from nfarm.study.datasets import load_study, random_trajectories
+from nfarm.study.study_files import load_study
+from nfarm.study.id_trajectories import random_trajectories
 from nfarm.model.dynamics import rnea
 from nfarm.learning.learned import LearnedID, id_features
 from nfarm.infra.paths import PARAMS

@@ -12,9 +12,13 @@ import numpy as np
 import pytest
 import yaml
 
-from nfarm.study import datasets
-from nfarm.study.datasets import (IKRegion, build_datasets, measured_states, check_single_valued, load, load_study,
-                            random_trajectories, study_from_dict)
+from nfarm.solvers import workspace
+from nfarm.study import datasets, id_trajectories, study_files
+from nfarm.study.datasets import build_datasets, inputs_hash, load
+from nfarm.study.regions import IKRegion, check_single_valued
+from nfarm.study.id_trajectories import measured_states, random_trajectories
+from nfarm.study.jobs import study_sized
+from nfarm.study.study_files import load_study, study_from_dict
 from nfarm.model.dynamics import rnea, stribeck_drive_torques
 from nfarm.model.kinematics import fk
 from nfarm.infra.paths import PARAMS
@@ -352,7 +356,7 @@ def test_workspace_volume_of_a_spherical_shell(upper, fore):
     robot = _yaw_pitch_elbow(upper, fore)
     outer, inner = upper + fore, abs(upper - fore)
     exact = 4 / 3 * np.pi * (outer ** 3 - inner ** 3)
-    est = datasets.workspace_volume(robot, outer, n_points=1500, seed=2, restarts=8)
+    est = workspace.workspace_volume(robot, outer, n_points=1500, seed=2, restarts=8)
     assert est.points == 1500 and est.reach == outer
     assert abs(est.volume - exact) <= 4 * max(est.std_error, 0.01 * exact), (est, exact)
 
@@ -383,12 +387,12 @@ def test_learned_ik_sets_the_chosen_size_and_not_the_data():
     plain = load_study(PARAMS / "studies" / "intelbot5.yaml")
     data = copy.deepcopy(plain.params)
     data["learned_ik"] = {"n_mfs": [1, 4, 4, 4, 4, 1], "epochs": [1, 2, 3, 4, 5]}
-    sized = datasets.study_from_dict(data, "x.yaml")
-    assert sized.inputs_hash == plain.inputs_hash          # the data sets are the same files
-    chosen = sized.chosen_ik({"n_mfs": 3, "epochs": 30, "joint_options": [{"n_mfs": 1}, {}, {}, {}, {}]})
+    sized = study_files.study_from_dict(data, "x.yaml")
+    assert inputs_hash(sized) == inputs_hash(plain)          # the data sets are the same files
+    chosen = study_sized(sized, {"n_mfs": 3, "epochs": 30, "joint_options": [{"n_mfs": 1}, {}, {}, {}, {}]})
     assert chosen["n_mfs"] == [1, 4, 4, 4, 4, 1]
     assert chosen["joint_options"] == [{"n_mfs": 1, "epochs": 1}, *({"epochs": e} for e in (2, 3, 4, 5))]
-    assert plain.chosen_ik({"n_mfs": 3}) == {"n_mfs": 3}
+    assert study_sized(plain, {"n_mfs": 3}) == {"n_mfs": 3}
 
 
 def test_measured_states_read_an_encoder_and_differentiate_like_a_drive():
@@ -412,23 +416,24 @@ def test_measured_states_read_an_encoder_and_differentiate_like_a_drive():
 def test_seed_like_trajectories_are_the_dissertation_s_cubics():
     """Rest to rest over 6 s, every 0.2 s (31 states), ends within the limits less the margin."""
     study = load_study(STUDY)
-    d = datasets.seed_like_trajectories(study.robot, study.id, 4, 3)
+    d = id_trajectories.seed_like_trajectories(study.robot, study.id, 4, 3)
     assert d["q"].shape == (4 * 31, study.robot.n) and np.array_equal(np.bincount(d["trajectory"]), [31] * 4)
     np.testing.assert_allclose(d["t"][:31], np.arange(31) * 0.2, atol=1e-12)
     ends = d["qd"].reshape(4, 31, -1)[:, [0, -1]]
     np.testing.assert_allclose(ends, 0.0, atol=1e-12)
     lo, hi = study.robot.qlim[:, 0] + study.id.margin, study.robot.qlim[:, 1] - study.id.margin
     assert ((d["q"] >= lo - 1e-12) & (d["q"] <= hi + 1e-12)).all()
-    again = datasets.seed_like_trajectories(study.robot, study.id, 4, 3)
+    again = id_trajectories.seed_like_trajectories(study.robot, study.id, 4, 3)
     np.testing.assert_array_equal(again["q"], d["q"])
 
 
 def test_a_redrawn_study_draws_new_training_data_and_keeps_the_test_set(built, tmp_path):
-    from nfarm.study.datasets import dataset_dir, load, redrawn
+    from nfarm.study.datasets import dataset_dir, load
+    from nfarm.study.study_files import redrawn
     study, out, _ = built
     assert redrawn(study, 0) is study
     again = redrawn(study, 2)
-    assert again.seed == study.seed + 2 and again.draw == 2 and again.inputs_hash != study.inputs_hash
+    assert again.seed == study.seed + 2 and again.draw == 2 and inputs_hash(again) != inputs_hash(study)
     assert dataset_dir(again, out) == dataset_dir(study, out) / "draw2"
     made = build_datasets(again, out)
     assert {p.name for p, _ in made} == {f"{k}_{s}.npz" for k in ("ik", "id", "ik_full") for s in ("train", "val")}
@@ -442,7 +447,7 @@ def test_a_redrawn_study_draws_new_training_data_and_keeps_the_test_set(built, t
 
 
 def test_the_memory_budget_is_half_the_machine_or_what_nfarm_memory_gb_says(monkeypatch):
-    from nfarm.study.datasets import memory_budget
+    from nfarm.study.study_files import memory_budget
     monkeypatch.delenv("NFARM_MEMORY_GB", raising=False)
     assert memory_budget() == 0.5 * os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     monkeypatch.setenv("NFARM_MEMORY_GB", "0.25")

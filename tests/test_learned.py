@@ -10,7 +10,9 @@ import warnings
 import numpy as np
 import pytest
 
-from nfarm.study.datasets import ik_samples, load_study
+from nfarm.study.regions import ik_samples
+
+from nfarm.study.study_files import load_study
 from nfarm.model.kinematics import fk
 from nfarm.learning.learned import ENCODINGS, LearnedIK, encode, out_of_plane
 from nfarm.infra.paths import PARAMS
@@ -305,7 +307,7 @@ def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
 
 # -- learned inverse dynamics ------------------------------------------------------------------
 
-from nfarm.study.datasets import random_trajectories  # noqa: E402
+from nfarm.study.id_trajectories import random_trajectories  # noqa: E402
 from nfarm.model.dynamics import inertial_parameters, rnea  # noqa: E402
 from nfarm.learning.learned import INPUT_SETS, LearnedID, id_features, regressor_columns  # noqa: E402
 

@@ -13,7 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from nfarm.publishing import panel_compute as pc
-from nfarm.study.datasets import ik_samples, load_study
+from nfarm.study.regions import ik_samples
+from nfarm.study.study_files import load_study
 from nfarm.model.dynamics import rnea
 from nfarm.solvers.geometric_ik import in_class
 from nfarm.model.kinematics import fk, fk_all

@@ -8,14 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from nfarm.study import datasets, sweep
+from nfarm.study import datasets, id_trajectories, study_files, sweep
 from nfarm.infra import provenance
 from nfarm.model.dynamics import rnea
 from nfarm.learning.learned import LearnedID, fit_cached
 from nfarm.infra.paths import ROOT
 from nfarm.publishing.report import _chapter_key, notebook_modules
 
-STUDY = datasets.smoke_study(datasets.load_study(ROOT / "params" / "studies" / "intelbot5.yaml"))
+STUDY = study_files.smoke_study(study_files.load_study(ROOT / "params" / "studies" / "intelbot5.yaml"))
 ROBOT = STUDY.robot
 
 
@@ -62,7 +62,7 @@ def test_the_learners_digest_changes_with_their_code_only(package, module, chang
 def test_a_model_is_retrained_after_a_training_module_changes_and_reused_after_a_presentation_one(
         package, tmp_path):
     def split(count, seed):
-        d = datasets.random_trajectories(ROBOT, STUDY.id, count, seed)
+        d = id_trajectories.random_trajectories(ROBOT, STUDY.id, count, seed)
         return {**d, "tau": rnea(ROBOT, d["q"], d["qd"], d["qdd"])}
     train, val = split(3, 1), split(1, 2)
     where = tmp_path / "model"

@@ -12,7 +12,6 @@ from nfarm.model.kinematics import fk
 from nfarm.infra.paths import ROOT
 from nfarm.model.robot import robot_from_dict, sample_configurations
 from nfarm.solvers.tool_paths import plane_held_poses
-from nfarm.solvers.trajectory import arm_plane_poses
 
 from conftest import load_quietly
 
@@ -69,20 +68,33 @@ def test_the_reference_pose_is_kept(name):
     np.testing.assert_allclose(plane_held_poses(robot, q_ref, T_ref[None, :3, 3])[0], T_ref, atol=1e-13)
 
 
+def _azimuth_turn(T_ref, positions):
+    """The simple construction for an arm whose plane contains the world's z axis: ``T_ref``'s
+    orientation turned about z by each position's change of azimuth ``atan2(y, x)``."""
+    turn = np.arctan2(positions[:, 1], positions[:, 0]) - np.arctan2(T_ref[1, 3], T_ref[0, 3])
+    c, s = np.cos(turn), np.sin(turn)
+    Rz = np.zeros((len(positions), 3, 3))
+    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = c, -s, s, c, 1.0
+    out = np.tile(np.eye(4), (len(positions), 1, 1))
+    out[:, :3, :3] = Rz @ T_ref[:3, :3]
+    out[:, :3, 3] = positions
+    return out
+
+
 def test_on_intelbot5_it_is_the_azimuth_turn():
-    """intelbot5's plane contains the world's z axis: the general construction is
-    arm_plane_poses' turn by the change of azimuth."""
+    """intelbot5's plane contains the world's z axis: the general construction is the turn by
+    the change of azimuth."""
     robot = _arm("intelbot5")
     q_ref = np.radians([10, 20, 30, -20, 15])
     x = _line_and_circle(fk(robot, q_ref)[:3, 3])
-    np.testing.assert_allclose(plane_held_poses(robot, q_ref, x), arm_plane_poses(fk(robot, q_ref), x), atol=1e-12)
+    np.testing.assert_allclose(plane_held_poses(robot, q_ref, x), _azimuth_turn(fk(robot, q_ref), x), atol=1e-12)
 
 
 def test_where_the_azimuth_turn_leaves_the_so101s_pose_set_this_does_not():
     robot = _arm("so101")
     q_ref = _reference(robot, 0)
     x = _line_and_circle(fk(robot, q_ref)[:3, 3], radius=0.03)
-    _, pos_old, _ = ik.closed_form(robot, arm_plane_poses(fk(robot, q_ref), x)).nearest()
+    _, pos_old, _ = ik.closed_form(robot, _azimuth_turn(fk(robot, q_ref), x)).nearest()
     _, pos_new, _ = ik.closed_form(robot, plane_held_poses(robot, q_ref, x)).nearest()
     assert pos_old.max() > 1e-3 and pos_new.max() < 1e-9
 
@@ -105,3 +117,21 @@ def test_bad_input_is_refused_in_one_line():
                               "joints": [{**joint, "a": 0.3}, {**joint, "a": 0.2}]})
     with pytest.raises(ValueError, match=r"planar: the second joint's axis is parallel to the first's"):
         plane_held_poses(planar, [0.1, 0.2], np.zeros((1, 3)))
+
+
+def test_the_poses_are_reached_exactly_where_a_fixed_orientation_is_not():
+    """Poses keeping the reference's pitch and roll in the arm's plane along a circle: the
+    positions asked, orthonormal, and reached by LM; the reference's orientation moved
+    sideways is not."""
+    robot = _arm("intelbot5")
+    q_ref = np.radians([10, 20, 30, -20, 15])
+    T_ref = fk(robot, q_ref)
+    angle = np.linspace(0, 2 * np.pi, 24)
+    circle = T_ref[:3, 3] + 0.04 * np.column_stack([np.cos(angle), np.sin(angle), 0 * angle])
+    T = plane_held_poses(robot, q_ref, circle)
+    np.testing.assert_allclose(T[:, :3, 3], circle, atol=1e-15)
+    np.testing.assert_allclose(T[:, :3, :3] @ np.swapaxes(T[:, :3, :3], 1, 2), np.broadcast_to(np.eye(3), (24, 3, 3)), atol=1e-15)
+    assert ik.solve(robot, T).success.all()
+    fixed = T.copy()
+    fixed[:, :3, :3] = T_ref[:3, :3]
+    assert not ik.solve(robot, fixed[[6, 12]], restarts=4).success.any()

@@ -13,9 +13,8 @@ import pytest
 
 from nfarm.model.dynamics import rnea
 from nfarm.model.kinematics import fk
-from nfarm.solvers.ik import solve
 from nfarm.presentation.recording import record_id_trajectory, record_ik_paths, record_trajectory
-from nfarm.solvers.trajectory import (TrajectoryLimitWarning, arm_plane_poses, cubic, line_path, quintic,
+from nfarm.solvers.trajectory import (TrajectoryLimitWarning, cubic, line_path, quintic, quintic_segments,
                               time_grid, via_points)
 
 Q0, QF = np.radians([0, 10, -20, 30, 0]), np.radians([90, 45, -60, 30, 120])
@@ -180,17 +179,16 @@ def test_id_recording_holds_the_arm_and_every_torque_series(intelbot5, tmp_path)
     assert not (tmp_path / "x.rrd").exists()
 
 
-def test_arm_plane_poses_are_reachable_by_a_five_joint_arm(intelbot5):
-    """Poses keeping the reference's pitch and roll in the arm's plane: same positions as asked,
-    orthonormal, and reached exactly by LM (a fixed orientation moved sideways is not)."""
-    q_ref = np.radians([10, 20, 30, -20, 15])
-    T_ref = fk(intelbot5, q_ref)
-    angle = np.linspace(0, 2 * np.pi, 24)
-    circle = T_ref[:3, 3] + 0.04 * np.column_stack([np.cos(angle), np.sin(angle), 0 * angle])
-    T = arm_plane_poses(T_ref, circle)
-    np.testing.assert_array_equal(T[:, :3, 3], circle)
-    np.testing.assert_allclose(T[:, :3, :3] @ np.swapaxes(T[:, :3, :3], 1, 2), np.broadcast_to(np.eye(3), (24, 3, 3)), atol=1e-15)
-    assert solve(intelbot5, T).success.all()
-    fixed = T.copy()
-    fixed[:, :3, :3] = T_ref[:3, :3]
-    assert not solve(intelbot5, fixed[[6, 12]], restarts=4).success.any()
+
+
+def test_quintic_segments_are_the_quintic_in_normalised_time():
+    """The batched evaluator and the sampled quintic are one polynomial: positions,
+    velocities and accelerations agree on random segments with end velocities."""
+    rng = np.random.default_rng(5)
+    for p0, p1, v0, v1, T in rng.uniform(-2, 2, size=(20, 5)):
+        T = abs(T) + 0.1
+        reference = quintic(p0, p1, v0, v1, 0.0, T, T / 16)
+        q, qd, qdd = quintic_segments(p0, v0, p1, v1, T, reference.t / T)
+        np.testing.assert_allclose(q, reference.q[:, 0], atol=1e-12)
+        np.testing.assert_allclose(qd, reference.qd[:, 0], atol=1e-10)
+        np.testing.assert_allclose(qdd, reference.qdd[:, 0], atol=1e-8 / T**2)

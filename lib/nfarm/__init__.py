@@ -58,7 +58,8 @@ PUBLIC: dict[str, str] = {
     **dict.fromkeys(["ANFIS"], "learning.anfis"),
     **dict.fromkeys(["LearnedIK", "LearnedID", "OutsideTrainingWarning"], "learning.learned"),
     **dict.fromkeys(["BaselineID"], "learning.baselines"),
-    **dict.fromkeys(["load_study", "build_datasets"], "study.datasets"),
+    "load_study": "study.study_files",
+    "build_datasets": "study.datasets",
 }
 
 __all__ = sorted(PUBLIC)
@@ -91,4 +92,5 @@ if TYPE_CHECKING:   # for readers and type checkers; at run time the names come 
     from .solvers import ik
     from .solvers.geometric_ik import closed_form
     from .solvers.trajectory import Trajectory, cubic, quintic, via_points
-    from .study.datasets import build_datasets, load_study
+    from .study.datasets import build_datasets
+    from .study.study_files import load_study

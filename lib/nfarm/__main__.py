@@ -27,7 +27,7 @@ def _check_one(path: str) -> str:
         sweep = sweep_from_dict(data, source=path)
         return f"sweep {sweep.name!r}: {len(sweep.cells)} cells of {sweep.target}"
     if isinstance(data, dict) and "robot_file" in data and "joints" not in data:
-        from .study.datasets import study_from_dict
+        from .study.study_files import study_from_dict
 
         study = study_from_dict(data, source=path)
         return (f"study {study.name!r} of {study.robot.name}, IK sizes "
@@ -210,7 +210,8 @@ def _output_directory(option: str, out: str | None) -> str | None:
 
 def make_datasets(study_file: str, out: str | None, force: bool) -> int:
     """Build (or reuse) every data set of a study; one line per file."""
-    from .study.datasets import build_datasets, load_study
+    from .study.datasets import build_datasets
+    from .study.study_files import load_study
 
     problem = _output_directory("--out", out)
     if problem:

@@ -56,7 +56,7 @@ __all__ = [
 
 CONVENTIONS = ("standard", "modified")
 TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
-            "tool": False, "base": False, "description": False}
+            "tool": False, "base": False, "description": False, "poses_deg": False}
 JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
               "com": True, "inertia": True, "name": False, "viscous": False, "coulomb": False,
               "coulomb_velocity": False, "armature": False, "effort": False, "velocity": False}
@@ -95,6 +95,10 @@ class Robot:
             ``<limit effort velocity>``; ``inf`` unless given). Informative: no solver
             enforces them.
         source: the file the robot was loaded from, or a description.
+        poses: named configurations ``{name: (n,)}`` [rad] within the limits, for a reader
+            (the file's ``poses_deg``; :func:`poses_for`): each arm's own, named for what it
+            does there. Not a model parameter: :func:`robot_hash` leaves them out, so naming a
+            pose keeps the robot's data sets and models valid.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -130,6 +134,7 @@ class Robot:
     base: np.ndarray | None = None
     effort: np.ndarray | None = None
     velocity: np.ndarray | None = None
+    poses: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
     provenance: tuple[str, str] | None = dataclasses.field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -145,6 +150,8 @@ class Robot:
             value = getattr(self, field.name)
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
+        for value in self.poses.values():
+            value.setflags(write=False)
 
     @property
     def n(self) -> int:
@@ -164,7 +171,7 @@ class Robot:
 #: import the file-format layer.
 _READERS: dict[str, Any] = {}
 URDF_FILE_KEYS = {"name": True, "urdf": True, "tip": False, "lock": False, "gravity": False,
-                  "drive": False, "description": False}
+                  "drive": False, "description": False, "poses_deg": False}
 _DRIVE_KEYS = dict.fromkeys(DRIVE_DEFAULTS, False)
 
 
@@ -237,6 +244,8 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
         changes["gravity"] = np.array(v.vector(data["gravity"], "gravity", 3))
     if "description" in data:
         changes["description"] = v.string(data["description"], "description", allow_empty=True)
+    if data.get("poses_deg") is not None:
+        changes["poses"] = v.poses(data["poses_deg"], "poses_deg", robot)
     if data.get("drive") is not None:
         drive = v.mapping(data["drive"], "drive", _DRIVE_KEYS)
         for key, value in drive.items():
@@ -247,7 +256,8 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
                        for x in values]
             changes[key] = np.array(numbers)
     robot = dataclasses.replace(robot, **changes)
-    fields = json.dumps(data, sort_keys=True, default=str).encode("utf-8")
+    model = {k: x for k, x in data.items() if k != "poses_deg"}      # the poses are no parameter
+    fields = json.dumps(model, sort_keys=True, default=str).encode("utf-8")
     return with_provenance(robot, fields, _read_bytes(urdf))
 
 
@@ -318,7 +328,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
             fields.setdefault(key, []).append(
                 v.number(joint[key], f"{at}.{key}", lo=0.0, lo_open=True) if key in joint else math.inf)
 
-    return Robot(
+    robot = Robot(
         name=name, convention=convention,
         a=np.array(fields["a"]), alpha=np.array(fields["alpha"]), d=np.array(fields["d"]),
         offset=np.array(fields["offset"]), qlim=np.array(fields["qlim"], dtype=float),
@@ -328,6 +338,9 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         **{key: np.array(fields[key]) for key in DRIVE_DEFAULTS},
         effort=np.array(fields["effort"], dtype=float), velocity=np.array(fields["velocity"], dtype=float),
     )
+    if data.get("poses_deg") is not None:
+        robot = dataclasses.replace(robot, poses=v.poses(data["poses_deg"], "poses_deg", robot))
+    return robot
 
 
 def robot_to_dict(robot: Robot) -> dict:
@@ -339,7 +352,7 @@ def robot_to_dict(robot: Robot) -> dict:
         >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
         >>> data = robot_to_dict(robot)
         >>> list(data)
-        ['name', 'convention', 'gravity', 'tool', 'joints', 'description']
+        ['name', 'convention', 'gravity', 'tool', 'joints', 'description', 'poses_deg']
         >>> data["joints"][1]["a"], data["joints"][1]["qlim"]     # [m], [rad]
         (0.2, [-1.5707963267948966, 1.5707963267948966])
     """
@@ -366,11 +379,17 @@ def robot_to_dict(robot: Robot) -> dict:
         out["base"] = robot.base.tolist()
     if robot.description:
         out["description"] = robot.description
+    if robot.poses:
+        out["poses_deg"] = {name: np.degrees(q).tolist() for name, q in robot.poses.items()}
     return out
 
 
 def _canonical(robot: Robot) -> str:
-    return json.dumps(robot_to_dict(robot), sort_keys=True, separators=(",", ":"))
+    """The robot's model parameters as canonical JSON: what :func:`robot_hash` hashes (the
+    named poses left out)."""
+    data = robot_to_dict(robot)
+    data.pop("poses_deg", None)
+    return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 
 def robot_hash(robot: Robot) -> str:
@@ -463,15 +482,17 @@ def joint_array(robot: Robot, value, name: str = "q") -> np.ndarray:
     return array.astype(float, copy=False)
 
 
-def poses_for(robot: Robot, poses_deg: dict[str, Sequence[float]], seed: int = 0,
+def poses_for(robot: Robot, poses_deg: dict[str, Sequence[float]] | None = None, seed: int = 0,
               ) -> tuple[dict[str, np.ndarray], str]:
     """Named configurations [rad] for a chapter, and a note for its reader.
 
-    ``poses_deg`` maps names to angles [deg]. When every pose has one angle per joint they are
-    used as given (an empty note); when they were written for another arm (another number of
-    joints), the home configuration (0 moved into the limits) and seeded random
-    configurations within the limits take their place, as many as were given, and the note
-    says so — a chapter run for another robot shows that robot instead of failing.
+    ``poses_deg`` maps names to angles [deg]; ``None`` takes the robot file's own named poses
+    (:attr:`Robot.poses`). When every pose has one angle per joint they are used as given (an
+    empty note); when they were written for another arm (another number of joints), or the
+    robot file names none, the home configuration (0 moved into the limits) and seeded random
+    configurations within the limits take their place, as many as were asked for (four when the
+    file names none), and the note says so — a chapter run for another robot shows that robot
+    instead of failing.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -482,19 +503,28 @@ def poses_for(robot: Robot, poses_deg: dict[str, Sequence[float]], seed: int = 0
         ([0.0, 0.523599, 1.047198, -1.570796, 0.0], '')
         >>> list(poses_for(robot, {"a": [0] * 6, "b": [10] * 6})[0])          # poses for 6 joints
         ['home (q = 0)', 'random configuration 1']
+        >>> list(poses_for(robot)[0])                                          # the file's own
+        ['ready (q = 0)', 'reaching forward and down', 'raised, base turned 60°', 'folded back']
     """
+    if poses_deg is None and robot.poses:
+        return {name: q.copy() for name, q in robot.poses.items()}, ""
     if poses_deg and all(len(q) == robot.n for q in poses_deg.values()):
         return {name: np.radians(np.asarray(q, dtype=float)) for name, q in poses_deg.items()}, ""
-    lengths = sorted({len(q) for q in poses_deg.values()})
+    wanted = 4 if poses_deg is None else len(poses_deg)
     rng = np.random.default_rng(seed)
     home = np.clip(0.0, robot.qlim[:, 0], robot.qlim[:, 1])
     poses = {"home (q = 0)": home}
-    for k in range(1, max(len(poses_deg), 1)):
+    for k in range(1, max(wanted, 1)):
         poses[f"random configuration {k}"] = sample_configurations(robot, (), rng)
-    note = (f"The chapter's named poses have {', '.join(map(str, lengths))} angles; "
-            f"{robot.name} has {robot.n} joints, so its home configuration and "
-            f"{len(poses) - 1} random configuration{'s' if len(poses) != 2 else ''} within its limits (seed {seed}) are "
-            f"shown instead.")
+    shown_instead = (f"so its home configuration and {len(poses) - 1} random "
+                     f"configuration{'s' if len(poses) != 2 else ''} within its limits (seed {seed}) "
+                     f"are shown instead.")
+    if poses_deg is None:
+        note = f"{robot.name}'s robot file names no poses (poses_deg), {shown_instead}"
+    else:
+        lengths = sorted({len(q) for q in poses_deg.values()})
+        note = (f"The chapter's named poses have {', '.join(map(str, lengths))} angles; "
+                f"{robot.name} has {robot.n} joints, {shown_instead}")
     return poses, note
 
 
@@ -562,6 +592,25 @@ class _Validator(Validator):
                           f"the triangle inequality (I1 + I2 >= I3): not a physical rigid body; "
                           f"accepted as given")
         return inertia
+
+    def poses(self, value: Any, at: str, robot: Robot) -> dict[str, np.ndarray]:
+        """Named configurations ``{name: [deg, ...]}``: one angle per joint, within its limits."""
+        if not isinstance(value, dict) or not value:
+            self.fail(at, f"must map pose names to {robot.n} joint angles [deg], got {show(value)}")
+        poses = {}
+        for name, angles in value.items():
+            where = f"{at}.{name}"
+            if not isinstance(name, str) or not name.strip():
+                self.fail(at, f"pose names must be non-empty text, got {show(name)}")
+            q = np.radians(np.asarray(self.vector(angles, where, robot.n), dtype=float))
+            for j in range(robot.n):
+                lo, hi = robot.qlim[j]
+                if not lo - 1e-9 <= q[j] <= hi + 1e-9:
+                    self.fail(f"{where}[{j}]", f"must lie within {robot.joint_names[j]}'s limits "
+                                               f"[{math.degrees(lo):.6g}, {math.degrees(hi):.6g}] deg, "
+                                               f"got {angles[j]!r}")
+            poses[name] = q
+        return poses
 
     def warn(self, at: str, message: str) -> None:
         warnings.warn(ParamsWarning(f"{self.source}: {at}: {message}"), stacklevel=5)

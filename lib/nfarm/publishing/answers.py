@@ -20,7 +20,9 @@ from ..model.kinematics import fk, jacobian, min_singular_value
 from ..model.robot import Robot, robot_from_dict, robot_to_dict, sample_configurations
 from ..solvers.ik import solve
 from ..solvers.workspace import reach, workspace_points
-from ..study.datasets import IKRegion, Study, check_single_valued, workspace_volume
+from ..study.regions import check_single_valued, IKRegion
+from ..study.study_files import Study
+from ..solvers.workspace import workspace_volume
 
 __all__ = ["scan", "tool_shift", "dh_transform", "dh_cases", "singular_elbows_deg", "one_more_joint",
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",

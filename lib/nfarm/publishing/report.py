@@ -94,7 +94,7 @@ class Edition:
 def editions(params_dir: Path | None = None) -> list[Edition]:
     """One edition per study file ``params/studies/*.yaml``, the primary (intelbot5) first;
     a single primary edition with the chapters' defaults if there is no study file."""
-    from ..study.datasets import load_study          # the study's robot file, validated
+    from ..study.study_files import load_study          # the study's robot file, validated
     from ..infra.paths import PARAMS
 
     files = sorted(((params_dir or PARAMS) / "studies").glob("*.yaml"))

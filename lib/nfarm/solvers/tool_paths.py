@@ -7,11 +7,11 @@ it can keep the orientation it has *relative to its own vertical plane*: turning
 ``Δ`` turns every later axis and the tool's orientation about the base axis by ``Δ``, and the
 pitch joints then move the tool within the turned plane without changing the pitch and roll.
 :func:`plane_held_poses` builds those poses for any robot from its kinematics alone, without
-the assumption of :func:`nfarm.solvers.trajectory.arm_plane_poses` that the tool point lies in a
-vertical plane through the world's z axis (false for the SO-101: its base axis is 38.8 mm from
-the world origin and its tool point 7.9 mm off the roll axis: on chapter 02's 0.53 m line, 200 of
-the 201 poses that function makes are outside the SO-101's pose set, by up to 45 mm and 1°,
-and LM solves 1 of them; of these poses it reaches all 201, exactly).
+assuming that the tool point lies in a vertical plane through the world's z axis, which is
+false for the SO-101: its base axis is 38.8 mm from the world origin and its tool point 7.9 mm
+off the roll axis (turning poses about the world's z axis instead puts 200 of the 201 poses of
+chapter 02's 0.53 m line outside the SO-101's pose set, by up to 45 mm and 1°; of the poses
+made here it reaches all 201, exactly — ``tests/test_tool_paths.py``).
 
 **Equations.** With the base axis through ``o`` along the unit vector ``e`` and ``n`` the
 pitch joints' common axis at ``q_ref`` (both from the geometric Jacobian: angular parts of

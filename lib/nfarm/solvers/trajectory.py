@@ -23,7 +23,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, Slerp
 
 __all__ = ["Trajectory", "LimitViolation", "TrajectoryLimitWarning", "cubic", "quintic",
-           "via_points", "time_grid", "line_path", "arm_plane_poses"]
+           "via_points", "time_grid", "line_path", "quintic_segments"]
 
 
 class TrajectoryLimitWarning(UserWarning):
@@ -191,6 +191,38 @@ def quintic(q0, qf, v0, vf, t0: float, tf: float, dt: float, *, acc0=0.0, accf=0
     return _polynomial(np.stack([q0, v0, a0 / 2, a3, a4, a5]), t, t0, qlim)
 
 
+def quintic_segments(p0, v0, p1, v1, T, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Many quintic segments at once, each from ``p0`` at speed ``v0`` to ``p1`` at ``v1`` in ``T``
+    [s] with zero end accelerations, at normalised times ``s ∈ [0, 1]`` (``t = s·T``): position,
+    velocity and acceleration, arrays broadcast over leading axes.
+
+    The polynomial of :func:`quintic` with ``acc0 = accf = 0``, written in ``s`` (``d = p1 − p0``)::
+
+        q(s) = p0 + c₁ s + c₃ s³ + c₄ s⁴ + c₅ s⁵,   c₁ = v0 T,  c₃ = 10d − (6v0 + 4v1) T,
+        c₄ = −15d + (8v0 + 7v1) T,                 c₅ = 6d − 3(v0 + v1) T
+
+    (``q̇ = q'(s)/T``, ``q̈ = q''(s)/T²``). Where :func:`quintic` samples one segment on a time
+    grid, this evaluates a whole batch of segments (every segment of every random trajectory,
+    :func:`nfarm.study.id_trajectories.random_trajectories`) in one call.
+
+    Example:
+        >>> q, qd, qdd = quintic_segments(0.0, 0.0, 1.0, 0.0, 1.0, np.linspace(0.0, 1.0, 5))
+        >>> q.round(6).tolist() == quintic(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.25).q[:, 0].round(6).tolist()
+        True
+        >>> (qdd[[0, -1]].round(9) + 0.0).tolist()     # rest to rest, smoothly [rad/s²]
+        [0.0, 0.0]
+    """
+    d = p1 - p0
+    c3 = 10 * d - (6 * v0 + 4 * v1) * T
+    c4 = -15 * d + (8 * v0 + 7 * v1) * T
+    c5 = 6 * d - 3 * (v0 + v1) * T
+    c1 = v0 * T
+    q = p0 + s * (c1 + s * s * (c3 + s * (c4 + s * c5)))
+    qd = (c1 + s * s * (3 * c3 + s * (4 * c4 + s * 5 * c5))) / T
+    qdd = s * (6 * c3 + s * (12 * c4 + s * 20 * c5)) / (T * T)
+    return q, qd, qdd
+
+
 def via_points(times, points, dt: float, *, v0=0.0, vf=0.0, qlim=None) -> Trajectory:
     """Through ``points (m, n)`` [rad] at ``times (m,)`` [s], with velocities ``v0``, ``vf`` at
     the ends: a clamped cubic spline (:class:`scipy.interpolate.CubicSpline`), so position,
@@ -271,34 +303,3 @@ def line_path(T_start, T_end, steps: int) -> np.ndarray:
     T[:, :3, :3] = slerp(s).as_matrix()
     T[:, :3, 3] = (1 - s)[:, None] * T_start[:3, 3] + s[:, None] * T_end[:3, 3]
     return T
-
-
-def arm_plane_poses(T_ref, positions) -> np.ndarray:
-    """Tool poses ``(K, 4, 4)`` at ``positions (K, 3)`` [m] that keep ``T_ref``'s orientation
-    *as seen in the arm's vertical plane*: ``R_k = Rz(φ_k − φ_ref) · R_ref`` with ``φ`` the
-    azimuth ``atan2(y, x)`` of the position.
-
-    An arm whose approach axis stays in the vertical plane through the tool point (a base yaw,
-    pitch joints, a wrist roll: intelbot5, the SO-101) cannot keep a fixed orientation while its
-    tool moves sideways, but it can keep its pitch and roll in that plane: these are the
-    Cartesian paths such an arm can follow.
-
-    Example:
-        >>> T_ref = np.eye(4)
-        >>> T_ref[:3, :3], T_ref[:3, 3] = np.diag([1.0, -1.0, -1.0]), [0.18, 0.0, 0.195]   # pointing down
-        >>> T = arm_plane_poses(T_ref, [[0.18, 0.0, 0.195], [0.0, 0.18, 0.195]])         # [m]
-        >>> T.shape, (T[1, :3, :3].round(6) + 0.0).tolist()       # turned 90° about z with the plane
-        ((2, 4, 4), [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-    """
-    T_ref = np.asarray(T_ref, dtype=float)
-    positions = np.asarray(positions, dtype=float)
-    if T_ref.shape != (4, 4) or positions.ndim != 2 or positions.shape[1] != 3:
-        raise ValueError(f"T_ref must be (4, 4) and positions (K, 3), got {T_ref.shape} and {positions.shape}")
-    turn = np.arctan2(positions[:, 1], positions[:, 0]) - np.arctan2(T_ref[1, 3], T_ref[0, 3])
-    c, s = np.cos(turn), np.sin(turn)
-    Rz = np.zeros((len(positions), 3, 3))
-    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = c, -s, s, c, 1.0
-    out = np.tile(np.eye(4), (len(positions), 1, 1))
-    out[:, :3, :3] = Rz @ T_ref[:3, :3]
-    out[:, :3, 3] = positions
-    return out

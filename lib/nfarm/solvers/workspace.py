@@ -10,9 +10,10 @@ from scipy.stats import binned_statistic_2d
 from ..model.kinematics import fk, fk_all, manipulability, min_singular_value
 from ..model.robot import Robot, sample_configurations
 from .geometric_ik import class_refusal, elbow_meeting_angles
+from .ik import solve
 
 __all__ = ["Map2D", "workspace_points", "reach", "plane_map", "joint_map", "singular_configurations",
-           "near_stretched"]
+           "near_stretched", "Volume", "workspace_volume"]
 
 
 @dataclass(frozen=True)
@@ -192,3 +193,46 @@ def near_stretched(robot: Robot, stretched: np.ndarray, degrees: float) -> np.nd
     inward = np.sign(robot.qlim[2].mean() - near[2]) or 1.0
     near[2] += inward * np.radians(degrees)
     return near
+
+
+@dataclass(frozen=True)
+class Volume:
+    """A Monte Carlo estimate of the workspace's volume (:func:`workspace_volume`)."""
+
+    volume: float        # [m³]
+    std_error: float     # [m³], one standard error of the estimate
+    reach: float         # [m], radius of the ball the points were drawn in
+    share: float         # share of the drawn points the tool reaches
+    points: int
+
+
+def workspace_volume(robot: Robot, reach_m: float, n_points: int = 4000, seed: int = 0,
+                     **solve_options) -> Volume:
+    """Volume [m³] of the tool's position workspace: points drawn uniformly in the ball of
+    radius ``reach_m`` about the first joint's origin, each tested by position-only IK
+    (:func:`nfarm.solvers.ik.solve` with weights ``[1, 1, 1, 0, 0, 0]``, its restarts, within the joint
+    limits); ``V = (4/3)π r³ · share reached``, standard error ``(4/3)π r³ √(s(1 − s)/N)``.
+
+    Why not count the cells that sampled configurations reach: with uniform joint samples
+    that count was still growing by 10 % from 200 000 to 800 000 samples (cells reached rarely
+    hold no sample), whereas 4 000 IK points give ±2 % in 3 s.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> v = workspace_volume(robot, reach_m=0.5, n_points=400)
+        >>> 0.0 < v.share < 1.0, round(v.volume / (4 / 3 * np.pi * 0.5**3), 12) == round(v.share, 12)
+        (True, True)
+    """
+    rng = np.random.default_rng(seed)
+    direction = rng.normal(size=(n_points, 3))
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    radius = reach_m * rng.random(n_points) ** (1 / 3)
+    T = np.tile(np.eye(4), (n_points, 1, 1))
+    T[:, :3, 3] = robot.base[:3, 3] + direction * radius[:, None]
+    reached = solve(robot, T, weights=[1, 1, 1, 0, 0, 0], seed=seed, **solve_options).success
+    share = float(reached.mean())
+    ball = 4 / 3 * np.pi * reach_m ** 3
+    return Volume(ball * share, ball * np.sqrt(share * (1 - share) / n_points), reach_m, share,
+                  n_points)

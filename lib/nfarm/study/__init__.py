@@ -1,6 +1,14 @@
-"""The study: study files and the data sets they define (:mod:`.datasets`), the library jobs a
-sweep runs (:mod:`.jobs`) and the sweeps (:mod:`.sweep`), the spreads of compared numbers
-(:mod:`.statistics`) and the summary of every method's held-out errors (:mod:`.summary`).
+"""The study: what it declares and the data it makes, the jobs its sweeps run, and the numbers
+it compares.
+
+- :mod:`.study_files`: a study file read into a :class:`~.study_files.Study` (and the
+  smoke-sized and redrawn studies derived from one);
+- :mod:`.regions`: the IK region, its samples and the single-valuedness check;
+- :mod:`.id_trajectories`: the ID trajectories and what a measured arm's sensors record;
+- :mod:`.datasets`: the data set files, written once and reused while their inputs hold;
+- :mod:`.jobs` and :mod:`.sweep`: the library jobs a sweep runs, and the sweeps;
+- :mod:`.statistics`: the spreads of compared numbers; :mod:`.summary`: every method's
+  held-out errors; :mod:`.configurations`: reading a sweep's configurations (chapter 06).
 
 Imports every layer below; :mod:`nfarm.publishing` is above it.
 """

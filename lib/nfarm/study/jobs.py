@@ -11,7 +11,7 @@ and returns its metrics, a flat mapping of numbers, strings or lists of numbers.
 * ``learned_id`` — a study's learned inverse dynamics (chapter 6): every ``stride``-th training
   state, each joint's validation NRMSE (RMSE over the standard deviation of its torque). With
   ``seed_like: {duration_s, dt_s, seed}`` it trains instead on as many states on trajectories
-  made the dissertation's program's way (:func:`nfarm.study.datasets.seed_like_trajectories`, drawn from that
+  made the dissertation's program's way (:func:`nfarm.study.id_trajectories.seed_like_trajectories`, drawn from that
   seed and the cell's), validated on the study's own validation trajectories.
 * ``id_baseline`` — a model-free scikit-learn baseline of a study's inverse dynamics
   (:class:`nfarm.learning.baselines.BaselineID`, chapters 06 and 07): fitted on every ``stride``-th
@@ -28,7 +28,7 @@ same cell. Path parameters are stored relative to the repository root, so the ce
 
 A study job's ``seed`` is the **data draw and the initialisation**: seed 0 trains on the
 study's own data sets, seed ``k`` on its training and validation data drawn again with the
-study's seed plus ``k`` (:func:`nfarm.study.datasets.redrawn`), and seeds the learner; a test split is
+study's seed plus ``k`` (:func:`nfarm.study.study_files.redrawn`), and seeds the learner; a test split is
 always the study's own. A sweep's ``seeds: [0, 1, 2, 3, 4]`` thus gives each configuration's
 spread over data and initialisation (:func:`nfarm.study.sweep.by_configuration`).
 
@@ -52,7 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from . import datasets
+from . import datasets, id_trajectories, study_files
 
 from ..infra.paths import BUILD, project_path, shown_path
 from ..infra.reading import ParamsError, show
@@ -208,16 +208,16 @@ def anfis_benchmark(p: dict) -> dict:
 # Learned IK and ID on a study's data
 
 
-def _own_study(p: dict) -> datasets.Study:
+def _own_study(p: dict) -> study_files.Study:
     """The cell's study (its smoke version with ``smoke``) as its file draws it."""
-    study = datasets.load_study(p["study_file"])
-    return datasets.smoke_study(study) if p["smoke"] else study
+    study = study_files.load_study(p["study_file"])
+    return study_files.smoke_study(study) if p["smoke"] else study
 
 
-def _study(p: dict) -> datasets.Study:
+def _study(p: dict) -> study_files.Study:
     """The study whose training and validation data the cell's ``seed`` draws
-    (:func:`nfarm.study.datasets.redrawn`: seed 0 is the study's own)."""
-    return datasets.redrawn(_own_study(p), p["seed"])
+    (:func:`nfarm.study.study_files.redrawn`: seed 0 is the study's own)."""
+    return study_files.redrawn(_own_study(p), p["seed"])
 
 
 def _build_data(p: dict) -> None:
@@ -226,7 +226,7 @@ def _build_data(p: dict) -> None:
         datasets.build_datasets(_own_study(p), p["data_dir"])
 
 
-def _study_data(p: dict) -> tuple[datasets.Study, Path, Path]:
+def _study_data(p: dict) -> tuple[study_files.Study, Path, Path]:
     """The cell's study, its data sets (built or reused) and its models directory (the same
     for every draw: a model's directory name holds its seed)."""
     study = _study(p)
@@ -264,6 +264,31 @@ _ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint
 _POSES = {"region": "ik", "full_range": "ik_full"}
 
 
+def study_sized(study: study_files.Study, options: Mapping) -> dict:
+    """Chapter 06's chosen learned-IK ``options`` (LearnedIK keyword arguments) with the study
+    file's ``learned_ik`` applied: ``n_mfs`` replaces the grid's functions per input;
+    ``epochs``, one number or one per joint, the epochs (per joint through ``joint_options``,
+    keeping each joint's other options).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.study.study_files import load_study
+        >>> study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+        >>> study_sized(study, {"n_mfs": 3}) == {"n_mfs": 3, **study.learned_ik}   # the file's sizes win
+        True
+    """
+    chosen = dict(options)
+    if "n_mfs" in study.learned_ik:
+        chosen["n_mfs"] = study.learned_ik["n_mfs"]
+    epochs = study.learned_ik.get("epochs")
+    if isinstance(epochs, int):
+        chosen["epochs"] = epochs
+    elif epochs is not None:
+        joint = chosen.get("joint_options") or [{}] * len(epochs)
+        chosen["joint_options"] = [{**o, "epochs": e} for o, e in zip(joint, epochs)]
+    return chosen
+
+
 def _fit_ik(p: dict) -> tuple[LearnedIK, int]:
     """A ``learned_ik`` cell's model, trained or reused (:func:`fit_cached`), and the number of
     training samples it saw."""
@@ -279,7 +304,7 @@ def _fit_ik(p: dict) -> tuple[LearnedIK, int]:
     val = datasets.load(directory / f"{kind}_val.npz", robot, study)
     options = {k: p[k] for k in ("encoding", *_ANFIS_KEYS) if p[k] is not None}
     if p["study_sizes"]:
-        options = study.chosen_ik(options)
+        options = study_sized(study, options)
     if options["encoding"] == "arm_plane" and p["max_out_of_plane_deg"] is not None:
         options["max_out_of_plane"] = math.radians(p["max_out_of_plane_deg"])
     subset = _first(train, ("T", "q"), p["fraction"], p["samples"])
@@ -367,7 +392,7 @@ def _seed_like_split(p: dict, study, states: int) -> dict:
         raise ParamsError("seed_like: trajectories made the seed's way have rigid-body torques only "
                           "(torques: rigid)")
     per = int(round(duration / dt)) + 1
-    made = datasets.seed_like_trajectories(study.robot, study.id, -(-states // per), [seed, p["seed"]],
+    made = id_trajectories.seed_like_trajectories(study.robot, study.id, -(-states // per), [seed, p["seed"]],
                                            duration=duration, dt=dt)
     made = {k: made[k][:states] for k in ("q", "qd", "qdd", "trajectory")}
     made["tau"] = rnea(study.robot, made["q"], made["qd"], made["qdd"])

@@ -71,7 +71,7 @@ from typing import Any
 
 from ..infra import provenance
 from ..infra.limits import time_limit
-from ..infra.paths import BUILD, NOTEBOOKS, PARAMS, ROOT, atomic_path, project_path, shown_path
+from ..infra.paths import BUILD, PARAMS, ROOT, atomic_path, project_path, shown_path
 from ..infra.provenance import digest_files
 from ..infra.reading import ParamsError, Validator, json_ready, load_yaml, show
 from .jobs import CELL_ENV, JOBS
