@@ -166,3 +166,27 @@ def test_a_robot_names_its_file_from_the_checkout_whatever_the_working_directory
     robot = load_robot(ROOT / "params" / "robots" / "intelbot5.yaml")
     monkeypatch.chdir(tmp_path)
     assert "source='params/robots/intelbot5.yaml'" in repr(robot)
+
+
+def test_named_poses_are_the_files_own_checked_and_outside_the_hash(tmp_path):
+    """A robot file's poses_deg: one angle per joint within its limits, in radians inside;
+    the hash, data sets and models do not depend on them."""
+    from nfarm.model.robot import poses_for, robot_hash
+    path = ROOT / "params" / "robots" / "intelbot5.yaml"
+    robot = load_robot(path)
+    assert list(robot.poses)[0] == "ready (q = 0)" and robot.poses["folded back"][2] == pytest.approx(np.radians(-110))
+    assert list(poses_for(robot)[0]) == list(robot.poses) and poses_for(robot)[1] == ""
+    text = path.read_text()
+    bare = text[:text.index("poses_deg:")]
+    plain = tmp_path / "plain.yaml"
+    plain.write_text(bare)
+    assert robot_hash(load_robot(plain)) == robot_hash(robot)
+    assert "poses_deg" not in robot_to_dict(robot)
+    poses, note = poses_for(load_robot(plain))
+    assert list(poses)[0] == "home (q = 0)" and len(poses) == 4 and "names no poses (poses_deg)" in note
+    for bad, message in (("  folded back: [-45, 20, -140, 90, -90]\n", r"poses_deg\.folded back\[2\]: must lie within elbow_pitch's limits \[-135, 135\] deg, got -140"),
+                         ("  short: [0, 0, 0]\n", r"poses_deg\.short: must be a list of 5 numbers")):
+        broken = tmp_path / "broken.yaml"
+        broken.write_text(bare + "poses_deg:\n" + bad)
+        with pytest.raises(ParamsError, match=message):
+            load_robot(broken)

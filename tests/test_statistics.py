@@ -124,3 +124,38 @@ def test_bootstrap_rows_is_seeded_and_takes_several_statistics():
 def test_bootstrap_rows_refuses_bad_input(rows, kwargs, message):
     with pytest.raises(ValueError, match=message):
         bootstrap_rows(rows, lambda X: X.mean(axis=(-2, -1)), **kwargs)
+
+
+def test_tail_ratios_find_the_cause_and_call_two_alike_causes_alike():
+    from nfarm.study.statistics import tail_ratios
+    rng = np.random.default_rng(3)
+    n = 4000
+    edge, also, noise = rng.random(n), rng.random(n), rng.random(n)
+    error = rng.gamma(2.0, size=n) * (1 + 2 * (edge < 0.1))          # three times as large near the edge
+    result = tail_ratios({"edge": edge, "other": also, "noise": noise}, error, draws=400, seed=1)
+    assert result.low[0] < 3.0 < result.high[0] * 1.5 and result.low[0] > 2.0
+    assert result.larger("edge", "other") and result.larger("edge", "noise")
+    assert not result.larger("other", "noise") and not result.larger("noise", "other")   # alike: no order
+    again = tail_ratios({"edge": edge, "other": also, "noise": noise}, error, draws=400, seed=1)
+    np.testing.assert_array_equal(again.pair_low, result.pair_low)                        # seeded
+
+
+def test_tail_ratios_use_only_the_rows_a_cause_has():
+    from nfarm.study.statistics import tail_ratios
+    rng = np.random.default_rng(4)
+    x = rng.random(2000)
+    error = 1 + 4 * (x < 0.1)
+    partial = np.where(np.arange(2000) % 2 == 0, x, np.nan)                # half the rows have no value
+    result = tail_ratios({"all": x, "half": partial}, error, draws=200)
+    np.testing.assert_allclose(result.value, [5.0, 5.0])
+
+
+@pytest.mark.parametrize("causes, error, message", [
+    ({}, np.ones(5), "at least one"),
+    ({"a": np.ones(4)}, np.ones(5), r"each cause \(N,\)"),
+    ({"a": np.ones(5)}, np.array([1, 2, np.nan, 4, 5]), "must be finite"),
+])
+def test_tail_ratios_refuse_bad_input_in_one_line(causes, error, message):
+    from nfarm.study.statistics import tail_ratios
+    with pytest.raises(ValueError, match=message):
+        tail_ratios(causes, error)

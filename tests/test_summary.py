@@ -178,3 +178,15 @@ def test_a_maximum_is_written_without_an_interval(tmp_path):
     rows = {r["metric"]: r for r in read_long_table(tmp_path / "tables" / "07_summary.csv")}
     assert rows["position max"]["ci_low"] == rows["position max"]["ci_high"] == rows["position max"]["level"] == ""
     assert rows["position median"]["ci_low"] and rows["position median"]["level"] == "0.95"
+
+
+@pytest.mark.parametrize("low, high, target, expected", [
+    (1.0, 2.0, 2.0, "✓"),                                  # the whole interval at the target: met
+    (1.0, 2.0, 0.5, "✗"),
+    (2.0, 3.0, 2.0, "undecided (the interval spans it)"),   # touching from above is not met
+    (1.0, 3.0, 2.0, "undecided (the interval spans it)"),
+])
+def test_a_target_is_judged_on_the_interval_not_the_point(low, high, target, expected):
+    from nfarm.study.summary import Row, target_verdict
+    row = Row("inverse kinematics", "m", "chosen", "position p95", "mm", (low + high) / 2, low, high, 2000, 0.95, "")
+    assert target_verdict(row, target) == expected

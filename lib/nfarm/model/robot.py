@@ -344,7 +344,9 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
 
 
 def robot_to_dict(robot: Robot) -> dict:
-    """The parameter mapping of ``robot`` (plain Python types), as :func:`robot_from_dict` reads.
+    """The model parameters of ``robot`` (plain Python types), as :func:`robot_from_dict` reads;
+    not its named poses (:attr:`Robot.poses`, a reader's, not the model's), so that a mapping edited
+    joint by joint (a joint added, say) stays valid.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -352,7 +354,7 @@ def robot_to_dict(robot: Robot) -> dict:
         >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
         >>> data = robot_to_dict(robot)
         >>> list(data)
-        ['name', 'convention', 'gravity', 'tool', 'joints', 'description', 'poses_deg']
+        ['name', 'convention', 'gravity', 'tool', 'joints', 'description']
         >>> data["joints"][1]["a"], data["joints"][1]["qlim"]     # [m], [rad]
         (0.2, [-1.5707963267948966, 1.5707963267948966])
     """
@@ -379,17 +381,12 @@ def robot_to_dict(robot: Robot) -> dict:
         out["base"] = robot.base.tolist()
     if robot.description:
         out["description"] = robot.description
-    if robot.poses:
-        out["poses_deg"] = {name: np.degrees(q).tolist() for name, q in robot.poses.items()}
     return out
 
 
 def _canonical(robot: Robot) -> str:
-    """The robot's model parameters as canonical JSON: what :func:`robot_hash` hashes (the
-    named poses left out)."""
-    data = robot_to_dict(robot)
-    data.pop("poses_deg", None)
-    return json.dumps(data, sort_keys=True, separators=(",", ":"))
+    """The robot's model parameters as canonical JSON: what :func:`robot_hash` hashes."""
+    return json.dumps(robot_to_dict(robot), sort_keys=True, separators=(",", ":"))
 
 
 def robot_hash(robot: Robot) -> str:

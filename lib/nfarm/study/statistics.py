@@ -20,7 +20,9 @@ distribution, every value of one would lie below every value of the other with p
 Over **independent samples** (the test poses of the learned IK, each drawn on its own; or the
 per-trajectory maxima of a torque error) :func:`bootstrap_rows` resamples rows with SciPy's
 ``scipy.stats.bootstrap`` (percentile method, paired columns, batched so that 2 000 resamples of
-10 000 poses stay within a few tens of MB).
+10 000 poses stay within a few tens of MB). :func:`tail_ratios` does the same for the question
+"does the error grow near a place": the ratio of the median error over the poses nearest to it
+to that over the poses farthest from it, for several places on the same resamples.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ import numpy as np
 import scipy.stats
 
 __all__ = ["trajectory_sums", "trajectory_maxima", "nrmse_from_sums", "Interval", "bootstrap_nrmse",
-           "worst_difference", "Estimate", "bootstrap_rows", "ranges_separate", "separation_level"]
+           "worst_difference", "Estimate", "bootstrap_rows", "ranges_separate", "separation_level",
+           "TailRatios", "tail_ratio", "tail_ratios"]
 
 
 def trajectory_sums(predicted: np.ndarray, tau: np.ndarray, trajectory: np.ndarray) -> np.ndarray:
@@ -222,3 +225,91 @@ def separation_level(n_a: int, n_b: int) -> float:
     whose ``n_a`` and ``n_b`` values come from one continuous distribution: ``2 / C(n_a + n_b,
     n_a)``."""
     return 2 / math.comb(n_a + n_b, n_a)
+
+
+@dataclass(frozen=True)
+class TailRatios:
+    """:func:`tail_ratios`' result for ``k`` candidate causes: each one's ratio and its interval
+    (``value``, ``low``, ``high`` of shape ``(k,)``) and, for every pair, the interval of the
+    ratio of their ratios (``pair_low[i, j]``, ``pair_high[i, j]`` of ``ratio_i / ratio_j``, from
+    the same resamples), at coverage ``level`` from ``draws`` resamples."""
+
+    names: tuple[str, ...]
+    value: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    pair_low: np.ndarray
+    pair_high: np.ndarray
+    level: float
+    draws: int
+
+    def larger(self, a: str, b: str) -> bool:
+        """Whether cause ``a``'s ratio exceeds ``b``'s on the interval (the ratio of ratios > 1)."""
+        return bool(self.pair_low[self.names.index(a), self.names.index(b)] > 1)
+
+
+def _tail_ratio(X: np.ndarray, E: np.ndarray, share: float) -> np.ndarray:
+    """``X, E (b, N)`` (NaN in ``X``: no value) → ``(b,)`` median ``E`` of the ``share`` of each
+    row's finite ``X`` that is smallest over that of the ``share`` that is largest."""
+    lo = np.nanquantile(X, share, axis=1, keepdims=True)
+    hi = np.nanquantile(X, 1 - share, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore"):
+        near = np.nanmedian(np.where(X <= lo, E, np.nan), axis=1)
+        far = np.nanmedian(np.where(X >= hi, E, np.nan), axis=1)
+    return near / far
+
+
+def tail_ratio(x, error, share: float = 0.1) -> float:
+    """The point value of one cause's ratio (:func:`tail_ratios`, without an interval): the
+    median ``error`` of the ``share`` of rows with the smallest ``x`` over that of the ``share``
+    with the largest. For rows that are not independent (the samples of a trajectory), where a
+    bootstrap over rows would give too narrow an interval.
+
+    Example:
+        >>> x = np.linspace(0.0, 1.0, 1000)
+        >>> tail_ratio(x, 1 + 4 * (x < 0.1))
+        5.0
+    """
+    return float(_tail_ratio(np.asarray(x, float)[None], np.asarray(error, float)[None], share)[0])
+
+
+def tail_ratios(causes, error, *, share: float = 0.1, draws: int = 2000, level: float = 0.95,
+                seed: int = 0, batch: int = 50) -> TailRatios:
+    """How much larger the error is near each candidate cause: for each ``x (N,)`` of
+    ``causes`` (a mapping name → distances; NaN where a row has none), the median ``error
+    (N,)`` of the ``share`` of the rows with the smallest ``x`` divided by that of the
+    ``share`` with the largest, and its percentile-bootstrap interval over the rows (resampled
+    with replacement, ``draws`` times from one generator seeded by ``seed``, ``batch`` at a
+    time); every cause is computed on the same resamples, so two causes are compared by the
+    interval of the ratio of their ratios (:meth:`TailRatios.larger`).
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> x = rng.random(2000)
+        >>> result = tail_ratios({"near x = 0": x, "unrelated": rng.random(2000)}, 1 + 4 * (x < 0.1), draws=200)
+        >>> result.value.round(2).tolist(), result.larger("near x = 0", "unrelated")
+        ([5.0, 1.0], True)
+    """
+    names = tuple(causes)
+    if not names:
+        raise ValueError("causes must name at least one candidate")
+    error = np.asarray(error, float)
+    X = np.stack([np.asarray(causes[n], float) for n in names])          # (k, N)
+    if error.ndim != 1 or X.shape[1:] != error.shape or len(error) < 2 or not np.isfinite(error).all():
+        raise ValueError(f"error must be finite (N >= 2,) and each cause (N,), got {error.shape} and "
+                         f"{[np.shape(causes[n]) for n in names]}")
+    if not 0 < share < 0.5:
+        raise ValueError(f"share must be in (0, 0.5), got {share!r}")
+    if not (isinstance(draws, int) and draws >= 100) or not 0 < level < 1:
+        raise ValueError(f"draws must be an integer >= 100 and level in (0, 1), got {draws!r}, {level!r}")
+    value = np.array([_tail_ratio(x[None], error[None], share)[0] for x in X])
+    rng = np.random.default_rng(seed)
+    ratios = []
+    for start in range(0, draws, batch):
+        rows = rng.integers(0, len(error), size=(min(batch, draws - start), len(error)))
+        ratios.append(np.stack([_tail_ratio(x[rows], error[rows], share) for x in X], axis=1))
+    R = np.concatenate(ratios)                                            # (draws, k)
+    tails = (100 * (1 - level) / 2, 100 * (1 + level) / 2)
+    low, high = np.nanpercentile(R, tails, axis=0)
+    pair_low, pair_high = np.nanpercentile(R[:, :, None] / R[:, None, :], tails, axis=0)
+    return TailRatios(names, value, low, high, pair_low, pair_high, level, draws)

@@ -40,7 +40,8 @@ from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
            "long_table", "wide_table", "interval_text", "ik_baselines", "best_id_baseline",
-           "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID"]
+           "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
+           "target_verdict"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
 WORST_ID = "worst resolved joint NRMSE"
@@ -261,6 +262,19 @@ def interval_text(row: Row, floors: Mapping[str, float] | None = None, digits: s
     floor = _floor(row, floors or {})
     value, low, high = (shown(v, digits, floor=floor) for v in (row.value, row.low, row.high))
     return value if low == high == value else f"{value} ({low}–{high})"
+
+
+def target_verdict(row: Row, target: float) -> str:
+    """Whether a metric meets an upper ``target`` (same unit), judged on its interval: ✓ when the
+    whole interval is at or below it, ✗ when all of it is above, else undecided — a point value
+    just under a target whose interval spans it has not met it.
+
+    Example:
+        >>> row = Row("inverse kinematics", "m", "chosen", "position p95", "mm", 9.0, 8.5, 10.5, 2000, 0.95, "")
+        >>> target_verdict(row, 10.0), target_verdict(row, 11.0), target_verdict(row, 8.0)
+        ('undecided (the interval spans it)', '✓', '✗')
+    """
+    return "✓" if row.high <= target else "✗" if row.low > target else "undecided (the interval spans it)"
 
 
 def wide_table(rows: Sequence[Row], task: str, *, floors: Mapping[str, float] | None = None,
