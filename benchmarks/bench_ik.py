@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from common import seconds_per_call
-from nfarm.solvers.ik import solve
+from nfarm.solvers.ik import LM, solve
 from nfarm.model.kinematics import fk
 from nfarm.infra.paths import PARAMS
 from nfarm.model.pinocchio_ref import pinocchio_model
@@ -82,7 +82,7 @@ def main() -> None:
     result = ours(robot, T, rows, "nfarm lm (Sugihara, default)")
     rows[-1][-1] = ("target ≥ 99.9 % and ≤ 12 µs: "
                     + ("met" if result.success_rate >= 0.999 and rows[-1][5] <= 12 else "NOT met"))
-    ours(robot, T, rows, "nfarm lm (Marquardt)", lm_damping="marquardt")
+    ours(robot, T, rows, "nfarm lm (Marquardt)", method=LM(damping="marquardt"))
     ours(robot, T, rows, "nfarm lm from home (dissertation)", q0="home")
     ours(robot, T, rows, "nfarm dls (μ = 0.05)", repeat=1, method="dls")
     ours(robot, T, rows, "nfarm pinv", repeat=1, method="pinv")

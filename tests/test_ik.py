@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import load_quietly
-from nfarm.solvers.ik import METHODS, REASONS, solve
+from nfarm.solvers.ik import DLS, LM, METHODS, REASONS, Pinv, solve
 from nfarm.model.kinematics import fk
 from nfarm.infra.paths import PARAMS
 from nfarm.model.robot import robot_from_dict, sample_configurations
@@ -125,7 +125,15 @@ def test_each_method_converges_on_an_easy_target(intelbot5, method):
 
 def test_marquardt_damping_also_solves(intelbot5):
     T = fk(intelbot5, sample_configurations(intelbot5, 30, 11))
-    assert solve(intelbot5, T, lm_damping="marquardt").success.all()
+    assert solve(intelbot5, T, method=LM(damping="marquardt")).success.all()
+
+
+@pytest.mark.parametrize("name", list(METHODS))
+def test_a_method_s_name_is_that_method_with_its_defaults(intelbot5, name):
+    T = good_targets(intelbot5, 20)
+    a, b = solve(intelbot5, T, method=name), solve(intelbot5, T, method=METHODS[name]())
+    for field in ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
 
 
 @pytest.mark.parametrize("batch", [(), (1,), (2, 3)])
@@ -197,26 +205,37 @@ def test_bad_targets_beyond_the_first_check_chunk_are_named(intelbot5, rule, mon
     (dict(weights=[1, 1, 1]), r"weights must be 6 numbers"),
     (dict(weights=[1, 1, 1, 1, 1, -1]), r"weights must be finite, >= 0 and not all zero"),
     (dict(weights=np.zeros(6)), r"weights must be finite, >= 0 and not all zero"),
-    (dict(method="newton"), r"method must be one of lm, dls, pinv, jt"),
-    (dict(lm_damping="fixed"), r"lm_damping must be 'sugihara' or 'marquardt'"),
+    (dict(method="newton"), r"method must be one of lm, dls, pinv, jt or an update rule"),
+    (dict(method=LM), r"method must be one of lm, dls, pinv, jt or an update rule \(LM\(\), DLS\(\)"),
+    (dict(lm_damping="marquardt"), r"unexpected keyword argument 'lm_damping'"),   # an option of LM now
     (dict(tol_pos=0.0), r"tol_pos must be a finite number > 0, got 0.0"),
-    # Options that once turned a reachable target into "unreachable", or switched a check off.
-    (dict(pinv_rcond=np.nan), r"pinv_rcond must be a finite number > 0 and < 1, got nan"),
-    (dict(lm_scale=-1), r"lm_scale must be a finite number >= 0, got -1"),
-    (dict(lm_bias=np.nan), r"lm_bias must be a finite number >= 0, got nan"),
-    (dict(lm_factor=0), r"lm_factor must be a finite number > 1, got 0"),
-    (dict(lm_lambda0=np.nan), r"lm_lambda0 must be a finite number > 0, got nan"),
-    (dict(dls_damping=np.inf), r"dls_damping must be a finite number > 0, got inf"),
     (dict(ortho_tol=np.nan), r"ortho_tol must be a finite number > 0 and < 1, got nan"),
-    (dict(lm_scale=0, lm_bias=0), r"lm_scale and lm_bias must not both be 0"),
     (dict(restarts=2.5), r"restarts must be an integer >= 0, got 2.5"),
     (dict(seed=-1), r"seed must be an integer >= 0, got -1"),
     (dict(chunk=0), r"chunk must be an integer >= 1, got 0"),
     (dict(restarts=300), r"restarts \(300\) must be below guess_table \(256\)"),
 ])
 def test_bad_options_are_clear_errors(intelbot5, kwargs, message):
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises((ValueError, TypeError), match=message):
         solve(intelbot5, good_targets(intelbot5), **kwargs)
+
+
+# A method's options are checked when it is made. These once turned a reachable target into
+# "unreachable", or switched a check off.
+@pytest.mark.parametrize("make, message", [
+    (lambda: LM(damping="fixed"), r"LM: damping must be 'sugihara' or 'marquardt', got 'fixed'"),
+    (lambda: LM(scale=-1), r"LM: scale must be a finite number >= 0, got -1"),
+    (lambda: LM(bias=np.nan), r"LM: bias must be a finite number >= 0, got nan"),
+    (lambda: LM(factor=0), r"LM: factor must be a finite number > 1, got 0"),
+    (lambda: LM(lambda0=np.nan), r"LM: lambda0 must be a finite number > 0, got nan"),
+    (lambda: LM(scale=0, bias=0), r"LM: scale and bias must not both be 0"),
+    (lambda: DLS(damping=np.inf), r"DLS: damping must be a finite number > 0, got inf"),
+    (lambda: Pinv(rcond=np.nan), r"Pinv: rcond must be a finite number > 0 and < 1, got nan"),
+    (lambda: Pinv(rcond=True), r"Pinv: rcond must be a finite number > 0 and < 1, got True"),
+])
+def test_bad_method_options_are_clear_errors(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()
 
 
 def test_q0_outside_the_limits_is_fine_when_limits_are_not_respected(intelbot5):

@@ -8,16 +8,18 @@ closed-form branch it converged to where the robot has one.
 
 All targets are solved together: every iteration evaluates the pose and the Jacobian of the
 still-unsolved targets as one batch (component layout, samples last), and a target leaves
-the batch as soon as it converges. Four update rules (``e`` the pose error of
+the batch as soon as it converges. Four update rules, each a small object that carries and
+checks its own options and supplies the step (``e`` the pose error of
 :func:`nfarm.model.rotations.pose_error`, ``J`` the geometric Jacobian, both scaled by the square
 roots of ``weights``; ``E = ½ eᵀe``)::
 
-    "lm"    Levenberg–Marquardt   (JᵀJ + λI) Δq = Jᵀe, λ adaptive (see ``lm_damping``)
-    "dls"   damped least squares  (JᵀJ + μ²I) Δq = Jᵀe, μ fixed           (Wampler 1986)
-    "pinv"  Newton–Raphson        Δq = J⁺ e  (truncated-SVD pseudo-inverse)
-    "jt"    Jacobian transpose    Δq = α Jᵀe, α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖²       (Buss 2009)
+    LM()    "lm"    Levenberg–Marquardt   (JᵀJ + λI) Δq = Jᵀe, λ adaptive (see ``damping``)
+    DLS()   "dls"   damped least squares  (JᵀJ + μ²I) Δq = Jᵀe, μ fixed     (Wampler 1986)
+    Pinv()  "pinv"  Newton–Raphson        Δq = J⁺ e  (truncated-SVD pseudo-inverse)
+    JT()    "jt"    Jacobian transpose    Δq = α Jᵀe, α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖² (Buss 2009)
 
-``lm_damping="sugihara"`` (default) is Sugihara's (2011) rule ``λ = s·E + w̄``: the damping
+``solve(robot, T, method=LM(damping="marquardt"))`` picks one with its options; a name picks
+one with its defaults. ``LM(damping="sugihara")`` (default) is Sugihara's (2011) rule ``λ = s·E + w̄``: the damping
 vanishes with the error, so the last iterations are Gauss–Newton (quadratic convergence).
 ``"marquardt"`` is the classic schedule (λ ÷ ν after a step that lowers E, × ν after one that
 does not). Both keep the last accepted point and retry from it with ν times the damping after
@@ -46,6 +48,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -54,11 +57,10 @@ from ..model.linalg import cholesky_solve_T, gram_T
 from ..model.robot import Robot, sample_configurations
 from ..model.rotations import relative_log_T
 
-__all__ = ["IKResult", "solve", "solve_path", "check_targets", "METHODS", "REASONS"]
+__all__ = ["IKResult", "solve", "solve_path", "check_targets", "METHODS", "REASONS", "Method", "LM", "DLS",
+           "Pinv", "JT"]
 
-METHODS = ("lm", "dls", "pinv", "jt")
 REASONS = ("converged", "max_iter", "unreachable", "joint_limits")
-DEFAULT_MAX_ITER = {"lm": 25, "dls": 100, "pinv": 50, "jt": 2000}
 _CONVERGED, _MAX_ITER, _UNREACHABLE, _LIMITS = range(4)
 _TABLE_STREAM = 0x1C7AB1E
 _FIELDS = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
@@ -299,7 +301,159 @@ class _Seeds:
 
 
 # --------------------------------------------------------------------------------------------
-# Steps (component layout: e (6, A), J (6, n, A), everything already scaled by sqrt(weights))
+# Update rules (component layout: e (6, A), J (6, n, A), everything already scaled by sqrt(weights))
+
+
+@dataclass(frozen=True)
+class Method:
+    """An update rule of :func:`solve`: its options (checked when it is made, one line naming the
+    option) and its step ``Δq (n, A)`` from the scaled Jacobians ``J (6, n, A)``, errors ``e (6,
+    A)``, ``E (A,)`` and each lane's damping state ``lam (A,)``.
+
+    ``max_iter``: the steps per attempt a solve gives it unless told otherwise. A ``guarded``
+    rule keeps each lane's last accepted point and steps from it again with more damping after
+    a step that raised E (:meth:`adapt`).
+    """
+
+    name: ClassVar[str]
+    max_iter: ClassVar[int]
+    guarded: ClassVar[bool] = False
+
+    def initial_damping(self) -> float:
+        """The damping state a new lane starts with."""
+        return 1.0
+
+    def step(self, J: np.ndarray, e: np.ndarray, E: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def adapt(self, lam: np.ndarray, accept: np.ndarray) -> np.ndarray:
+        """A guarded rule's damping state after a step that was accepted (``accept``) or not."""
+        return lam
+
+
+@dataclass(frozen=True)
+class LM(Method):
+    """Levenberg–Marquardt: ``(JᵀJ + λI) Δq = Jᵀe`` (module docstring).
+
+    Args:
+        damping: ``"sugihara"`` (λ = ν · (scale · E + bias), the multiplier ν starting at 1) or
+            ``"marquardt"`` (λ from ``lambda0``); either way ÷ ``factor`` after an accepted
+            step, × ``factor`` after a rejected one.
+        scale, bias: Sugihara's ``s`` and ``w̄`` (not both 0).
+        lambda0: Marquardt's first λ.
+        factor: ν's step, > 1.
+
+    Example:
+        >>> LM(damping="marquardt").name, LM.max_iter
+        ('lm', 25)
+        >>> LM(factor=1.0)
+        Traceback (most recent call last):
+        ...
+        ValueError: LM: factor must be a finite number > 1, got 1.0
+    """
+
+    name: ClassVar[str] = "lm"
+    max_iter: ClassVar[int] = 25
+    guarded: ClassVar[bool] = True
+    damping: str = "sugihara"
+    scale: float = 0.1
+    bias: float = 1e-12
+    lambda0: float = 1e-3
+    factor: float = 10.0
+
+    def __post_init__(self) -> None:
+        if self.damping not in ("sugihara", "marquardt"):
+            raise ValueError(f"LM: damping must be 'sugihara' or 'marquardt', got {self.damping!r}")
+        _check_number("LM: lambda0", self.lambda0, 0, None, open_lo=True)
+        _check_number("LM: factor", self.factor, 1, None, open_lo=True)
+        for name in ("scale", "bias"):
+            _check_number(f"LM: {name}", getattr(self, name), 0, None, open_lo=False)
+        if self.damping == "sugihara" and self.scale == 0 and self.bias == 0:
+            raise ValueError("LM: scale and bias must not both be 0 (no damping at all)")
+
+    @property
+    def marquardt(self) -> bool:
+        return self.damping == "marquardt"
+
+    def initial_damping(self) -> float:
+        return self.lambda0 if self.marquardt else 1.0
+
+    def step(self, J, e, E, lam):
+        return _step_lm(J, e, lam if self.marquardt else lam * (self.scale * E + self.bias))
+
+    def adapt(self, lam, accept):
+        floor = 1e-15 if self.marquardt else 1.0
+        return np.where(accept, np.maximum(lam / self.factor, floor), np.minimum(lam * self.factor, 1e15))
+
+
+@dataclass(frozen=True)
+class DLS(Method):
+    """Damped least squares: ``(JᵀJ + μ²I) Δq = Jᵀe`` with a fixed ``damping`` μ [m].
+
+    Example:
+        >>> DLS().damping, DLS.max_iter
+        (0.05, 100)
+    """
+
+    name: ClassVar[str] = "dls"
+    max_iter: ClassVar[int] = 100
+    damping: float = 0.05
+
+    def __post_init__(self) -> None:
+        _check_number("DLS: damping", self.damping, 0, None, open_lo=True)
+
+    def step(self, J, e, E, lam):
+        return _step_lm(J, e, self.damping ** 2)
+
+
+@dataclass(frozen=True)
+class Pinv(Method):
+    """Newton–Raphson through the pseudo-inverse: ``Δq = J⁺ e``, singular values below ``rcond``
+    times the largest cut off.
+
+    Example:
+        >>> Pinv(rcond=1e-8).rcond, Pinv.max_iter
+        (1e-08, 50)
+    """
+
+    name: ClassVar[str] = "pinv"
+    max_iter: ClassVar[int] = 50
+    rcond: float = 1e-6
+
+    def __post_init__(self) -> None:
+        _check_number("Pinv: rcond", self.rcond, 0, 1, open_lo=True)
+
+    def step(self, J, e, E, lam):
+        return _step_pinv(J, e, self.rcond)
+
+
+@dataclass(frozen=True)
+class JT(Method):
+    """The Jacobian transpose with Buss's step length: ``Δq = α Jᵀe``, ``α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖²``.
+
+    Example:
+        >>> JT().name, JT.max_iter
+        ('jt', 2000)
+    """
+
+    name: ClassVar[str] = "jt"
+    max_iter: ClassVar[int] = 2000
+
+    def step(self, J, e, E, lam):
+        return _step_jt(J, e)
+
+
+#: The update rules by name: ``solve(..., method="dls")`` is ``method=DLS()``.
+METHODS: dict[str, type[Method]] = {cls.name: cls for cls in (LM, DLS, Pinv, JT)}
+
+
+def _method(method) -> Method:
+    if isinstance(method, Method):
+        return method
+    if isinstance(method, str) and method in METHODS:
+        return METHODS[method]()
+    raise ValueError(f"method must be one of {', '.join(METHODS)} or an update rule (LM(), DLS(), Pinv(), "
+                     f"JT()), got {method!r}")
 
 
 def _step_lm(J, e, damping):
@@ -342,15 +496,11 @@ def _wrap_into_limits(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np
 # The solver
 
 
-def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
+def solve(robot: Robot, T_target, q0=None, *, method: str | Method = "lm", weights=None,
           tol_pos: float = 1e-9, tol_rot: float = 1e-9, max_iter: int | None = None,
           restarts: int = 24, restart_batch: int = 16, respect_limits: bool = True,
-          seed: int = 0, guess_table: int = 256,
-          lm_damping: str = "sugihara", lm_scale: float = 0.1, lm_bias: float = 1e-12,
-          lm_lambda0: float = 1e-3,
-          lm_factor: float = 10.0, dls_damping: float = 0.05, pinv_rcond: float = 1e-6,
-          stall_rtol: float = 1e-2, stall_iters: int = 4, ortho_tol: float = 1e-9,
-          record_history: bool = False, chunk: int = 8192) -> IKResult:
+          seed: int = 0, guess_table: int = 256, stall_rtol: float = 1e-2, stall_iters: int = 4,
+          ortho_tol: float = 1e-9, record_history: bool = False, chunk: int = 8192) -> IKResult:
     """Solve ``fk(robot, q) = T_target`` for a batch of targets.
 
     Args:
@@ -358,21 +508,20 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
         q0: initial guess ``(n,)`` or ``(..., n)`` [rad]; ``"home"`` for the home
             configuration (as the dissertation); by default, per target, the nearest pose in a
             seeded table of ``guess_table`` random configurations within the limits.
-        method: ``"lm"``, ``"dls"``, ``"pinv"`` or ``"jt"`` (module docstring).
+        method: the update rule, :class:`LM` (default), :class:`DLS`, :class:`Pinv` or
+            :class:`JT` with its options, or its name (``"lm"``, ``"dls"``, ``"pinv"``,
+            ``"jt"``) for its defaults (module docstring).
         weights: 6 weights on the squared errors, position x, y, z [1/m²] then rotation x, y, z
             [1/rad²] (base axes); a zero drops that component. Default all ones.
         tol_pos, tol_rot: success thresholds on the weighted components' position [m] and
             orientation [rad] errors.
-        max_iter: steps per attempt (default 25 for lm, 50 for pinv, 100 for dls, 2000 for jt).
+        max_iter: steps per attempt (default: the method's, 25 for LM, 50 for Pinv, 100 for
+            DLS, 2000 for JT).
         restarts: attempts from random configurations after the first one fails.
         restart_batch: how many of those a target runs side by side.
         respect_limits: accept only solutions within the joint limits, and return a
             configuration within them.
         seed: seed of the restart configurations.
-        lm_damping: ``"sugihara"`` (λ = lm_scale · E + lm_bias) or ``"marquardt"`` (λ from
-            lm_lambda0, divided or multiplied by lm_factor).
-        dls_damping: μ of ``"dls"`` [m].
-        pinv_rcond: relative cut-off of small singular values for ``"pinv"``.
         stall_rtol, stall_iters: an attempt has stalled when E has not dropped by a factor
             ``1 − stall_rtol`` below its best for ``stall_iters`` steps.
         ortho_tol: largest accepted ``|RᵀR − I|`` of a target rotation.
@@ -393,22 +542,14 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
         >>> result = solve(robot, fk(robot, q))                                       # targets (2, 4, 4)
         >>> result.success.tolist(), np.allclose(fk(robot, result.q), fk(robot, q))
         ([True, True], True)
+        >>> solve(robot, fk(robot, q), method=LM(damping="marquardt")).success.tolist()
+        [True, True]
     """
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    if lm_damping not in ("sugihara", "marquardt"):
-        raise ValueError(f"lm_damping must be 'sugihara' or 'marquardt', got {lm_damping!r}")
+    method = _method(method)
     for name, value, lo, hi in (("tol_pos", tol_pos, 0, None), ("tol_rot", tol_rot, 0, None),
-                                ("dls_damping", dls_damping, 0, None),
-                                ("pinv_rcond", pinv_rcond, 0, 1), ("lm_lambda0", lm_lambda0, 0, None),
-                                ("lm_factor", lm_factor, 1, None), ("ortho_tol", ortho_tol, 0, 1),
-                                ("stall_rtol", stall_rtol, 0, 1)):
+                                ("ortho_tol", ortho_tol, 0, 1), ("stall_rtol", stall_rtol, 0, 1)):
         _check_number(name, value, lo, hi, open_lo=True)
-    for name, value in (("lm_scale", lm_scale), ("lm_bias", lm_bias)):
-        _check_number(name, value, 0, None, open_lo=False)
-    if lm_damping == "sugihara" and lm_scale == 0 and lm_bias == 0:
-        raise ValueError("lm_scale and lm_bias must not both be 0 (no damping at all)")
-    max_iter = DEFAULT_MAX_ITER[method] if max_iter is None else max_iter
+    max_iter = method.max_iter if max_iter is None else max_iter
     for name, value, lo in (("max_iter", max_iter, 1), ("restarts", restarts, 0),
                             ("restart_batch", restart_batch, 1), ("seed", seed, 0),
                             ("guess_table", guess_table, 1), ("stall_iters", stall_iters, 1),
@@ -422,29 +563,29 @@ def solve(robot: Robot, T_target, q0=None, *, method: str = "lm", weights=None,
     if restarts + first_rank > guess_table:
         raise ValueError(f"restarts ({restarts}) must be below guess_table ({guess_table})")
     T = T.reshape(-1, 4, 4)
-    options = dict(lm_damping=lm_damping, lm_scale=lm_scale, lm_bias=lm_bias,
-                   lm_lambda0=lm_lambda0, lm_factor=lm_factor, dls_damping=dls_damping,
-                   pinv_rcond=pinv_rcond)
+    if T.shape[0] == 0:
+        return _with_branch(robot, _empty(robot, batch, record_history))
+    rules = _Rules(method, max_iter, restarts, restart_batch, respect_limits, stall_rtol, stall_iters,
+                   np.array([tol_pos, tol_rot]), record_history)
     # Targets are independent: solving them in chunks bounds the memory and gives the same
     # result for each target whatever the chunk size.
-    if T.shape[0] == 0:
-        empty = {f: np.zeros((*batch, robot.n) if f == "q" else batch,
-                             dtype={"success": bool, "iterations": int, "restarts": int,
-                                    "reason": np.array(REASONS).dtype}.get(f, float))
-                 for f in _FIELDS}
-        return _with_branch(robot, IKResult(
-            **empty, history=np.zeros((*batch, 0, 2)) if record_history else None))
     results = []
     for start in range(0, T.shape[0], chunk):
         part = slice(start, start + chunk)
         seeds = _Seeds(robot, T[part], w, guess_table, seed, restarts + first_rank)
         q_part = seeds.nearest(np.arange(seeds.targets.shape[0])) if q_start is None \
             else q_start[part]
-        run = _Run(robot, T[part], q_part, w, method, max_iter, restarts, restart_batch,
-                   respect_limits, seeds, first_rank, options, stall_rtol, stall_iters,
-                   tol_pos, tol_rot, record_history)
-        results.append(run.result((q_part.shape[0],)))
+        results.append(_Search(robot, T[part], w, rules, seeds, first_rank).run(q_part))
     return _with_branch(robot, _concatenate(results, batch, robot.n))
+
+
+def _empty(robot: Robot, batch: tuple, record_history: bool) -> IKResult:
+    """The result of no targets, of shape ``batch``."""
+    empty = {f: np.zeros((*batch, robot.n) if f == "q" else batch,
+                         dtype={"success": bool, "iterations": int, "restarts": int,
+                                "reason": np.array(REASONS).dtype}.get(f, float))
+             for f in _FIELDS}
+    return IKResult(**empty, history=np.zeros((*batch, 0, 2)) if record_history else None)
 
 
 def _with_branch(robot: Robot, result: IKResult) -> IKResult:
@@ -485,33 +626,47 @@ def _concatenate(results: list[IKResult], batch: tuple, n: int) -> IKResult:
                     history=history)
 
 
-class _Run:
-    """One batched solve. Work is organised in *lanes*: a lane is one attempt at one target,
-    and all live lanes step together. Every target starts with one lane from its initial
-    guess; when a target's last lane ends without a solution, new lanes start from its next
-    random configurations, 1, 2, 4, … (at most ``restart_batch``) at once, so that the few
-    hard targets at the end of a batch do not need many rounds one after another."""
+@dataclass(frozen=True)
+class _Rules:
+    """What a search needs besides its targets: the update rule, its budget, the stopping rules
+    (tolerances ``tol = [tol_pos, tol_rot]``, stalls) and whether to keep the history."""
 
-    def __init__(self, robot, T, q_start, w, method, max_iter, restarts, restart_batch,
-                 respect_limits, seeds, first_rank, options, stall_rtol, stall_iters, tol_pos, tol_rot,
-                 record_history):
-        M, n = q_start.shape
-        self.robot, self.method, self.options = robot, method, options
-        self.max_iter, self.restarts, self.restart_batch = max_iter, restarts, restart_batch
-        self.respect_limits = respect_limits
-        self.stall_rtol, self.stall_iters = stall_rtol, stall_iters
-        self.tol = np.array([tol_pos, tol_rot])
+    method: Method
+    max_iter: int
+    restarts: int
+    restart_batch: int
+    respect_limits: bool
+    stall_rtol: float
+    stall_iters: int
+    tol: np.ndarray
+    record_history: bool
+
+
+class _Search:
+    """The batched search of one chunk of targets. Work is organised in *lanes*: a lane is one
+    attempt at one target, and all live lanes step together. Every target starts with one lane
+    from its initial guess; when a target's last lane ends without a solution, new lanes start
+    from its next random configurations, 1, 2, 4, … (at most ``restart_batch``) at once, so that
+    the few hard targets at the end of a batch do not need many rounds one after another.
+
+    Each iteration: evaluate the lanes' errors and Jacobians, record the history, keep each
+    target's best point, finish the solved targets, (LM) accept or reject the step, end the
+    lanes that stalled or ran out of steps, step the others, and restart or stop the targets
+    left without a lane."""
+
+    def __init__(self, robot: Robot, T: np.ndarray, w: np.ndarray, rules: _Rules, seeds: _Seeds,
+                 first_rank: int):
+        self.robot, self.rules, self.method = robot, rules, rules.method
+        self.seeds, self.first_rank = seeds, first_rank
         self.sw = np.sqrt(w)
         self.mask = w > 0
         self.lo, self.hi = robot.qlim[:, 0], robot.qlim[:, 1]
         self.R_t = np.ascontiguousarray(np.moveaxis(T[:, :3, :3], 0, -1))
         self.p_t = np.ascontiguousarray(T[:, :3, 3].T)
-        self.seeds, self.first_rank = seeds, first_rank
-        # LM keeps the last accepted point and retries from it with more damping after a step
-        # that raised E; ``lam`` is λ itself (Marquardt) or a multiplier of s·E + w̄ (Sugihara).
-        self.guarded = method == "lm"
-        self.marquardt = self.guarded and options["lm_damping"] == "marquardt"
-        self.lam0, self.lam_floor = (options["lm_lambda0"], 1e-15) if self.marquardt else (1.0, 1.0)
+
+    def run(self, q_start: np.ndarray) -> IKResult:
+        """Solve from ``q_start (M, n)``; the result has shape ``(M,)``."""
+        M = q_start.shape[0]
         # Per target: the best configuration so far (within the limits when they are
         # respected), how its attempts ended, and the outcome.
         self.best_q, self.best_E = np.array(q_start.T, order="C"), np.full(M, np.inf)
@@ -523,22 +678,46 @@ class _Run:
         self.solved_outside = np.zeros(M, bool)
         self.done = np.zeros(M, bool)
         self.reason = np.full(M, _UNREACHABLE)
-        self.history = [] if record_history else None
-        # Per lane.
+        self.history = [] if self.rules.record_history else None
         self.lanes = self._new_lanes(np.arange(M), q_start.T)
         while self.lanes["target"].size:
             self._iteration()
+        return self._result((M,))
 
     def _new_lanes(self, target, q):
         L = target.size
         lanes = dict(target=target, q=np.array(q, dtype=float).reshape(-1, L),
                      best=np.full(L, np.inf), since=np.zeros(L, int), steps=np.zeros(L, int),
-                     lam=np.full(L, self.lam0))
-        if self.guarded:  # the last accepted point: q, E, scaled error and Jacobian
+                     lam=np.full(L, self.method.initial_damping()))
+        if self.method.guarded:  # the last accepted point: q, E, scaled error and Jacobian
             n = lanes["q"].shape[0]
             lanes.update(acc_q=lanes["q"].copy(), acc_E=np.full(L, np.inf),
                          acc_e=np.zeros((6, L)), acc_J=np.zeros((6, n, L)))
         return lanes
+
+    def _iteration(self):
+        t = self.lanes["target"]
+        e, J, weighted, full = self._errors(self.lanes["q"], t)
+        if self.mask.all() and (self.sw == 1).all():
+            es, Js = e, J
+        else:
+            es, Js = e * self.sw[:, None], J * self.sw[:, None, None]
+        E = 0.5 * (es * es).sum(0)
+        self._record(t, full)
+        q, inside = self.lanes["q"], np.ones(t.size, bool)
+        if self.rules.respect_limits:
+            q, inside = _wrap_into_limits(q, self.lo, self.hi)
+        self._keep_best(t, q, inside, E, full)
+        solved = self._finish_solved(t, q, inside, weighted, full)
+        if self.method.guarded:
+            es, Js, E = self._accept_or_reject(es, Js, E)
+        keep = self._still_going(t, E, solved)
+        if not keep.all():
+            es, Js, E = self._cull(t, keep, es, Js, E)
+        self.lanes["q"] += self.method.step(Js, es, E, self.lanes["lam"])
+        self.lanes["steps"] += 1
+        np.add.at(self.iterations, self.lanes["target"], 1)     # lanes side by side each count
+        self._restart_or_stop()
 
     def _errors(self, q, target):
         """Pose error ``e (6, L)``, Jacobian ``(6, n, L)``, and per lane the position and
@@ -554,76 +733,38 @@ class _Run:
         square *= self.mask[:, None]
         return e, J, np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)])), full
 
-    def _iteration(self):
-        lanes = self.lanes
-        t = lanes["target"]
-        e, J, weighted, full = self._errors(lanes["q"], t)
-        if self.mask.all() and (self.sw == 1).all():
-            es, Js = e, J
-        else:
-            es, Js = e * self.sw[:, None], J * self.sw[:, None, None]
-        E = 0.5 * (es * es).sum(0)
+    def _record(self, t, full):
+        """The history: each target's smallest errors over its lanes before this step."""
         if self.history is not None:
             row = np.full((2, self.best_E.size), np.inf)
             np.minimum.at(row, (slice(None), t), full)
             self.history.append(np.where(np.isinf(row), np.nan, row))
-        q, inside = lanes["q"], np.ones(t.size, bool)
-        if self.respect_limits:
-            q, inside = _wrap_into_limits(q, self.lo, self.hi)
 
-        # The best point of each target (of several lanes of a target, the lowest E).
+    def _keep_best(self, t, q, inside, E, full):
+        """The best point of each target (of several lanes of a target, the lowest E)."""
         eligible = np.flatnonzero(inside & (E < self.best_E[t]))
         np.minimum.at(self.best_E, t[eligible], E[eligible])
         eligible = eligible[E[eligible] == self.best_E[t[eligible]]]
         self.best_q[:, t[eligible]] = q[:, eligible]
         self.best_err[:, t[eligible]] = full[:, eligible]
 
-        solved = (weighted <= self.tol[:, None]).all(axis=0)
+    def _finish_solved(self, t, q, inside, weighted, full):
+        """Targets with a lane within the tolerances (and the limits) are done; returns which
+        lanes are within the tolerances."""
+        solved = (weighted <= self.rules.tol[:, None]).all(axis=0)
         winners = np.flatnonzero(solved & inside)
         winners = winners[np.unique(t[winners], return_index=True)[1]]
         self.best_q[:, t[winners]], self.best_err[:, t[winners]] = q[:, winners], full[:, winners]
         self.done[t[winners]], self.reason[t[winners]] = True, _CONVERGED
         self.solved_outside[t[solved & ~inside]] = True
-
-        if self.guarded:
-            es, Js, E = self._accept_or_reject(es, Js, E)
-        improved = E < lanes["best"] * (1.0 - self.stall_rtol)
-        lanes["best"] = np.where(improved, E, lanes["best"])
-        lanes["since"] = np.where(improved, 0, lanes["since"] + 1)
-        stalled = (lanes["since"] >= self.stall_iters) & ~solved
-        out_of_steps = (lanes["steps"] >= self.max_iter) & ~solved & ~stalled
-        self.hit_max_iter[t[out_of_steps]] = True
-
-        keep = ~solved & ~stalled & ~out_of_steps & ~self.done[t]
-        if not keep.all():
-            np.subtract.at(self.live, t[~keep], 1)
-            g = np.flatnonzero(keep)
-            Js, es, E = Js[:, :, g], es[:, g], E[g]
-            for key, value in lanes.items():
-                lanes[key] = value[..., g]
-        lanes["q"] += self._step(Js, es, E, lanes["lam"])
-        lanes["steps"] += 1
-        np.add.at(self.iterations, lanes["target"], 1)     # lanes side by side each count
-        self._restart_or_stop()
-
-    def _step(self, Js, es, E, lam):
-        o = self.options
-        if self.method == "lm":
-            return _step_lm(Js, es, lam if self.marquardt else lam * (o["lm_scale"] * E + o["lm_bias"]))
-        if self.method == "dls":
-            return _step_lm(Js, es, o["dls_damping"] ** 2)
-        if self.method == "pinv":
-            return _step_pinv(Js, es, o["pinv_rcond"])
-        return _step_jt(Js, es)
+        return solved
 
     def _accept_or_reject(self, es, Js, E):
         """Accept the new point if it lowered E (damping ÷ ν), else go back to the last
         accepted point (damping × ν). Returns the error, Jacobian and E to step from."""
         lanes = self.lanes
         accept = E < lanes["acc_E"]
-        factor = self.options["lm_factor"]
-        lanes["lam"] = np.where(accept, np.maximum(lanes["lam"] / factor, self.lam_floor),
-                                np.minimum(lanes["lam"] * factor, 1e15))
+        lanes["lam"] = self.method.adapt(lanes["lam"], accept)
         # The fresh arrays become the accepted ones, with the old values put back where the
         # step was rejected (usually few lanes).
         r = np.flatnonzero(~accept)
@@ -633,10 +774,30 @@ class _Run:
         lanes["acc_q"], lanes["acc_E"], lanes["acc_e"], lanes["acc_J"] = lanes["q"].copy(), E, es, Js
         return es, Js, E
 
+    def _still_going(self, t, E, solved):
+        """Which lanes step again: not solved, not stalled (E not below its best by the factor
+        ``1 − stall_rtol`` for ``stall_iters`` steps), not out of steps, target not done."""
+        lanes, rules = self.lanes, self.rules
+        improved = E < lanes["best"] * (1.0 - rules.stall_rtol)
+        lanes["best"] = np.where(improved, E, lanes["best"])
+        lanes["since"] = np.where(improved, 0, lanes["since"] + 1)
+        stalled = (lanes["since"] >= rules.stall_iters) & ~solved
+        out_of_steps = (lanes["steps"] >= rules.max_iter) & ~solved & ~stalled
+        self.hit_max_iter[t[out_of_steps]] = True
+        return ~solved & ~stalled & ~out_of_steps & ~self.done[t]
+
+    def _cull(self, t, keep, es, Js, E):
+        """Drop the lanes that ended; returns the kept lanes' error, Jacobian and E."""
+        np.subtract.at(self.live, t[~keep], 1)
+        g = np.flatnonzero(keep)
+        for key, value in self.lanes.items():
+            self.lanes[key] = value[..., g]
+        return es[:, g], Js[:, :, g], E[g]
+
     def _restart_or_stop(self):
         """Targets with no live lane: start their next batch of attempts, or stop them."""
         idle = np.flatnonzero((self.live == 0) & ~self.done)
-        left = self.restarts - self.attempts[idle]
+        left = self.rules.restarts - self.attempts[idle]
         stop = idle[left == 0]
         self.done[stop] = True
         self.reason[stop] = np.where(self.solved_outside[stop], _LIMITS,
@@ -644,7 +805,7 @@ class _Run:
         # Rounds of 1, 2, 4, … lanes (at most restart_batch): cheap for the many targets that
         # need one more try, parallel for the few that need many.
         again = idle[left > 0]
-        count = np.minimum(left[left > 0], np.minimum(self.restart_batch, self.attempts[again] + 1))
+        count = np.minimum(left[left > 0], np.minimum(self.rules.restart_batch, self.attempts[again] + 1))
         if again.size == 0:
             return
         target = np.repeat(again, count)
@@ -656,7 +817,7 @@ class _Run:
         self.lanes = {key: np.concatenate([value, new[key]], axis=-1)
                       for key, value in self.lanes.items()}
 
-    def result(self, batch: tuple) -> IKResult:
+    def _result(self, batch: tuple) -> IKResult:
         n = self.best_q.shape[0]
         history = None
         if self.history is not None:
