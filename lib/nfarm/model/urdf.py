@@ -21,6 +21,7 @@ import json
 import os
 import re
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -419,6 +420,39 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     path = Path(path)
     source = str(path)
     r = _Reader(source, _parse(path))
+    tree = _tree(r)
+    tip, chain, moving = _chain(r, tree, tip)
+    lock = _locks(r, chain, lock)
+    pose = _world_poses(r, tree, chain, lock)
+    frames = _dh_frames(_joint_axes(r, pose, moving), pose[tip][:3, 3])
+    joints = [{**row, **body} for row, body in zip(_dh_rows(frames), _link_bodies(r, tree, pose, frames, moving))]
+    tool = np.linalg.solve(frames[-1], pose[tip])
+    try:
+        robot = robot_from_dict({"name": name or r.name, "convention": "standard",
+                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                "tool": tool.tolist(), "joints": joints,
+                                "description": f"from {path.name}, chain {tree.root} → {tip}"},
+                               source=source)
+    except ParamsError as exc:
+        raise ParamsError(f"{exc} (converted from the URDF)") from None
+    how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
+    return with_provenance(robot, read_bytes(path, max_bytes=16 << 20, what="URDF"), how)
+
+
+@dataclass(frozen=True)
+class _Tree:
+    """The URDF's kinematic tree: its root link, every link with parents before children,
+    each link's child joints and each child link's parent joint."""
+
+    root: str
+    order: list[str]
+    children: dict[str, list[str]]
+    parent_joint: dict[str, str]
+
+
+def _tree(r: _Reader) -> _Tree:
+    """Check that the links and joints form one tree (every named link exists, no link has two
+    parents, one root, every link connected to it) and return it."""
     v = r.v
     children: dict[str, list[str]] = {name_: [] for name_ in r.links}
     parent_joint: dict[str, str] = {}
@@ -441,7 +475,14 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     if len(order) != len(r.links):
         v.fail("<robot>", f"links not connected to the root {root!r} (a loop): "
                           f"{', '.join(sorted(set(r.links) - set(order)))}")
-    leaves = sorted(l for l in r.links if not children[l])
+    return _Tree(root, order, children, parent_joint)
+
+
+def _chain(r: _Reader, tree: _Tree, tip: str | None) -> tuple[str, list[str], list[str]]:
+    """The tip (the single leaf when not named), the joints from the root to it and the
+    revolute ones among them; only revolute and fixed joints may lie on the chain."""
+    v = r.v
+    leaves = sorted(l for l in r.links if not tree.children[l])
     if tip is None:
         if len(leaves) != 1:
             v.fail("tip", f"the URDF has {len(leaves)} leaf links ({', '.join(leaves)}): name the "
@@ -450,8 +491,8 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     elif tip not in r.links:
         v.fail("tip", f"no link {tip!r} in the URDF (leaves: {', '.join(leaves)})")
     chain, link = [], tip                       # joint names from the root to the tip
-    while link != root:
-        chain.append(parent_joint[link])
+    while link != tree.root:
+        chain.append(tree.parent_joint[link])
         link = r.joints[chain[-1]]["parent"]
     chain.reverse()
     for jname in chain:
@@ -461,7 +502,13 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
                                        f"fixed joints are supported there")
     moving = [j for j in chain if r.joints[j]["type"] == "revolute"]
     if not moving:
-        v.fail("tip", f"the chain from {root!r} to {tip!r} has no revolute joint")
+        v.fail("tip", f"the chain from {tree.root!r} to {tip!r} has no revolute joint")
+    return tip, chain, moving
+
+
+def _locks(r: _Reader, chain: list[str], lock: Mapping[str, float] | None) -> dict[str, float]:
+    """The positions of joints off the chain: finite numbers of joints that exist, not on it."""
+    v = r.v
     lock = dict(lock or {})
     for jname, value in lock.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
@@ -470,11 +517,17 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
             v.fail(f"lock.{jname}", "names no joint of the URDF")
         if jname in chain:
             v.fail(f"lock.{jname}", "is on the chain: only joints off it are locked")
+    return lock
 
-    # World poses at q = 0 (side joints at their lock positions) of every link.
-    pose = {root: np.eye(4)}
-    for link in order:
-        for jname in children[link]:
+
+def _world_poses(r: _Reader, tree: _Tree, chain: list[str], lock: Mapping[str, float]
+                 ) -> dict[str, np.ndarray]:
+    """Every link's pose ``(4, 4)`` in the root's frame at ``q = 0``, the joints off the chain
+    at their lock positions (a revolute joint turned about its axis, a prismatic one slid
+    along it): ``T_child = T_parent · origin · motion``."""
+    pose = {tree.root: np.eye(4)}
+    for link in tree.order:
+        for jname in tree.children[link]:
             j = r.joints[jname]
             T = pose[link] @ j["origin"]
             value = float(lock.get(jname, 0.0)) if jname not in chain else 0.0
@@ -483,34 +536,51 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
             elif j["type"] == "prismatic" and value:
                 T[:3, 3] += T[:3, :3] @ j["axis"] * value
             elif j["type"] not in _LOCKABLE:
-                v.fail(f"joint {jname!r}", f"type {j['type']!r} cannot be locked off the chain")
+                r.v.fail(f"joint {jname!r}", f"type {j['type']!r} cannot be locked off the chain")
             pose[j["child"]] = T
+    return pose
 
-    # Joint axes as world lines, then the DH frames.
+
+def _joint_axes(r: _Reader, pose: Mapping[str, np.ndarray], moving: list[str]
+                ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each revolute joint's axis as a line in the root's frame: a point ``(3,)`` [m] (the
+    joint frame's origin) and the unit direction ``(3,)``."""
     axes = []
     for jname in moving:
         T = pose[r.joints[jname]["parent"]] @ r.joints[jname]["origin"]
         axes.append((T[:3, 3], T[:3, :3] @ r.joints[jname]["axis"]))
-    n = len(moving)
-    frames = _dh_frames(axes, pose[tip][:3, 3])
+    return axes
 
+
+def _dh_rows(frames: list[np.ndarray]) -> list[dict[str, float]]:
+    """Standard DH rows read off consecutive frames ``F_{i−1}, F_i`` (``n + 1`` frames):
+    ``a = (o_i − o_{i−1})·x_i``, ``d = (o_i − o_{i−1})·z_{i−1}``, ``offset`` the angle from
+    ``x_{i−1}`` to ``x_i`` about ``z_{i−1}``, ``alpha`` from ``z_{i−1}`` to ``z_i`` about ``x_i``;
+    values within 1e-12 of a round number snapped to it."""
     rows = []
-    for i in range(1, n + 1):
+    for i in range(1, len(frames)):
         F0, F1 = frames[i - 1], frames[i]
         z0, x0, x1, z1 = F0[:3, 2], F0[:3, 0], F1[:3, 0], F1[:3, 2]
         step = F1[:3, 3] - F0[:3, 3]
         rows.append({"a": _snap(np.dot(step, x1)), "d": _snap(np.dot(step, z0)),
                      "offset": _snap(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
                      "alpha": _snap(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
+    return rows
 
-    # Inertias: each moving link with what is fixed or locked to it, in its DH frame.
+
+def _link_bodies(r: _Reader, tree: _Tree, pose: Mapping[str, np.ndarray], frames: list[np.ndarray],
+                 moving: list[str]) -> list[dict]:
+    """Each revolute joint's moving body: its child link with everything fixed or locked to it
+    (side branches, massless frames) lumped into one rigid body in its DH frame (mass [kg],
+    centre of mass [m], inertia about it [kg m²] by the parallel-axis theorem), with the
+    joint's name, limits, effort and velocity. Links before joint 1 never move: left out."""
     owner = {}
-    for link in order:
-        if link == root:
+    for link in tree.order:
+        if link == tree.root:
             continue
-        jname = parent_joint[link]
+        jname = tree.parent_joint[link]
         owner[link] = moving.index(jname) if jname in moving else owner.get(r.joints[jname]["parent"])
-    bodies = [[] for _ in range(n)]
+    bodies = [[] for _ in moving]
     for link, k in owner.items():
         if k is None or r.links[link] is None:
             continue
@@ -521,21 +591,10 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     for k, jname in enumerate(moving):
         m, com, I = _lump(bodies[k])
         j = r.joints[jname]
-        joints.append({**rows[k], "name": jname, "qlim": list(j["limits"]), "mass": m,
-                       "com": com.tolist(),
+        joints.append({"name": jname, "qlim": list(j["limits"]), "mass": m, "com": com.tolist(),
                        "inertia": [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]],
                        **{key: j[key] for key in ("effort", "velocity") if j[key] > 0}})
-    tool = np.linalg.solve(frames[n], pose[tip])
-    try:
-        robot = robot_from_dict({"name": name or r.name, "convention": "standard",
-                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
-                                "tool": tool.tolist(), "joints": joints,
-                                "description": f"from {path.name}, chain {root} → {tip}"},
-                               source=source)
-    except ParamsError as exc:
-        raise ParamsError(f"{exc} (converted from the URDF)") from None
-    how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
-    return with_provenance(robot, read_bytes(path, max_bytes=16 << 20, what="URDF"), how)
+    return joints
 
 
 def _snap(x: float, tol: float = 1e-12) -> float:
