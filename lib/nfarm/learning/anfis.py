@@ -39,7 +39,6 @@ smaller ones are solved as before, to the same bits.
 
 from __future__ import annotations
 
-import inspect
 import itertools
 import json
 import math
@@ -51,6 +50,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
+from .estimator import Estimator
 from .fuzzy import (MF_TYPES, cluster_params, fcm_memberships, grid_params, mf_gradients,
                     mf_rows, mf_values, subtractive_clustering)
 from ..infra.limits import check_time
@@ -72,7 +72,7 @@ class ANFISWarning(UserWarning):
     """A prediction is not backed by the training data (no rule fires)."""
 
 
-class ANFIS:
+class ANFIS(Estimator):
     """A first-order Sugeno ANFIS for one output, with a scikit-learn estimator interface.
 
     Args:
@@ -118,6 +118,8 @@ class ANFIS:
     ``step_size_curve_``, ``best_epoch_``, ``n_features_in_``, ``feature_names_in_``.
     """
 
+    _fitted = "consequents_"
+
     def __init__(self, n_mfs: int | Sequence[int] = 2, mf: str = "gbell", partition: str = "grid",
                  n_rules: int | None = None, radius: float = 0.5, epochs: int = 10,
                  fcm_tolerance: float = 1e-3, fcm_max_iter: int = 1000,
@@ -147,28 +149,6 @@ class ANFIS:
         self.feature_names = feature_names
         self.progress = progress
         self.premise_inputs = premise_inputs
-
-    # -- scikit-learn conventions ------------------------------------------------------------
-
-    @classmethod
-    def _param_names(cls) -> list[str]:
-        return [p for p in inspect.signature(cls.__init__).parameters if p != "self"]
-
-    def get_params(self, deep: bool = True) -> dict:
-        return {name: getattr(self, name) for name in self._param_names()}
-
-    def set_params(self, **params) -> "ANFIS":
-        for name, value in params.items():
-            if name not in self._param_names():
-                raise ValueError(f"unknown parameter {name!r} for {type(self).__name__}; "
-                                 f"valid: {', '.join(self._param_names())}")
-            setattr(self, name, value)
-        return self
-
-    def __repr__(self) -> str:
-        defaults = {p.name: p.default for p in inspect.signature(type(self).__init__).parameters.values()}
-        changed = [f"{k}={v!r}" for k, v in self.get_params().items() if v != defaults.get(k)]
-        return f"{type(self).__name__}({', '.join(changed)})"
 
     # -- validation ---------------------------------------------------------------------------
 
@@ -580,10 +560,6 @@ class ANFIS:
         y = np.einsum("kn,nk->n", coefficients[:n], X) + coefficients[n]
         return y / np.where(total > 0, total, 1.0), total
 
-    def _check_fitted(self):
-        if not hasattr(self, "consequents_"):
-            raise ValueError(f"this {type(self).__name__} is not fitted yet: call fit first")
-
     def predict(self, X) -> np.ndarray:
         """Outputs ``(N,)`` for inputs ``X (N, n)``."""
         self._check_fitted()
@@ -713,22 +689,17 @@ class ANFIS:
             tmp.write_text(json.dumps(with_content_digest(self.to_dict())), encoding="utf-8")
 
 
-class ANFISMulti:
+class ANFISMulti(Estimator):
     """One :class:`ANFIS` per output column, as the dissertation's one-FIS-per-joint design.
 
     ``ANFISMulti(**params)`` passes ``params`` to every model; ``models_`` holds them.
     """
 
+    _fitted = "models_"
+    _passed_to = ANFIS
+
     def __init__(self, **params):
         self.params = params
-
-    def get_params(self, deep: bool = True) -> dict:
-        return dict(self.params)
-
-    def set_params(self, **params) -> "ANFISMulti":
-        ANFIS().set_params(**params)           # validates the names
-        self.params.update(params)
-        return self
 
     def fit(self, X, Y, X_val=None, Y_val=None) -> "ANFISMulti":
         Y = np.asarray(Y, dtype=float)
@@ -740,8 +711,7 @@ class ANFISMulti:
         return self
 
     def predict(self, X) -> np.ndarray:
-        if not hasattr(self, "models_"):
-            raise ValueError("this ANFISMulti is not fitted yet: call fit first")
+        self._check_fitted()
         return np.column_stack([m.predict(X) for m in self.models_])
 
     def to_dict(self) -> dict:

@@ -47,6 +47,7 @@ from ..infra.limits import check_time
 from ..model.dynamics import rnea
 from ..model.robot import Robot
 from .bases import BASES, basis
+from .estimator import Estimator
 
 __all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label"]
 
@@ -79,7 +80,7 @@ def _smooth_inputs(q, qd, qdd) -> np.ndarray:
     return np.concatenate([np.sin(q), np.cos(q), qd, qdd], axis=1)
 
 
-class BaselineID:
+class BaselineID(Estimator):
     """One scikit-learn learner of the torques of every joint (scikit-learn conventions).
 
     Args:
@@ -92,20 +93,14 @@ class BaselineID:
     ``n_features_`` (inputs the learner sees).
     """
 
+    _fitted = "model_"
+
     def __init__(self, learner: str = "ridge", options: Mapping | None = None, residual: bool = False,
                  random_state: int = 0):
         self.learner = learner
         self.options = options
         self.residual = residual
         self.random_state = random_state
-
-    def get_params(self, deep: bool = True) -> dict:
-        return {"learner": self.learner, "options": self.options, "residual": self.residual,
-                "random_state": self.random_state}
-
-    def __repr__(self) -> str:
-        return (f"BaselineID(learner={self.learner!r}, options={self.options!r}, "
-                f"residual={self.residual!r}, random_state={self.random_state!r})")
 
     def _options(self) -> dict:
         if self.learner not in LEARNERS:
@@ -212,8 +207,7 @@ class BaselineID:
 
     def predict(self, q, qd, qdd) -> np.ndarray:
         """Torques ``(N, n)`` [N·m] for states ``(N, n)``."""
-        if not hasattr(self, "model_"):
-            raise ValueError("this BaselineID is not fitted yet: call fit first")
+        self._check_fitted()
         from .learned import _states
 
         q, qd, qdd = _states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)

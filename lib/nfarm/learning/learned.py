@@ -87,6 +87,7 @@ from ..model.rotations import matrix_to_quat, pose_error
 from ..solvers.ik import check_targets
 from .anfis import ANFIS
 from .bases import basis, basis_width
+from .estimator import Estimator
 
 __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
            "encode", "arm_chart", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "n_parameters",
@@ -244,7 +245,7 @@ def _pairs(data: Mapping, robot: Robot, what: str) -> tuple[np.ndarray, np.ndarr
     return T, q
 
 
-class LearnedIK:
+class LearnedIK(Estimator):
     """Inverse kinematics learned by one ANFIS per joint (scikit-learn conventions).
 
     Args:
@@ -263,29 +264,14 @@ class LearnedIK:
     inputs), ``input_lo_``, ``input_span_`` (the scaling), ``fit_seconds_`` (per joint).
     """
 
+    _passed_to = ANFIS
+
     def __init__(self, encoding: str = "quat_xyz", joint_options: Sequence[Mapping] | None = None,
                  max_out_of_plane: float = 1e-6, **anfis_options):
         self.encoding = encoding
         self.joint_options = joint_options
         self.max_out_of_plane = max_out_of_plane
         self.anfis_options = anfis_options
-
-    def get_params(self, deep: bool = True) -> dict:
-        return {"encoding": self.encoding, "joint_options": self.joint_options,
-                "max_out_of_plane": self.max_out_of_plane, **self.anfis_options}
-
-    def set_params(self, **params) -> "LearnedIK":
-        for name in ("encoding", "joint_options", "max_out_of_plane"):
-            if name in params:
-                setattr(self, name, params.pop(name))
-        ANFIS().set_params(**params)          # validates the names
-        self.anfis_options.update(params)
-        return self
-
-    def __repr__(self) -> str:
-        options = "".join(f", {k}={v!r}" for k, v in self.anfis_options.items())
-        joints = f", joint_options={self.joint_options!r}" if self.joint_options else ""
-        return f"LearnedIK(encoding={self.encoding!r}{joints}{options})"
 
     # -- fitting ------------------------------------------------------------------------------
 
@@ -348,10 +334,6 @@ class LearnedIK:
         return self
 
     # -- prediction ---------------------------------------------------------------------------
-
-    def _check_fitted(self):
-        if not hasattr(self, "models_"):
-            raise ValueError("this LearnedIK is not fitted yet: call fit or load")
 
     def predict(self, T_0e, *, threads: int | None = None, far: float = FAR) -> np.ndarray:
         """Joint angles ``(..., n)`` [rad] for tool poses ``T_0e (..., 4, 4)`` (a single pose
@@ -695,7 +677,7 @@ def _states(data: Mapping, robot: Robot, what: str, *, tau: bool = True) -> list
     return arrays
 
 
-class LearnedID:
+class LearnedID(Estimator):
     """Inverse dynamics learned by one ANFIS per joint (scikit-learn conventions).
 
     Args:
@@ -711,24 +693,14 @@ class LearnedID:
     ``fit_seconds_``.
     """
 
+    _passed_to = ANFIS
+
     def __init__(self, inputs: str = "own", residual: bool = False,
                  joint_options: Sequence[Mapping] | None = None, **anfis_options):
         self.inputs = inputs
         self.residual = residual
         self.joint_options = joint_options
         self.anfis_options = anfis_options
-
-    def get_params(self, deep: bool = True) -> dict:
-        return {"inputs": self.inputs, "residual": self.residual,
-                "joint_options": self.joint_options, **self.anfis_options}
-
-    def __repr__(self) -> str:
-        options = "".join(f", {k}={v!r}" for k, v in self.anfis_options.items())
-        return f"LearnedID(inputs={self.inputs!r}, residual={self.residual!r}{options})"
-
-    def _check_fitted(self):
-        if not hasattr(self, "models_"):
-            raise ValueError("this LearnedID is not fitted yet: call fit or load")
 
     def _inputs(self, q, qd, qdd) -> list[np.ndarray]:
         """Each joint's inputs, scaled to [0, 1] over the training data."""
@@ -908,13 +880,15 @@ def ik_errors(robot: Robot, q_pred, q_true, T_true) -> dict[str, np.ndarray]:
 BASELINES = ("nearest", "rbf", "linear")
 
 
-class Baseline:
+class Baseline(Estimator):
     """Learned-IK baselines that need no new dependency, on the same encoded, scaled inputs as
     :class:`LearnedIK`: ``"nearest"`` — the training sample nearest to the pose
     (``scipy.spatial.cKDTree``); ``"rbf"`` — thin-plate-spline interpolation over the
     ``neighbors`` nearest samples (``scipy.interpolate.RBFInterpolator``); ``"linear"`` —
     one affine map fitted by least squares (``scipy.linalg.lstsq``).
     """
+
+    _fitted = "scaler_"
 
     def __init__(self, kind: str = "nearest", encoding: str = "arm_plane", neighbors: int = 32):
         self.kind = kind
@@ -949,8 +923,7 @@ class Baseline:
 
     def predict(self, T_0e) -> np.ndarray:
         """Joint angles ``(..., n)`` [rad] for poses ``T_0e (..., 4, 4)``."""
-        if not hasattr(self, "scaler_"):
-            raise ValueError("this Baseline is not fitted yet: call fit")
+        self._check_fitted()
         T = check_targets(T_0e, 1e-6)
         batch = T.shape[:-2]
         X = self.scaler_._inputs(T.reshape(-1, 4, 4))
