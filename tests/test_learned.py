@@ -101,7 +101,7 @@ def test_angular_inputs_are_unwrapped_about_their_centre(data):
     """A region straddling ±180° of roll is not cut: the roll input of the fitted model spans
     the region's roll range (180° here), not the whole circle."""
     model = LearnedIK(encoding="arm_plane", n_mfs=1, epochs=1).fit(ROBOT, data["train"])
-    roll_span = model.input_span_[5]
+    roll_span = model.encoder_.input_span_[5]
     np.testing.assert_allclose(roll_span, np.ptp(data["train"]["q"][:, 4]), rtol=1e-9)
 
 
@@ -141,7 +141,7 @@ def test_prediction_is_batched_over_leading_axes(fitted, data):
 
 
 def test_fast_prediction_equals_the_training_path(fitted, data):
-    X = fitted._inputs(data["test"]["T"])
+    X = fitted.encoder_.transform(data["test"]["T"])
     for model in fitted.models_:
         slow = model._predict_with(X, model.mfs_, model.rules_, model.consequents_)
         np.testing.assert_allclose(model._predict_fast(X)[0], slow, rtol=0, atol=1e-12)
@@ -488,7 +488,7 @@ def test_the_arm_chart_describes_an_arm_whose_tool_is_off_its_roll_axis(tmp_path
     model = LearnedIK(**{**SMALL, "epochs": 2}, max_out_of_plane=np.radians(0.5)).fit(so101, data)
     model.save(tmp_path)
     again = LearnedIK.load(tmp_path, so101)
-    np.testing.assert_array_equal(again.chart_, chart)
+    np.testing.assert_array_equal(again.encoder_.chart_, chart)
     np.testing.assert_array_equal(again.predict(data["T"]), model.predict(data["T"]))
     with pytest.raises(ValueError, match="leave it by up to"):
         LearnedIK(**{**SMALL, "epochs": 2}).fit(so101, data)
@@ -539,3 +539,17 @@ def test_states_far_outside_the_training_data_warn_and_overflowing_ones_are_refu
             model.predict(q, qd, qdd)
     with pytest.raises(ValueError, match=r"q, qd, qdd must be finite|must be real|complex"):
         model.predict(q.astype(complex), qd, qdd)
+
+
+def test_the_learned_ik_and_its_baselines_see_the_same_inputs(data):
+    """One PoseEncoder for both: the same chart, unwrapping and scaling, bit for bit."""
+    from nfarm.learning.encoding import PoseEncoder
+    from nfarm.learning.learned import Baseline
+    model = LearnedIK(**{**SMALL, "encoding": "arm_plane", "epochs": 1}).fit(ROBOT, data["train"])
+    base = Baseline("linear", encoding="arm_plane").fit(ROBOT, data["train"])
+    plain = PoseEncoder("arm_plane").fit(ROBOT, data["train"]["T"])
+    T = data["test"]["T"]
+    np.testing.assert_array_equal(model.encoder_.transform(T), base.encoder_.transform(T))
+    np.testing.assert_array_equal(plain.transform(T), base.encoder_.transform(T))
+    with pytest.raises(ValueError, match="this PoseEncoder is not fitted yet: call fit"):
+        PoseEncoder().transform(T)

@@ -535,9 +535,9 @@ class ANFIS(Estimator):
 
         A grid's last product is never formed: with ``w_(s,k) = w'_s μ_k`` (``k`` the last
         input's function), ``Σ_r Θ_r w_r = Σ_k μ_k (Θ_(·,k)ᵀ w')``, one matrix product on
-        the ``R / m_L`` partial strengths and ``m_L`` scaled sums. Measured on chapter 06's
-        chosen 81-rule models: 510 → 370 ns per pose. Equal to the training path's outputs
-        to rounding (tested).
+        the ``R / m_L`` partial strengths and ``m_L`` scaled sums: ``m_L`` times fewer products
+        per rule (``benchmarks/bench_anfis.py`` measures the prediction). Equal to the training
+        path's outputs to rounding (tested).
         """
         n = X.shape[1]
         theta = np.column_stack([self.consequents_, np.ones(len(self.consequents_))])  # (R, n+2)

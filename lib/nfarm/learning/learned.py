@@ -4,57 +4,23 @@ maps joint states to torques (section "Learned inverse dynamics" below).
 
 The dissertation's IK page feeds five trained ANFIS models, one per joint, with the target's
 orientation quaternion and position (7 inputs). :class:`LearnedIK` does that, and offers other
-**encodings** of a target pose ``T_0e`` (:func:`encode`):
-
-* ``"quat_xyz"`` — the dissertation's ``[w, x, y, z]`` quaternion (kept on one hemisphere,
-  ``w ≥ 0``, so that ``q`` and ``−q`` are one input) and the position ``[x, y, z]``: 7 inputs.
-  The hemisphere is a cut: a rotation by about 180° (the gripper pointing down is one) has
-  ``w ≈ 0``, and across it ``x, y, z`` change sign — a jump the model must learn;
-* ``"axes_xyz"`` — the position, the tool's approach axis (the z column of ``R``) and its
-  x axis: 9 inputs, continuous everywhere (two columns of ``R`` determine it);
-* ``"arm_plane"`` — six numbers for an arm whose tool's approach axis stays in the vertical
-  plane through the tool point (a base yaw, then joints pitching in that plane, then a roll:
-  intelbot5, the SO-101): the tool point's azimuth ``atan2(y, x)``, its distance ``r`` from the
-  base axis and its height ``z``; with ``R' = Rz(−azimuth) · R`` (the orientation seen in the
-  arm's plane), the pitch ``φ = atan2(R'₀₂, −R'₂₂)`` of the approach axis from pointing straight
-  down, as ``cos φ, sin φ``, and the roll ``ψ = atan2(R'₁₀, R'₁₁)`` about it. The pose set of such
-  an arm is 5-dimensional and this is a minimal chart of it but for the pitch, which is kept as a
-  point on the circle because the arm's pitch ``q2 + q3 + q4`` spans more than a turn: a single
-  pitch angle would jump by 2π inside the region. For intelbot5 in a region that keeps the tool
-  in front of the base axis, ``q1`` *is* the azimuth and ``q5`` the roll less a constant, so two of
-  the five models are linear maps, which a first-order Sugeno rule represents exactly.
-  The pose is read in the robot's :func:`arm_chart`: in DH frame 0 (whose z is the base axis),
-  at the point of the roll axis nearest the tool point — the identity for intelbot5; for the
-  SO-101, whose tool point is 7.9 mm off its roll axis, the difference between its approach axis
-  leaving the arm's plane by up to 27° (in the world) and by 0.13° (in the chart).
-
-Angular inputs (the azimuth and the roll of ``"arm_plane"``) are unwrapped about the circular
-mean of the training data (stored with the model), so a region that straddles ±180° is not cut.
-Measured (chapter 06, intelbot5, 5 000 training samples, 10 epochs; validation RMSE of the worst
-joint): the dissertation's ``quat_xyz`` with 128 grid rules per joint 3.5°; ``axes_xyz`` with
-20 c-means rules 4.4°; ``arm_plane`` with a 3 × 3 × 3 × 3 grid over ``r, z, cos φ, sin φ``
-0.95° (0.37° on the test set with 20 000 samples and 30 epochs) — which is why chapter 06
-chooses it. A first-order rule's consequent is linear in its inputs, and the joint angles are
-far from linear in a quaternion's components.
-
-Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model), so grid
-partitions and clustering see every input alike. Outputs are the joint angles [rad].
+**encodings** of a target pose (:mod:`nfarm.learning.encoding`, where they are defined and
+measured against each other); its baselines (:class:`Baseline`) see the same inputs through the
+same :class:`~nfarm.learning.encoding.PoseEncoder`. Outputs are the joint angles [rad].
 
 :class:`LearnedID` feeds each joint's model one of six **input sets** (:func:`id_features`):
 the joint's own ``q, q̇, q̈`` (the likely dissertation design), every joint's, trigonometric
 features, the two ``affine`` sets — rules over the configuration, consequents over the terms
 every rigid arm's torque is a sum of (:mod:`nfarm.learning.bases`) — or the joint's row of the
 rigid-body regressor (:func:`nfarm.model.dynamics.regressor`), which needs the arm's geometry.
-Measured (chapter 06, intelbot5, validation NRMSE of the worst joint): own state with 8 or 27
-grid rules 95 %, every joint's state with 8 c-means rules 75 %, trigonometric features with 8
-c-means rules 73 %; ``affine`` with one rule 37 %, with eight rules over q2–q4 2.4 % (2.42 % on
-the held-out trajectories) — the rules supply the products of angle functions the inertia
-needs. The regressor's row with one rule is below 1e-6 %: the torques are linear in it
-(``τ = Y π``), so one rule is least squares on the inertial parameters, an identification, not
-a learning result. With ``residual=True`` a model learns ``τ − rnea`` instead: on chapter 05's
-measured arm (Stribeck and load-dependent friction, encoder states, 0.005 N·m sensor noise)
-own-state residual models leave 0.030 N·m on the worst joint against 0.046 N·m for a
-least-squares friction identification (chapter 07).
+Chapter 06 compares them on validation trajectories (``figures/tables/06_id_comparison``):
+the rules of the ``affine`` sets supply the products of angle functions the inertia needs,
+which the dissertation's own-state design lacks. The regressor's row with one rule fits the
+torques exactly (they are linear in it, ``τ = Y π``): one rule is least squares on the inertial
+parameters, an identification, not a learning result. With ``residual=True`` a model learns
+``τ − rnea`` instead: what the rigid-body model misses on chapter 05's measured arm (friction,
+encoder states, sensor noise), compared with a least-squares friction identification in
+chapter 07 (``figures/tables/07_id_measured``).
 
 Models are saved as one JSON file (no pickle) holding the robot's parameter hash
 (:func:`nfarm.model.robot.robot_hash`); loading against another robot is an error, and the file is
@@ -79,14 +45,15 @@ import numpy as np
 from .. import __version__
 from ..infra.paths import atomic_path
 from ..infra.provenance import code_digest
-from ..infra.reading import ParamsError, Validator, checked_content, json_ready, load_json, show, with_content_digest
+from ..infra.reading import Validator, checked_content, json_ready, load_json, show, with_content_digest
 from ..model.dynamics import regressor, rnea
-from ..model.kinematics import fk, fk_all
+from ..model.kinematics import fk
 from ..model.robot import Robot, joint_array, robot_hash
-from ..model.rotations import matrix_to_quat, pose_error
+from ..model.rotations import pose_error
 from ..solvers.ik import check_targets
 from .anfis import ANFIS
 from .bases import basis, basis_width
+from .encoding import ANGULAR, ENCODINGS, FEATURE_NAMES, SPAN_MIN, PoseEncoder, arm_chart, encode, out_of_plane
 from .estimator import Estimator
 
 __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
@@ -94,9 +61,6 @@ __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_colum
            "ENCODINGS",
            "ANGULAR", "FILE_NAME", "ID_FILE_NAME", "BASELINES", "OutsideTrainingWarning", "FAR"]
 
-ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
-#: Columns of each encoding that are angles [rad] (unwrapped about a centre).
-ANGULAR = {"quat_xyz": (), "axes_xyz": (), "arm_plane": (0, 5)}
 FILE_NAME = "learned_ik.json"
 _FORMAT = "nfarm-learned-ik-1"
 
@@ -131,90 +95,6 @@ def _warn_far(beyond: np.ndarray, far: float, what: str) -> None:
             f"than {far:g} of it (up to {beyond.max():.3g}; first: {what[:-1]} {i}): predicted by "
             f"extrapolation"), stacklevel=3)
 _CHUNK = 16384
-
-
-def arm_chart(robot: Robot) -> np.ndarray | None:
-    """``(2, 4, 4)``: the poses ``[B, W]`` that put a tool pose into the frame ``"arm_plane"``
-    reads, ``B · T_0e · W``, or ``None`` when both are the identity (intelbot5).
-
-    ``B = base⁻¹`` moves the world into DH frame 0, whose z axis is the base axis. ``W`` is, in
-    the tool frame, the frame on the last joint's axis nearest the tool point, its z along that
-    axis (on the side of the tool's z) and its x the tool's x made perpendicular to it. For an
-    arm whose tool point lies off its roll axis (the SO-101's, by 7.9 mm) the tool point leaves
-    the arm's vertical plane as the wrist rolls, the point on the roll axis does not.
-    """
-    F = fk_all(robot, np.zeros(robot.n))
-    axis_frame = F[-2] if robot.convention == "standard" else F[-1]
-    tool = F[-1] @ robot.tool
-    Rt = tool[:3, :3].T                                          # world → tool frame
-    c = Rt @ (axis_frame[:3, 3] - tool[:3, 3])                   # a point on the axis
-    u = Rt @ axis_frame[:3, 2]
-    u = u if u[2] >= 0 else -u
-    w = c - np.dot(c, u) * u
-    x = np.array([1.0, 0.0, 0.0]) - u[0] * u
-    x /= np.linalg.norm(x)
-    W = np.eye(4)
-    W[:3, :3], W[:3, 3] = np.column_stack([x, np.cross(u, x), u]), w
-    W[np.abs(W) < 1e-12] = 0.0
-    W[np.abs(W - 1) < 1e-12] = 1.0
-    B = np.eye(4)                                                # base⁻¹ of a rigid transform
-    B[:3, :3] = robot.base[:3, :3].T
-    B[:3, 3] = -B[:3, :3] @ robot.base[:3, 3]
-    if np.array_equal(W, np.eye(4)) and np.array_equal(robot.base, np.eye(4)):
-        return None
-    return np.stack([B, W])
-
-
-def _in_chart(T: np.ndarray, chart: np.ndarray | None) -> np.ndarray:
-    return T if chart is None else chart[0] @ T @ chart[1]
-
-
-def encode(T_0e: np.ndarray, encoding: str, chart: np.ndarray | None = None) -> np.ndarray:
-    """Input features ``(..., d)`` of tool poses ``T_0e (..., 4, 4)`` (module docstring);
-    ``"arm_plane"`` reads the poses in the robot's :func:`arm_chart` when given."""
-    if encoding not in ENCODINGS:
-        raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {encoding!r}")
-    T = np.asarray(T_0e, dtype=float)
-    if encoding == "arm_plane":
-        T = _in_chart(T, chart)
-    p, R = T[..., :3, 3], T[..., :3, :3]
-    if encoding == "quat_xyz":
-        quat = matrix_to_quat(R)                         # [w, x, y, z]
-        quat = np.where(quat[..., :1] < 0, -quat, quat)  # one hemisphere: w >= 0
-        return np.concatenate([quat, p], axis=-1)
-    if encoding == "axes_xyz":
-        return np.concatenate([p, R[..., :, 2], R[..., :, 0]], axis=-1)
-    azimuth = np.arctan2(p[..., 1], p[..., 0])
-    c, s = np.cos(azimuth), np.sin(azimuth)
-    # R' = Rz(−azimuth) R: rows 0 and 1 rotated, row 2 unchanged; only R'_02, R'_10, R'_11
-    # are needed (computed alone: 210 → 180 ns per pose, the same bits).
-    r0z = c * R[..., 0, 2] + s * R[..., 1, 2]
-    r1x = -s * R[..., 0, 0] + c * R[..., 1, 0]
-    r1y = -s * R[..., 0, 1] + c * R[..., 1, 1]
-    pitch = np.arctan2(r0z, -R[..., 2, 2])
-    roll = np.arctan2(r1x, r1y)
-    return np.stack([azimuth, np.hypot(p[..., 0], p[..., 1]), p[..., 2], np.cos(pitch),
-                     np.sin(pitch), roll], axis=-1)
-
-
-def out_of_plane(T_0e: np.ndarray, chart: np.ndarray | None = None) -> np.ndarray:
-    """Angle [rad] ``(...)`` by which the tool's approach axis leaves the vertical plane through
-    the tool point and the base axis: 0 for every pose of an arm ``"arm_plane"`` describes
-    (with ``chart``, :func:`arm_chart`: the roll axis and its point nearest the tool)."""
-    T = _in_chart(np.asarray(T_0e, dtype=float), chart)
-    azimuth = np.arctan2(T[..., 1, 3], T[..., 0, 3])
-    normal = -np.sin(azimuth) * T[..., 0, 2] + np.cos(azimuth) * T[..., 1, 2]
-    return np.arcsin(np.clip(np.abs(normal), 0.0, 1.0))
-
-
-def _unwrap(X: np.ndarray, columns: tuple, centre: np.ndarray, *, inplace: bool = False
-            ) -> np.ndarray:
-    """Angular columns mapped into ``[centre − π, centre + π)`` (a copy unless ``inplace``)."""
-    if columns:
-        X = X if inplace else X.copy()
-        for column, c in zip(columns, centre):
-            X[..., column] = c + np.mod(X[..., column] - c + np.pi, 2 * np.pi) - np.pi
-    return X
 
 
 def _check_q(q, robot: Robot, what: str, name: str = "q") -> np.ndarray:
@@ -260,8 +140,9 @@ class LearnedIK(Estimator):
             ``partition``, ``n_rules``, ``radius``, ``epochs``, …).
 
     Learned attributes: ``models_`` (one fitted ANFIS per joint), ``robot_hash_``,
-    ``robot_name_``, ``n_joints_``, ``angle_centre_`` (the unwrapping centres of the angular
-    inputs), ``input_lo_``, ``input_span_`` (the scaling), ``fit_seconds_`` (per joint).
+    ``robot_name_``, ``n_joints_``, ``encoder_`` (the fitted :class:`nfarm.learning.encoding.PoseEncoder`:
+    the chart, the unwrapping centres of the angular inputs and the scaling), ``fit_seconds_``
+    (per joint).
     """
 
     _passed_to = ANFIS
@@ -274,25 +155,6 @@ class LearnedIK(Estimator):
         self.anfis_options = anfis_options
 
     # -- fitting ------------------------------------------------------------------------------
-
-    def _fit_inputs(self, T: np.ndarray) -> np.ndarray:
-        """Learn the inputs' unwrapping centres and scaling from training poses ``T (N, 4, 4)``
-        and return their scaled inputs ``(N, d)``."""
-        X = encode(T, self.encoding, getattr(self, "chart_", None))
-        columns = ANGULAR[self.encoding]
-        self.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
-            else np.zeros(0)
-        X = _unwrap(X, columns, self.angle_centre_)
-        self.input_lo_ = X.min(axis=0)
-        self.input_span_ = np.where(np.ptp(X, axis=0) > SPAN_MIN, np.ptp(X, axis=0), 1.0)
-        return (X - self.input_lo_) / self.input_span_
-
-    def _inputs(self, T: np.ndarray) -> np.ndarray:
-        X = _unwrap(encode(T, self.encoding, getattr(self, "chart_", None)), ANGULAR[self.encoding],
-                    self.angle_centre_, inplace=True)
-        X -= self.input_lo_
-        X /= self.input_span_
-        return X
 
     def _options(self, n: int) -> list[dict]:
         """The ANFIS options of each joint, validated before any training."""
@@ -312,17 +174,10 @@ class LearnedIK(Estimator):
         options = self._options(robot.n)
         T, q = _pairs(train, robot, "train")
         T_val, q_val = _pairs(val, robot, "val") if val is not None else (None, None)
-        self.chart_ = arm_chart(robot) if self.encoding == "arm_plane" else None
-        if self.encoding == "arm_plane":
-            worst = float(out_of_plane(T, self.chart_).max())
-            if not worst <= self.max_out_of_plane:
-                raise ValueError(f"encoding 'arm_plane' needs the tool's approach axis in the "
-                                 f"vertical plane through the tool point; {robot.name}'s training "
-                                 f"poses leave it by up to {math.degrees(worst):.3g} deg: use "
-                                 f"'axes_xyz'")
-        Xs = self._fit_inputs(T)
-        Xv = self._inputs(T_val) if T_val is not None else None
-        names = _feature_names(self.encoding)
+        self.encoder_ = PoseEncoder(self.encoding, self.max_out_of_plane)
+        Xs = self.encoder_.fit_transform(robot, T)
+        Xv = self.encoder_.transform(T_val) if T_val is not None else None
+        names = self.encoder_.feature_names
         self.models_, self.fit_seconds_ = [], []
         for j in range(robot.n):
             start = time.perf_counter()
@@ -369,7 +224,7 @@ class LearnedIK(Estimator):
             beyond = np.empty(len(flat))
 
             def chunk(start: int) -> None:
-                X = self._inputs(flat[start:start + _CHUNK])
+                X = self.encoder_.transform(flat[start:start + _CHUNK])
                 beyond[start:start + _CHUNK] = _beyond(X)
                 for j, model in enumerate(self.models_):
                     out[start:start + _CHUNK, j] = model._predict_fast(X)[0]
@@ -396,7 +251,7 @@ class LearnedIK(Estimator):
         self._check_fitted()
         lines = [f"LearnedIK for {self.robot_name_} ({self.n_joints_} joints), encoding "
                  f"{self.encoding!r} ({ENCODINGS[self.encoding]} inputs: "
-                 f"{', '.join(_feature_names(self.encoding))})"]
+                 f"{', '.join(FEATURE_NAMES[self.encoding])})"]
         return "\n".join(lines + _model_lines(self.models_, "rad"))
 
     # -- persistence --------------------------------------------------------------------------
@@ -408,11 +263,11 @@ class LearnedIK(Estimator):
                 "joint_options": json_ready(self.joint_options), "max_out_of_plane":
                 self.max_out_of_plane, "robot": self.robot_name_,
                 "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
-                "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(),
-                "input_span": self.input_span_.tolist(),
+                "angle_centre": self.encoder_.angle_centre_.tolist(),
+                "input_lo": self.encoder_.input_lo_.tolist(), "input_span": self.encoder_.input_span_.tolist(),
                 "fit_seconds": list(self.fit_seconds_),
                 "models": [m.to_dict() for m in self.models_]} | \
-            ({} if getattr(self, "chart_", None) is None else {"chart": self.chart_.tolist()})
+            ({} if self.encoder_.chart_ is None else {"chart": self.encoder_.chart_.tolist()})
 
     def save(self, directory: str | os.PathLike) -> Path:
         """Write ``directory/learned_ik.json`` atomically; :meth:`load` reproduces the
@@ -452,11 +307,12 @@ class LearnedIK(Estimator):
         model = cls(encoding=encoding, joint_options=joint_options, max_out_of_plane=max_out,
                     **options)
         model.models_, model.fit_seconds_ = fitted, seconds
-        model.angle_centre_, model.input_lo_, model.input_span_ = centre, lo, span
-        model.chart_ = v.array(data["chart"], "chart", (2, 4, 4)) if data.get("chart") is not None \
+        encoder = model.encoder_ = PoseEncoder(encoding, max_out)
+        encoder.angle_centre_, encoder.input_lo_, encoder.input_span_ = centre, lo, span
+        encoder.chart_ = v.array(data["chart"], "chart", (2, 4, 4)) if data.get("chart") is not None \
             else None
-        if model.chart_ is not None:
-            for k, T in enumerate(model.chart_):
+        if encoder.chart_ is not None:
+            for k, T in enumerate(encoder.chart_):
                 R = T[:3, :3]
                 if not (np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-12)
                         and np.allclose(R @ R.T, np.eye(3), rtol=0.0, atol=1e-9)
@@ -477,7 +333,6 @@ _KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options"
 #: it, and a saved input's lowest value and span must lie within ±PLAUSIBLE_INPUT: every input
 #: of the study (angles, metres, rad/s, rad/s² and their products) is far inside, and an edited
 #: 1e308 or 1e-300 would otherwise turn predictions into inf or 1e287.
-SPAN_MIN = 1e-12
 PLAUSIBLE_INPUT = 1e6
 
 
@@ -574,13 +429,6 @@ def _model_lines(models: list, unit: str) -> list[str]:
                      f"epoch {m.best_epoch_ + 1} of {m.n_epochs_}, training RMSE "
                      f"{m.loss_curve_[m.best_epoch_]:.4g} {unit}{val}")
     return lines
-
-
-def _feature_names(encoding: str) -> list[str]:
-    return {"quat_xyz": ["qw", "qx", "qy", "qz", "x", "y", "z"],
-            "axes_xyz": ["x", "y", "z", "ax", "ay", "az", "nx", "ny", "nz"],
-            "arm_plane": ["azimuth", "r", "z", "cos_pitch", "sin_pitch", "roll"]}[encoding]
-
 
 
 # --------------------------------------------------------------------------------------------
@@ -886,14 +734,20 @@ class Baseline(Estimator):
     (``scipy.spatial.cKDTree``); ``"rbf"`` — thin-plate-spline interpolation over the
     ``neighbors`` nearest samples (``scipy.interpolate.RBFInterpolator``); ``"linear"`` —
     one affine map fitted by least squares (``scipy.linalg.lstsq``).
+
+    ``max_out_of_plane`` [rad] is the :class:`~nfarm.learning.encoding.PoseEncoder`'s check of
+    ``"arm_plane"`` poses; by default none (π): a baseline is fitted on the inputs it is given,
+    and the learned IK it is compared with has already refused poses its encoding cannot describe.
     """
 
-    _fitted = "scaler_"
+    _fitted = "encoder_"
 
-    def __init__(self, kind: str = "nearest", encoding: str = "arm_plane", neighbors: int = 32):
+    def __init__(self, kind: str = "nearest", encoding: str = "arm_plane", neighbors: int = 32,
+                 max_out_of_plane: float = math.pi):
         self.kind = kind
         self.encoding = encoding
         self.neighbors = neighbors
+        self.max_out_of_plane = max_out_of_plane
 
     def fit(self, robot: Robot, train: Mapping) -> "Baseline":
         import scipy.linalg
@@ -905,9 +759,8 @@ class Baseline(Estimator):
         if self.encoding not in ENCODINGS:
             raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
         T, q = _pairs(train, robot, "train")
-        self.scaler_ = LearnedIK(self.encoding)      # the same inputs as the learned IK's
-        self.scaler_.chart_ = arm_chart(robot) if self.encoding == "arm_plane" else None
-        X = self.scaler_._fit_inputs(T)
+        self.encoder_ = PoseEncoder(self.encoding, self.max_out_of_plane)   # the learned IK's inputs
+        X = self.encoder_.fit_transform(robot, T)
         start = time.perf_counter()
         if self.kind == "nearest":
             self.tree_, self.q_ = cKDTree(X), q
@@ -926,7 +779,7 @@ class Baseline(Estimator):
         self._check_fitted()
         T = check_targets(T_0e, 1e-6)
         batch = T.shape[:-2]
-        X = self.scaler_._inputs(T.reshape(-1, 4, 4))
+        X = self.encoder_.transform(T.reshape(-1, 4, 4))
         if self.kind == "nearest":
             q = self.q_[self.tree_.query(X)[1]]
         elif self.kind == "rbf":
