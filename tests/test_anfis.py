@@ -104,8 +104,10 @@ def test_clustering_partitions_learn(partition, extra):
 def test_save_load_round_trip_is_bit_for_bit(tmp_path):
     X, y, Xc, yc = jang.three_input_data()
     model = ANFIS(n_mfs=[2, 3, 2], epochs=8, feature_names=["x", "y", "z"]).fit(X, y, Xc, yc)
-    model.save(tmp_path / "m.json")
-    again = load(tmp_path / "m.json")
+    path = model.save(tmp_path / "m")
+    assert path == tmp_path / "m" / "anfis.json" and not list((tmp_path / "m").glob("*.tmp*"))
+    again = load(tmp_path / "m")
+    np.testing.assert_array_equal(load(path).predict(Xc), model.predict(Xc))      # or the file itself
     np.testing.assert_array_equal(again.predict(Xc), model.predict(Xc))
     assert again.get_params() == model.get_params() | {"n_mfs": [2, 3, 2], "feature_names": ["x", "y", "z"]}
     assert again.loss_curve_ == model.loss_curve_
@@ -220,8 +222,11 @@ def test_multi_output_fits_one_model_per_column(tmp_path):
     multi = ANFISMulti(n_mfs=2, epochs=5).fit(X, Y)
     assert len(multi.models_) == 2
     np.testing.assert_allclose(multi.predict(X)[:, 1], ANFIS(n_mfs=2, epochs=5).fit(X, np.sqrt(y)).predict(X))
-    multi.save(tmp_path / "multi.json")
-    np.testing.assert_array_equal(load(tmp_path / "multi.json").predict(Xc), multi.predict(Xc))
+    multi.save(tmp_path / "multi")
+    np.testing.assert_array_equal(load(tmp_path / "multi").predict(Xc), multi.predict(Xc))
+    with pytest.raises(ValueError, match=r"save takes a directory \(the model is written into it as "
+                                         r"anfis.json\), got the file name '.*multi.json'"):
+        multi.save(tmp_path / "multi.json")
 
 
 X3, Y3, *_ = jang.three_input_data()

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import load_quietly
-from nfarm.solvers.ik import DLS, LM, METHODS, REASONS, Pinv, solve
+from nfarm.solvers.ik import DLS, JT, LM, METHODS, REASONS, Pinv, solve
 from nfarm.model.kinematics import fk
 from nfarm.infra.paths import PARAMS
 from nfarm.model.robot import robot_from_dict, sample_configurations
@@ -136,6 +136,13 @@ def test_a_method_s_name_is_that_method_with_its_defaults(intelbot5, name):
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
 
 
+def test_the_methods_are_importable_from_the_top():
+    import nfarm
+
+    assert (nfarm.LM, nfarm.DLS, nfarm.Pinv, nfarm.JT) == (LM, DLS, Pinv, JT)
+    assert {"LM", "DLS", "Pinv", "JT"} <= set(dir(nfarm))
+
+
 @pytest.mark.parametrize("batch", [(), (1,), (2, 3)])
 def test_batch_shapes_and_history(intelbot5, batch):
     T = fk(intelbot5, sample_configurations(intelbot5, batch, 4))
@@ -207,7 +214,7 @@ def test_bad_targets_beyond_the_first_check_chunk_are_named(intelbot5, rule, mon
     (dict(weights=np.zeros(6)), r"weights must be finite, >= 0 and not all zero"),
     (dict(method="newton"), r"method must be one of lm, dls, pinv, jt or an update rule"),
     (dict(method=LM), r"method must be one of lm, dls, pinv, jt or an update rule \(LM\(\), DLS\(\)"),
-    (dict(lm_damping="marquardt"), r"unexpected keyword argument 'lm_damping'"),   # an option of LM now
+    (dict(lm_damping="marquardt"), r"unexpected keyword argument 'lm_damping'"),   # LM(damping=…)
     (dict(tol_pos=0.0), r"tol_pos must be a finite number > 0, got 0.0"),
     (dict(ortho_tol=np.nan), r"ortho_tol must be a finite number > 0 and < 1, got nan"),
     (dict(restarts=2.5), r"restarts must be an integer >= 0, got 2.5"),
@@ -220,8 +227,8 @@ def test_bad_options_are_clear_errors(intelbot5, kwargs, message):
         solve(intelbot5, good_targets(intelbot5), **kwargs)
 
 
-# A method's options are checked when it is made. These once turned a reachable target into
-# "unreachable", or switched a check off.
+# A method's options are checked when it is made, in one line naming the option and the rule:
+# unchecked, a NaN or out-of-range option turns reachable targets into "unreachable" silently.
 @pytest.mark.parametrize("make, message", [
     (lambda: LM(damping="fixed"), r"LM: damping must be 'sugihara' or 'marquardt', got 'fixed'"),
     (lambda: LM(scale=-1), r"LM: scale must be a finite number >= 0, got -1"),

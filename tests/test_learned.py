@@ -14,6 +14,7 @@ from nfarm.study.regions import ik_samples
 
 from nfarm.study.study_files import load_study
 from nfarm.model.kinematics import fk
+from nfarm.learning.encoding import FEATURE_NAMES
 from nfarm.learning.learned import ENCODINGS, LearnedIK, encode, out_of_plane
 from nfarm.infra.paths import PARAMS
 from nfarm.infra.reading import ParamsError, with_content_digest
@@ -309,7 +310,7 @@ def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
 
 from nfarm.study.id_trajectories import random_trajectories  # noqa: E402
 from nfarm.model.dynamics import inertial_parameters, rnea  # noqa: E402
-from nfarm.learning.learned import INPUT_SETS, LearnedID, id_features, regressor_columns  # noqa: E402
+from nfarm.learning.learned import LearnedID, id_features, regressor_columns  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -397,6 +398,8 @@ def test_id_save_load_batching_and_bad_input(id_data, tmp_path):
     loaded = LearnedID.load(tmp_path, ROBOT)
     np.testing.assert_array_equal(loaded.predict(d["q"], d["qd"], d["qdd"]),
                                   model.predict(d["q"], d["qd"], d["qdd"]))
+    np.testing.assert_array_equal(LearnedID.load(path, ROBOT).predict(d["q"], d["qd"], d["qdd"]),
+                                  model.predict(d["q"], d["qd"], d["qdd"]))        # or the file itself
     assert loaded.describe() == model.describe() and path.name == "learned_id.json"
     with pytest.raises(ParamsError, match=r"robot_params_sha256: trained for robot 'intelbot5'"):
         LearnedID.load(tmp_path, PUMA)
@@ -553,3 +556,27 @@ def test_the_learned_ik_and_its_baselines_see_the_same_inputs(data):
     np.testing.assert_array_equal(plain.transform(T), base.encoder_.transform(T))
     with pytest.raises(ValueError, match="this PoseEncoder is not fitted yet: call fit"):
         PoseEncoder().transform(T)
+
+
+def test_the_pose_encoder_is_public_batched_and_saved_with_the_model(data, tmp_path):
+    """The encoder's names, batching and fields: a LearnedIK file holds them at its top level,
+    under the keys it always had, and they rebuild the encoder bit for bit."""
+    from nfarm.learning.encoding import PoseEncoder
+    so101 = load_robot(PARAMS / "robots" / "so101.yaml")
+    so101_poses = fk(so101, np.zeros((1, so101.n)))
+    encoder = PoseEncoder("arm_plane", max_out_of_plane=0.5).fit(so101, so101_poses)
+    assert encoder.chart_ is not None and repr(encoder) == "PoseEncoder(encoding='arm_plane', max_out_of_plane=0.5)"
+    for name, d in ENCODINGS.items():
+        encoder = PoseEncoder(name).fit(ROBOT, data["train"]["T"])
+        assert encoder.feature_names_ == FEATURE_NAMES[name] and len(encoder.feature_names_) == d
+        T = data["test"]["T"][:6]
+        np.testing.assert_array_equal(encoder.transform(T.reshape(2, 3, 4, 4)).reshape(6, d), encoder.transform(T))
+        again = PoseEncoder.from_dict(json.loads(json.dumps(encoder.to_dict())))
+        np.testing.assert_array_equal(again.transform(T), encoder.transform(T))
+    model = LearnedIK(**{**SMALL, "epochs": 1}).fit(ROBOT, data["train"])
+    saved = json.loads(model.save(tmp_path).read_text())
+    assert {"encoding", "max_out_of_plane", "angle_centre", "input_lo", "input_span"} <= set(saved)
+    assert "chart" not in saved                                  # intelbot5's chart is the identity
+    with pytest.raises(ValueError, match=r"save takes a directory \(the model is written into it as "
+                                         r"learned_ik.json\), got the file name"):
+        model.save(tmp_path / "model.json")

@@ -53,6 +53,7 @@ PUBLIC: dict[str, str] = {
                      "rpy_to_matrix"], "model.rotations"),
     **dict.fromkeys(["to_urdf", "from_urdf"], "model.urdf"),
     "ik": "solvers.ik",
+    **dict.fromkeys(["LM", "DLS", "Pinv", "JT"], "solvers.ik"),
     **dict.fromkeys(["closed_form"], "solvers.geometric_ik"),
     **dict.fromkeys(["Trajectory", "cubic", "quintic", "via_points"], "solvers.trajectory"),
     **dict.fromkeys(["ANFIS"], "learning.anfis"),
@@ -90,6 +91,7 @@ if TYPE_CHECKING:   # for readers and type checkers; at run time the names come 
     from .model.rotations import matrix_to_quat, matrix_to_rpy, pose_error, quat_to_matrix, rpy_to_matrix
     from .model.urdf import from_urdf, to_urdf
     from .solvers import ik
+    from .solvers.ik import DLS, JT, LM, Pinv
     from .solvers.geometric_ik import closed_form
     from .solvers.trajectory import Trajectory, cubic, quintic, via_points
     from .study.datasets import build_datasets

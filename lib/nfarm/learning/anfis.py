@@ -40,28 +40,29 @@ smaller ones are solved as before, to the same bits.
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import os
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import scipy.linalg
 
-from .estimator import Estimator
+from .estimator import Estimator, model_file, write_model
 from .fuzzy import (MF_TYPES, cluster_params, fcm_memberships, grid_params, mf_gradients,
                     mf_rows, mf_values, subtractive_clustering)
 from ..infra.limits import check_time
-from ..infra.paths import atomic_path
-from ..infra.reading import Validator, checked_content, json_ready, load_json, show, with_content_digest
+from ..infra.reading import Validator, checked_content, json_ready, load_json, show
 
-__all__ = ["ANFIS", "ANFISMulti", "ANFISWarning", "MF_TYPES", "PARTITIONS", "SOLVERS", "load"]
+__all__ = ["ANFIS", "ANFISMulti", "ANFISWarning", "MF_TYPES", "PARTITIONS", "SOLVERS", "FILE_NAME", "load"]
 
 PARTITIONS = ("grid", "fcm", "subtractive")
 SOLVERS = ("normal", "lstsq")
 _FORMAT = "nfarm-anfis-1"
+#: The file a model is saved as, in the directory given to ``save``.
+FILE_NAME = "anfis.json"
 
 
 # --------------------------------------------------------------------------------------------
@@ -682,11 +683,11 @@ class ANFIS(Estimator):
         model.n_epochs_ = len(model.loss_curve_)
         return model
 
-    def save(self, path: str | os.PathLike) -> None:
-        """Write the model as JSON (atomically); :func:`load` reproduces its predictions bit
-        for bit (floats are written with full precision)."""
-        with atomic_path(path) as tmp:
-            tmp.write_text(json.dumps(with_content_digest(self.to_dict())), encoding="utf-8")
+    def save(self, directory: str | os.PathLike) -> Path:
+        """Write the model as ``directory/anfis.json`` (:data:`FILE_NAME`; JSON, atomically) and
+        return the file's path; :func:`load` of the directory reproduces its predictions bit for
+        bit."""
+        return write_model(directory, FILE_NAME, self.to_dict())
 
 
 class ANFISMulti(Estimator):
@@ -727,9 +728,9 @@ class ANFISMulti(Estimator):
         multi.models_ = [ANFIS.from_dict(m, f"{source}: models[{k}]") for k, m in enumerate(models)]
         return multi
 
-    def save(self, path: str | os.PathLike) -> None:
-        with atomic_path(path) as tmp:
-            tmp.write_text(json.dumps(with_content_digest(self.to_dict())), encoding="utf-8")
+    def save(self, directory: str | os.PathLike) -> Path:
+        """Write every model as ``directory/anfis.json`` (as :meth:`ANFIS.save`)."""
+        return write_model(directory, FILE_NAME, self.to_dict())
 
 
 #: Bytes a consequents' design may take before its normal equations are summed in blocks.
@@ -769,13 +770,15 @@ def _check_params(v: Validator, params: Any, at: str, n_features: int | None) ->
 
 
 def load(path: str | os.PathLike) -> ANFIS | ANFISMulti:
-    """Read a model written by ``save``, checked like a parameter file.
+    """Read a model written by ``save``, checked like a parameter file: ``path`` is the
+    directory it was saved into or the file itself (``…/anfis.json``).
 
     Raises:
         ParamsError: the file is not a regular file of at most 64 MB, not JSON, not a
             valid nfarm ANFIS model, or edited after it was saved (its ``content_sha256``,
             :func:`nfarm.infra.reading.checked_content`); the message names the file and the field.
     """
+    path = model_file(path, FILE_NAME)
     data = load_json(path, what="ANFIS model")
     kind = {"ANFIS": ANFIS, "ANFISMulti": ANFISMulti}.get(data.get("class")) \
         if isinstance(data, dict) else None

@@ -35,23 +35,27 @@ Chapter 06 compares the three on validation poses (``figures/tables/06_ik_compar
 chooses by that comparison: a first-order rule's consequent is linear in its inputs, and the
 joint angles are far from linear in a quaternion's components.
 
-Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model), so grid
-partitions and clustering see every input alike. Outputs are the joint angles [rad].
+Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model,
+:func:`input_scaling`, which :class:`nfarm.learning.learned.LearnedID` uses for its state inputs
+too), so grid partitions and clustering see every input alike.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
+from ..infra.reading import Validator, show
 from ..model.kinematics import fk_all
 from ..model.robot import Robot
 from ..model.rotations import matrix_to_quat
 from .estimator import Estimator
 
-__all__ = ["ENCODINGS", "ANGULAR", "FEATURE_NAMES", "SPAN_MIN", "encode", "arm_chart", "out_of_plane",
-           "PoseEncoder"]
+__all__ = ["ENCODINGS", "ANGULAR", "FEATURE_NAMES", "SPAN_MIN", "PLAUSIBLE_INPUT", "encode", "arm_chart",
+           "out_of_plane", "input_scaling", "check_scaling", "PoseEncoder"]
 
 #: The encodings and their number of inputs.
 ENCODINGS = {"quat_xyz": 7, "axes_xyz": 9, "arm_plane": 6}
@@ -63,6 +67,10 @@ FEATURE_NAMES = {"quat_xyz": ["qw", "qx", "qy", "qz", "x", "y", "z"],
                  "arm_plane": ["azimuth", "r", "z", "cos_pitch", "sin_pitch", "roll"]}
 #: An input whose training range is narrower than this is constant: scaled by 1, not by its range.
 SPAN_MIN = 1e-12
+#: A saved input's lowest value and span must lie within ±PLAUSIBLE_INPUT: every input of the
+#: study (angles, metres, rad/s, rad/s² and their products) is far inside, and an edited 1e308
+#: or 1e-300 would otherwise turn predictions into inf or 1e287.
+PLAUSIBLE_INPUT = 1e6
 
 
 def arm_chart(robot: Robot) -> np.ndarray | None:
@@ -149,10 +157,28 @@ def _unwrap(X: np.ndarray, columns: tuple, centre: np.ndarray, *, inplace: bool 
     return X
 
 
+def input_scaling(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest value ``lo (d,)`` and span ``(d,)`` of training inputs ``X (N, d)``, so that
+    ``(X − lo) / span`` lies in ``[0, 1]``; an input spanning :data:`SPAN_MIN` or less is
+    constant and is scaled by 1, not divided by its span (an ANFIS refuses it by name if it is
+    a premise input)."""
+    span = np.ptp(X, axis=0)
+    return X.min(axis=0), np.where(span > SPAN_MIN, span, 1.0)
+
+
+def check_scaling(v: Validator, lo: np.ndarray, span: np.ndarray, at_lo: str, at_span: str) -> None:
+    """A saved scaling (:func:`input_scaling`) is plausible: ``lo`` within ±:data:`PLAUSIBLE_INPUT`,
+    spans in ``(SPAN_MIN, PLAUSIBLE_INPUT]`` (else ``v.fail`` naming the field)."""
+    if (np.abs(lo) > PLAUSIBLE_INPUT).any():
+        v.fail(at_lo, f"must hold numbers within ±{PLAUSIBLE_INPUT:g}, got {show(lo.tolist())}")
+    if ((span <= SPAN_MIN) | (span > PLAUSIBLE_INPUT)).any():
+        v.fail(at_span, f"must hold spans in ({SPAN_MIN:g}, {PLAUSIBLE_INPUT:g}], got {show(span.tolist())}")
+
+
 class PoseEncoder(Estimator):
     """Tool poses to scaled inputs: :func:`encode` (read in the robot's :func:`arm_chart` for
     ``"arm_plane"``), angular inputs unwrapped about the training poses' circular mean, every
-    input scaled to ``[0, 1]`` by the training poses' range (``SPAN_MIN`` or narrower: by 1).
+    input scaled to ``[0, 1]`` by the training poses' range (:func:`input_scaling`).
 
     Args:
         encoding: one of :data:`ENCODINGS`.
@@ -160,8 +186,10 @@ class PoseEncoder(Estimator):
             pose's approach axis may leave the arm's vertical plane (:func:`out_of_plane`);
             beyond it the encoding loses information and ``fit`` refuses the robot.
 
-    Learned attributes: ``chart_`` (:func:`arm_chart` or ``None``), ``angle_centre_``,
-    ``input_lo_``, ``input_span_``.
+    Learned attributes: ``chart_`` (:func:`arm_chart` ``(2, 4, 4)`` or ``None``),
+    ``angle_centre_`` (``(a,)`` [rad], one per angular input of :data:`ANGULAR`), ``input_lo_``
+    and ``input_span_`` (``(d,)``, in the inputs' units: rad, m or none), ``feature_names_``
+    (the ``d`` inputs' names, :data:`FEATURE_NAMES`).
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -171,7 +199,7 @@ class PoseEncoder(Estimator):
         >>> T = fk(robot, sample_configurations(robot, 100, 0))                 # (100, 4, 4)
         >>> encoder = PoseEncoder("arm_plane").fit(robot, T)
         >>> X = encoder.transform(T)
-        >>> X.shape, float(X.min()), float(X.max()), encoder.feature_names[:3]
+        >>> X.shape, float(X.min()), float(X.max()), encoder.feature_names_[:3]
         ((100, 6), 0.0, 1.0, ['azimuth', 'r', 'z'])
     """
 
@@ -181,10 +209,6 @@ class PoseEncoder(Estimator):
         self.encoding = encoding
         self.max_out_of_plane = max_out_of_plane
 
-    @property
-    def feature_names(self) -> list[str]:
-        return FEATURE_NAMES[self.encoding]
-
     def fit(self, robot: Robot, T: np.ndarray) -> "PoseEncoder":
         """Learn the chart, the unwrapping centres and the scaling from training poses
         ``T (N, 4, 4)`` (rigid transforms, checked by the caller)."""
@@ -192,7 +216,12 @@ class PoseEncoder(Estimator):
         return self
 
     def fit_transform(self, robot: Robot, T: np.ndarray) -> np.ndarray:
-        """:meth:`fit`, returning the training poses' scaled inputs ``(N, d)``."""
+        """:meth:`fit`, returning the training poses' scaled inputs ``(N, d)``.
+
+        Raises:
+            ValueError: an unknown encoding, or ``"arm_plane"`` for poses that leave the arm's
+                plane by more than ``max_out_of_plane`` (naming the robot and the angle).
+        """
         if self.encoding not in ENCODINGS:
             raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
         self.chart_ = arm_chart(robot) if self.encoding == "arm_plane" else None
@@ -208,15 +237,60 @@ class PoseEncoder(Estimator):
         self.angle_centre_ = np.angle(np.exp(1j * X[:, columns]).mean(axis=0)) if columns \
             else np.zeros(0)
         X = _unwrap(X, columns, self.angle_centre_)
-        self.input_lo_ = X.min(axis=0)
-        self.input_span_ = np.where(np.ptp(X, axis=0) > SPAN_MIN, np.ptp(X, axis=0), 1.0)
+        self.input_lo_, self.input_span_ = input_scaling(X)
+        self.feature_names_ = list(FEATURE_NAMES[self.encoding])
         return (X - self.input_lo_) / self.input_span_
 
     def transform(self, T: np.ndarray) -> np.ndarray:
-        """Scaled inputs ``(N, d)`` of poses ``T (N, 4, 4)``."""
+        """Scaled inputs ``(..., d)`` of poses ``T (..., 4, 4)``: in ``[0, 1]`` inside the
+        training poses' range, beyond it outside."""
         self._check_fitted()
         X = _unwrap(encode(T, self.encoding, self.chart_), ANGULAR[self.encoding],
                     self.angle_centre_, inplace=True)
         X -= self.input_lo_
         X /= self.input_span_
         return X
+
+    # -- persistence --------------------------------------------------------------------------
+
+    def to_dict(self) -> dict:
+        """The parameters and learned state as JSON-ready fields: ``encoding``,
+        ``max_out_of_plane``, ``angle_centre``, ``input_lo``, ``input_span`` and, when there is
+        one, ``chart``. A :class:`nfarm.learning.learned.LearnedIK` file holds them among its own."""
+        self._check_fitted()
+        return {"encoding": self.encoding, "max_out_of_plane": self.max_out_of_plane,
+                "angle_centre": self.angle_centre_.tolist(), "input_lo": self.input_lo_.tolist(),
+                "input_span": self.input_span_.tolist()} | \
+            ({} if self.chart_ is None else {"chart": self.chart_.tolist()})
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = "<dict>") -> "PoseEncoder":
+        """The encoder :meth:`to_dict` described, each field checked (a ``ParamsError`` naming
+        ``source`` and the field); other fields of ``data`` are left to its caller."""
+        v = Validator(source)
+        if not isinstance(data, Mapping):
+            v.fail("", f"must be a mapping of fields, got {show(data)}")
+        for key in ("encoding", "max_out_of_plane", "angle_centre", "input_lo", "input_span"):
+            if key not in data:
+                v.fail(key, "required field is missing")
+        encoding = v.choice(data["encoding"], "encoding", tuple(ENCODINGS))
+        d = ENCODINGS[encoding]
+        lo = v.array(data["input_lo"], "input_lo", (d,))
+        span = v.array(data["input_span"], "input_span", (d,))
+        check_scaling(v, lo, span, "input_lo", "input_span")
+        max_out = v.number(data["max_out_of_plane"], "max_out_of_plane", lo=0.0, hi=math.pi)
+        centre = v.array(data["angle_centre"], "angle_centre", (len(ANGULAR[encoding]),))
+        if (np.abs(centre) > 2 * math.pi).any():
+            v.fail("angle_centre", f"must hold angles within [-2π, 2π] rad, got {show(centre.tolist())}")
+        chart = v.array(data["chart"], "chart", (2, 4, 4)) if data.get("chart") is not None else None
+        for k, T in enumerate([] if chart is None else chart):
+            R = T[:3, :3]
+            if not (np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-12)
+                    and np.allclose(R @ R.T, np.eye(3), rtol=0.0, atol=1e-9)
+                    and np.linalg.det(R) > 0 and (np.abs(T[:3, 3]) <= PLAUSIBLE_INPUT).all()):
+                v.fail(f"chart[{k}]", "must be a rigid transform (a rotation, a plausible position, last "
+                                      "row 0 0 0 1)")
+        encoder = cls(encoding, max_out)
+        encoder.chart_, encoder.angle_centre_, encoder.input_lo_, encoder.input_span_ = chart, centre, lo, span
+        encoder.feature_names_ = list(FEATURE_NAMES[encoding])
+        return encoder

@@ -4,6 +4,12 @@ unchanged; ``get_params`` and ``set_params`` read and change them (an unknown na
 one line naming the valid ones); ``repr`` shows those that differ from their defaults; and a
 learner used before it was fitted says so in one line.
 
+**Saving.** A learner that can be saved (:class:`nfarm.learning.anfis.ANFIS`, ``ANFISMulti``,
+:class:`nfarm.learning.learned.LearnedIK`, ``LearnedID``) takes a *directory* and writes one JSON
+file of a fixed name in it (:func:`write_model`), so that a model's directory can hold what
+belongs with it (``fit_cached``'s ``inputs.sha256``); loading takes that directory or the file
+itself (:func:`model_file`).
+
 A learner whose ``__init__`` takes ``**options`` passes them on to the learners it builds (an
 :class:`nfarm.learning.anfis.ANFIS` per joint): they are parameters too, kept in the attribute
 named like that argument and checked against the learner they go to (:attr:`Estimator._passed_to`).
@@ -12,9 +18,15 @@ named like that argument and checked against the learner they go to (:attr:`Esti
 from __future__ import annotations
 
 import inspect
+import json
+import os
+from pathlib import Path
 from typing import Any, ClassVar
 
-__all__ = ["Estimator"]
+from ..infra.paths import atomic_path
+from ..infra.reading import with_content_digest
+
+__all__ = ["Estimator", "write_model", "model_file"]
 
 
 class Estimator:
@@ -108,3 +120,30 @@ def _same(value: Any, default: Any) -> bool:
         return bool(value == default) and type(value) is type(default)
     except (TypeError, ValueError):
         return False
+
+
+def write_model(directory: str | os.PathLike, file_name: str, data: dict) -> Path:
+    """Write a model's :meth:`to_dict` ``data`` as ``directory/file_name`` (JSON with its content
+    hash, :func:`nfarm.infra.reading.with_content_digest`; atomically, the directory made if
+    missing) and return the file's path. Floats are written with full precision, so the model
+    read back predicts bit for bit what it did.
+
+    Raises:
+        ValueError: ``directory`` names a JSON file (``….json``): a model is saved into a
+            directory, as ``file_name``.
+    """
+    directory = Path(directory)
+    if directory.suffix.lower() == ".json":
+        raise ValueError(f"save takes a directory (the model is written into it as {file_name}), "
+                         f"got the file name {str(directory)!r}")
+    path = directory / file_name
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(with_content_digest(data)), encoding="utf-8")
+    return path
+
+
+def model_file(path: str | os.PathLike, file_name: str) -> Path:
+    """The saved model at ``path``: ``path/file_name`` when ``path`` is a directory (what
+    :func:`write_model` was given), else ``path`` itself (the file)."""
+    path = Path(path)
+    return path / file_name if path.is_dir() else path

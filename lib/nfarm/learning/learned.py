@@ -22,9 +22,11 @@ parameters, an identification, not a learning result. With ``residual=True`` a m
 encoder states, sensor noise), compared with a least-squares friction identification in
 chapter 07 (``figures/tables/07_id_measured``).
 
-Models are saved as one JSON file (no pickle) holding the robot's parameter hash
-(:func:`nfarm.model.robot.robot_hash`); loading against another robot is an error, and the file is
-validated like a parameter file (:mod:`nfarm.infra.reading`).
+A model is saved into a directory as one JSON file (``learned_ik.json``, ``learned_id.json``; no
+pickle; the convention of every saved learner, :func:`nfarm.learning.estimator.write_model`)
+holding the robot's parameter hash (:func:`nfarm.model.robot.robot_hash`); loading against
+another robot is an error, and the file is validated like a parameter file
+(:mod:`nfarm.infra.reading`).
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ import numpy as np
 from .. import __version__
 from ..infra.paths import atomic_path
 from ..infra.provenance import code_digest
-from ..infra.reading import Validator, checked_content, json_ready, load_json, show, with_content_digest
+from ..infra.reading import Validator, checked_content, json_ready, load_json, show
 from ..model.dynamics import regressor, rnea
 from ..model.kinematics import fk
 from ..model.robot import Robot, joint_array, robot_hash
@@ -53,8 +55,9 @@ from ..model.rotations import pose_error
 from ..solvers.ik import check_targets
 from .anfis import ANFIS
 from .bases import basis, basis_width
-from .encoding import ANGULAR, ENCODINGS, FEATURE_NAMES, SPAN_MIN, PoseEncoder, arm_chart, encode, out_of_plane
-from .estimator import Estimator
+from .encoding import (ANGULAR, ENCODINGS, PoseEncoder, arm_chart, check_scaling, encode, input_scaling,
+                       out_of_plane)
+from .estimator import Estimator, model_file, write_model
 
 __all__ = ["LearnedIK", "LearnedID", "Baseline", "id_features", "regressor_columns", "INPUT_SETS",
            "encode", "arm_chart", "out_of_plane", "ik_errors", "fit_cached", "fingerprint", "n_parameters",
@@ -177,7 +180,7 @@ class LearnedIK(Estimator):
         self.encoder_ = PoseEncoder(self.encoding, self.max_out_of_plane)
         Xs = self.encoder_.fit_transform(robot, T)
         Xv = self.encoder_.transform(T_val) if T_val is not None else None
-        names = self.encoder_.feature_names
+        names = self.encoder_.feature_names_
         self.models_, self.fit_seconds_ = [], []
         for j in range(robot.n):
             start = time.perf_counter()
@@ -249,41 +252,40 @@ class LearnedIK(Estimator):
     def describe(self) -> str:
         """What the model is: encoding, rule bases, sizes, training errors, per joint."""
         self._check_fitted()
+        names = self.encoder_.feature_names_
         lines = [f"LearnedIK for {self.robot_name_} ({self.n_joints_} joints), encoding "
-                 f"{self.encoding!r} ({ENCODINGS[self.encoding]} inputs: "
-                 f"{', '.join(FEATURE_NAMES[self.encoding])})"]
+                 f"{self.encoding!r} ({len(names)} inputs: {', '.join(names)})"]
         return "\n".join(lines + _model_lines(self.models_, "rad"))
 
     # -- persistence --------------------------------------------------------------------------
 
     def to_dict(self) -> dict:
+        """The model as JSON-ready fields: its options, the robot's name and parameter hash,
+        the encoder's fields (:meth:`PoseEncoder.to_dict`) and one ANFIS per joint."""
         self._check_fitted()
-        return {"format": _FORMAT, "nfarm_version": __version__, "encoding": self.encoding,
+        return {"format": _FORMAT, "nfarm_version": __version__,
                 "anfis_options": json_ready(self.anfis_options),
-                "joint_options": json_ready(self.joint_options), "max_out_of_plane":
-                self.max_out_of_plane, "robot": self.robot_name_,
+                "joint_options": json_ready(self.joint_options), "robot": self.robot_name_,
                 "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
-                "angle_centre": self.encoder_.angle_centre_.tolist(),
-                "input_lo": self.encoder_.input_lo_.tolist(), "input_span": self.encoder_.input_span_.tolist(),
                 "fit_seconds": list(self.fit_seconds_),
-                "models": [m.to_dict() for m in self.models_]} | \
-            ({} if self.encoder_.chart_ is None else {"chart": self.encoder_.chart_.tolist()})
+                "models": [m.to_dict() for m in self.models_], **self.encoder_.to_dict()}
 
     def save(self, directory: str | os.PathLike) -> Path:
-        """Write ``directory/learned_ik.json`` atomically; :meth:`load` reproduces the
-        predictions bit for bit. Returns the file's path."""
-        return _write_model(Path(directory) / FILE_NAME, self.to_dict())
+        """Write the model as ``directory/learned_ik.json`` (:data:`FILE_NAME`; JSON,
+        atomically) and return the file's path; :meth:`load` of the directory reproduces the
+        predictions bit for bit."""
+        return write_model(directory, FILE_NAME, self.to_dict())
 
     @classmethod
     def load(cls, directory: str | os.PathLike, robot: Robot) -> "LearnedIK":
-        """Read a model saved by :meth:`save` for ``robot``.
+        """Read a model saved by :meth:`save` for ``robot`` from the directory it was saved
+        into (or from the file itself).
 
         Raises:
             ParamsError: a missing, damaged or edited file (named, with the field), or a model
                 trained for another robot.
         """
-        path = Path(directory)
-        path = path / FILE_NAME if path.is_dir() else path
+        path = model_file(directory, FILE_NAME)
         data = _checked_file(load_json(path, what="learned IK model"), str(path), _FORMAT, "learned IK")
         return cls.from_dict(data, robot, str(path))
 
@@ -297,28 +299,10 @@ class LearnedIK(Estimator):
         d = ENCODINGS[encoding]
         n, options, joint_options, fitted, seconds = _read_joint_models(
             v, data, robot, source, [d] * robot.n, f"encoding {encoding!r}")
-        lo = v.array(data["input_lo"], "input_lo", (d,))
-        span = v.array(data["input_span"], "input_span", (d,))
-        _check_scaling(v, lo, span, "input_lo", "input_span")
-        max_out = v.number(data["max_out_of_plane"], "max_out_of_plane", lo=0.0, hi=math.pi)
-        centre = v.array(data["angle_centre"], "angle_centre", (len(ANGULAR[encoding]),))
-        if (np.abs(centre) > 2 * math.pi).any():
-            v.fail("angle_centre", f"must hold angles within [-2π, 2π] rad, got {show(centre.tolist())}")
-        model = cls(encoding=encoding, joint_options=joint_options, max_out_of_plane=max_out,
-                    **options)
-        model.models_, model.fit_seconds_ = fitted, seconds
-        encoder = model.encoder_ = PoseEncoder(encoding, max_out)
-        encoder.angle_centre_, encoder.input_lo_, encoder.input_span_ = centre, lo, span
-        encoder.chart_ = v.array(data["chart"], "chart", (2, 4, 4)) if data.get("chart") is not None \
-            else None
-        if encoder.chart_ is not None:
-            for k, T in enumerate(encoder.chart_):
-                R = T[:3, :3]
-                if not (np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-12)
-                        and np.allclose(R @ R.T, np.eye(3), rtol=0.0, atol=1e-9)
-                        and np.linalg.det(R) > 0 and (np.abs(T[:3, 3]) <= PLAUSIBLE_INPUT).all()):
-                    v.fail(f"chart[{k}]", "must be a rigid transform (a rotation, a plausible position, last "
-                                          "row 0 0 0 1)")
+        encoder = PoseEncoder.from_dict(data, source)
+        model = cls(encoding=encoding, joint_options=joint_options,
+                    max_out_of_plane=encoder.max_out_of_plane, **options)
+        model.models_, model.fit_seconds_, model.encoder_ = fitted, seconds, encoder
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
         return model
@@ -327,20 +311,6 @@ class LearnedIK(Estimator):
 _KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options",
          "max_out_of_plane", "robot", "robot_params_sha256", "n_joints", "angle_centre",
          "input_lo", "input_span", "fit_seconds", "models")
-
-
-#: An input's span at or below this is a constant input (scaled by 1); a saved span must exceed
-#: it, and a saved input's lowest value and span must lie within ±PLAUSIBLE_INPUT: every input
-#: of the study (angles, metres, rad/s, rad/s² and their products) is far inside, and an edited
-#: 1e308 or 1e-300 would otherwise turn predictions into inf or 1e287.
-PLAUSIBLE_INPUT = 1e6
-
-
-def _check_scaling(v: Validator, lo: np.ndarray, span: np.ndarray, at_lo: str, at_span: str) -> None:
-    if (np.abs(lo) > PLAUSIBLE_INPUT).any():
-        v.fail(at_lo, f"must hold numbers within ±{PLAUSIBLE_INPUT:g}, got {show(lo.tolist())}")
-    if ((span <= SPAN_MIN) | (span > PLAUSIBLE_INPUT)).any():
-        v.fail(at_span, f"must hold spans in ({SPAN_MIN:g}, {PLAUSIBLE_INPUT:g}], got {show(span.tolist())}")
 
 
 def _checked_file(data: Any, source: str, form: str, what: str) -> dict:
@@ -353,12 +323,6 @@ def _checked_file(data: Any, source: str, form: str, what: str) -> dict:
     if data.get("format") != form:
         v.fail("format", f"must be {form!r} (an nfarm {what} model), got {show(data.get('format'))}")
     return checked_content(data, source)
-
-
-def _write_model(path: Path, data: dict) -> Path:
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(with_content_digest(data)), encoding="utf-8")
-    return path
 
 
 def _read_joint_models(v: Validator, data: Mapping, robot: Robot, source: str, widths: list[int],
@@ -580,11 +544,8 @@ class LearnedID(Estimator):
             val_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
         self.__dict__.pop("models_", None)       # a failed refit leaves no half-fitted model
         self.robot_ = robot
-        self.input_lo_, self.input_span_ = [], []
-        for X in id_features(robot, q, qd, qdd, self.inputs):
-            lo, span = X.min(axis=0), np.ptp(X, axis=0)
-            self.input_lo_.append(lo)
-            self.input_span_.append(np.where(span > SPAN_MIN, span, 1.0))   # ANFIS refuses constants
+        scalings = [input_scaling(X) for X in id_features(robot, q, qd, qdd, self.inputs)]
+        self.input_lo_, self.input_span_ = [lo for lo, _ in scalings], [span for _, span in scalings]
         X = self._inputs(q, qd, qdd)
         Xv = self._inputs(vq, vqd, vqdd) if val_states is not None else [None] * n
         models, seconds = [], []
@@ -659,16 +620,17 @@ class LearnedID(Estimator):
                 "models": [m.to_dict() for m in self.models_]}
 
     def save(self, directory: str | os.PathLike) -> Path:
-        """Write ``directory/learned_id.json`` atomically; :meth:`load` reproduces the
-        predictions bit for bit. Returns the file's path."""
-        return _write_model(Path(directory) / ID_FILE_NAME, self.to_dict())
+        """Write the model as ``directory/learned_id.json`` (:data:`ID_FILE_NAME`; JSON,
+        atomically) and return the file's path; :meth:`load` of the directory reproduces the
+        predictions bit for bit."""
+        return write_model(directory, ID_FILE_NAME, self.to_dict())
 
     @classmethod
     def load(cls, directory: str | os.PathLike, robot: Robot) -> "LearnedID":
-        """Read a model saved by :meth:`save` for ``robot`` (a :class:`ParamsError` naming the
-        file and the field for a missing, damaged, edited or other robot's file)."""
-        path = Path(directory)
-        path = path / ID_FILE_NAME if path.is_dir() else path
+        """Read a model saved by :meth:`save` for ``robot`` from the directory it was saved
+        into (or from the file itself); a :class:`ParamsError` naming the file and the field
+        for a missing, damaged, edited or other robot's file."""
+        path = model_file(directory, ID_FILE_NAME)
         data = _checked_file(load_json(path, what="learned ID model"), str(path), _ID_FORMAT, "learned ID")
         return cls.from_dict(data, robot, str(path))
 
@@ -689,7 +651,7 @@ class LearnedID(Estimator):
                 enumerate(zip(v.sequence(data["input_span"], "input_span", min_len=n, max_len=n),
                               widths))]
         for j, (lo_j, span_j) in enumerate(zip(lo, span)):
-            _check_scaling(v, lo_j, span_j, f"input_lo[{j}]", f"input_span[{j}]")
+            check_scaling(v, lo_j, span_j, f"input_lo[{j}]", f"input_span[{j}]")
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
         model.input_lo_, model.input_span_ = list(lo), list(span)

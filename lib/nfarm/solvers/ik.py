@@ -19,8 +19,9 @@ roots of ``weights``; ``E = ½ eᵀe``)::
     JT()    "jt"    Jacobian transpose    Δq = α Jᵀe, α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖² (Buss 2009)
 
 ``solve(robot, T, method=LM(damping="marquardt"))`` picks one with its options; a name picks
-one with its defaults. ``LM(damping="sugihara")`` (default) is Sugihara's (2011) rule ``λ = s·E + w̄``: the damping
-vanishes with the error, so the last iterations are Gauss–Newton (quadratic convergence).
+one with its defaults. ``LM(damping="sugihara")`` (default) is Sugihara's (2011) rule
+``λ = s·E + w̄``: the damping vanishes with the error, so the last iterations are Gauss–Newton
+(quadratic convergence).
 ``"marquardt"`` is the classic schedule (λ ÷ ν after a step that lowers E, × ν after one that
 does not). Both keep the last accepted point and retry from it with ν times the damping after
 a step that raised E (for Sugihara's rule, a multiplier ≥ 1 of s·E + w̄): far from a solution,
@@ -313,6 +314,15 @@ class Method:
     ``max_iter``: the steps per attempt a solve gives it unless told otherwise. A ``guarded``
     rule keeps each lane's last accepted point and steps from it again with more damping after
     a step that raised E (:meth:`adapt`).
+
+    Example:
+        >>> J = np.zeros((6, 5, 3)); J[:5] = np.eye(5)[:, :, None]     # J (6, n, A): Δq = e[:5]
+        >>> e = np.ones((6, 3))                                          # e (6, A)
+        >>> dq = Pinv().step(J, e, 0.5 * (e * e).sum(0), np.ones(3))     # Δq (n, A)
+        >>> dq.shape, bool(np.allclose(dq, 1.0))
+        ((5, 3), True)
+        >>> all(isinstance(METHODS[name](), Method) for name in METHODS)
+        True
     """
 
     name: ClassVar[str]
@@ -324,6 +334,7 @@ class Method:
         return 1.0
 
     def step(self, J: np.ndarray, e: np.ndarray, E: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """The step ``Δq (n, A)`` of every lane."""
         raise NotImplementedError
 
     def adapt(self, lam: np.ndarray, accept: np.ndarray) -> np.ndarray:
@@ -660,6 +671,7 @@ class _Search:
         self.seeds, self.first_rank = seeds, first_rank
         self.sw = np.sqrt(w)
         self.mask = w > 0
+        self.unit_weights = bool((self.sw == 1).all())    # no scaling needed
         self.lo, self.hi = robot.qlim[:, 0], robot.qlim[:, 1]
         self.R_t = np.ascontiguousarray(np.moveaxis(T[:, :3, :3], 0, -1))
         self.p_t = np.ascontiguousarray(T[:, :3, 3].T)
@@ -696,17 +708,12 @@ class _Search:
         return lanes
 
     def _iteration(self):
+        """One step of every live lane, each job in its method (class docstring)."""
         t = self.lanes["target"]
-        e, J, weighted, full = self._errors(self.lanes["q"], t)
-        if self.mask.all() and (self.sw == 1).all():
-            es, Js = e, J
-        else:
-            es, Js = e * self.sw[:, None], J * self.sw[:, None, None]
+        es, Js, weighted, full = self._errors(self.lanes["q"], t)
         E = 0.5 * (es * es).sum(0)
         self._record(t, full)
-        q, inside = self.lanes["q"], np.ones(t.size, bool)
-        if self.rules.respect_limits:
-            q, inside = _wrap_into_limits(q, self.lo, self.hi)
+        q, inside = self._within_limits(self.lanes["q"])
         self._keep_best(t, q, inside, E, full)
         solved = self._finish_solved(t, q, inside, weighted, full)
         if self.method.guarded:
@@ -714,24 +721,33 @@ class _Search:
         keep = self._still_going(t, E, solved)
         if not keep.all():
             es, Js, E = self._cull(t, keep, es, Js, E)
-        self.lanes["q"] += self.method.step(Js, es, E, self.lanes["lam"])
-        self.lanes["steps"] += 1
-        np.add.at(self.iterations, self.lanes["target"], 1)     # lanes side by side each count
+        self._step(es, Js, E)
         self._restart_or_stop()
 
     def _errors(self, q, target):
-        """Pose error ``e (6, L)``, Jacobian ``(6, n, L)``, and per lane the position and
-        orientation errors, of the weighted components ``(2, L)`` and in full ``(2, L)``."""
+        """Pose error ``e (6, L)`` and Jacobian ``(6, n, L)``, both scaled by ``sqrt(weights)``,
+        and per lane the position and orientation errors, of the weighted components ``(2, L)``
+        and in full ``(2, L)``."""
         T, J = pose_jacobian_T(self.robot, q)
         e = np.empty((6, target.size))
         e[:3] = self.p_t[:, target] - T[:3, 3]
         e[3:] = relative_log_T(self.R_t[:, :, target], T[:3, :3])       # log(R_t Rᵀ)
         square = e * e
         full = np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)]))
-        if self.mask.all():
-            return e, J, full, full
-        square *= self.mask[:, None]
-        return e, J, np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)])), full
+        weighted = full
+        if not self.mask.all():
+            square *= self.mask[:, None]
+            weighted = np.sqrt(np.stack([square[:3].sum(0), square[3:].sum(0)]))
+        if self.unit_weights:
+            return e, J, weighted, full
+        return e * self.sw[:, None], J * self.sw[:, None, None], weighted, full
+
+    def _within_limits(self, q):
+        """The lanes' angles moved by multiples of 2π into the limits, and which lanes then lie
+        within them (all of them when the limits are not respected)."""
+        if self.rules.respect_limits:
+            return _wrap_into_limits(q, self.lo, self.hi)
+        return q, np.ones(q.shape[1], bool)
 
     def _record(self, t, full):
         """The history: each target's smallest errors over its lanes before this step."""
@@ -785,6 +801,14 @@ class _Search:
         out_of_steps = (lanes["steps"] >= rules.max_iter) & ~solved & ~stalled
         self.hit_max_iter[t[out_of_steps]] = True
         return ~solved & ~stalled & ~out_of_steps & ~self.done[t]
+
+    def _step(self, es, Js, E):
+        """Move every live lane by its method's step, and count the step for its target (lanes
+        side by side each count)."""
+        lanes = self.lanes
+        lanes["q"] += self.method.step(Js, es, E, lanes["lam"])
+        lanes["steps"] += 1
+        np.add.at(self.iterations, lanes["target"], 1)
 
     def _cull(self, t, keep, es, Js, E):
         """Drop the lanes that ended; returns the kept lanes' error, Jacobian and E."""
