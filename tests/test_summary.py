@@ -190,3 +190,11 @@ def test_a_target_is_judged_on_the_interval_not_the_point(low, high, target, exp
     from nfarm.study.summary import Row, target_verdict
     row = Row("inverse kinematics", "m", "chosen", "position p95", "mm", (low + high) / 2, low, high, 2000, 0.95, "")
     assert target_verdict(row, target) == expected
+
+
+def test_a_joint_below_the_noise_is_shown_without_an_interval():
+    from nfarm.study.summary import Row, interval_text
+    row = Row("inverse dynamics", "m", "chosen", "τ5 wrist_roll (below noise)", "%", 74.6, 61.6, 89.1, 2000, 0.95, "")
+    assert interval_text(row) == "75"
+    resolved = Row("inverse dynamics", "m", "chosen", "τ4 wrist_flex", "%", 1.3, 1.13, 1.46, 2000, 0.95, "")
+    assert interval_text(resolved) == "1.3 (1.13–1.46)"

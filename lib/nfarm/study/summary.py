@@ -258,8 +258,12 @@ def long_table(rows: Sequence[Row], *, floors: Mapping[str, float] | None = None
 
 
 def interval_text(row: Row, floors: Mapping[str, float] | None = None, digits: str = ".3g") -> str:
-    """``value (low–high)`` of a row for a reader; one value when the interval is a point."""
+    """``value (low–high)`` of a row for a reader; one value when the interval is a point. A
+    joint whose torque lies below the sensor noise (its metric marked "(below noise)") gets two
+    significant digits and no interval: its value is no evidence, and its spread is noise's."""
     floor = _floor(row, floors or {})
+    if row.metric.endswith("(below noise)"):
+        return shown(row.value, ".2g", floor=floor)
     value, low, high = (shown(v, digits, floor=floor) for v in (row.value, row.low, row.high))
     return value if low == high == value else f"{value} ({low}–{high})"
 
