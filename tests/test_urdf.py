@@ -54,6 +54,18 @@ def test_urdf_structure(robot):
         assert root.find(f"link[@name='link{i + 1}']/visual") is not None
 
 
+def test_a_prefix_renames_every_link_and_joint_and_nothing_else(intelbot5):
+    """Two copies of one arm share a scene: every name and every reference to a link carries
+    the prefix, the rest of the document (colour apart) is unchanged."""
+    plain, left = to_urdf(intelbot5), to_urdf(intelbot5, prefix="left_", color=(0.1, 0.2, 0.3))
+    root = ET.fromstring(left)
+    links = {link.get("name") for link in root.iter("link")}
+    assert root.get("name") == "left_intelbot5"
+    assert all(name.startswith("left_") for name in links | {j.get("name") for j in root.iter("joint")})
+    assert {e.get("link") for j in root.iter("joint") for e in (j.find("parent"), j.find("child"))} <= links
+    assert left.replace("left_", "").replace("0.1 0.2 0.3 1", "0.85 0.55 0.15 1") == plain
+
+
 def test_rerun_loads_the_urdf(intelbot5, tmp_path):
     """rerun's own URDF loader (inside the SDK, no viewer) turns every link into geometry."""
     urdf = tmp_path / "intelbot5.urdf"
@@ -264,6 +276,8 @@ def test_a_small_urdf_reads_as_expected(tmp_path):
      r"<robot>: the root element must be <robot>, got <robots>"),
     (lambda s: s.replace('</robot>', '<joint name="j3" type="fixed"><parent link="l1"/><child link="l3"/></joint><link name="l3"/></robot>'),
      r"tip: the URDF has 2 leaf links \(l2, l3\): name the chain's last link"),
+    (lambda s: s.replace('lower="-1" upper="1"', 'lower="-7" upper="7"', 1),     # the robot's own rules
+     r"joints\[0\]\.qlim: must lie within \[-2π, 2π\] rad, .* \(converted from the URDF\)$"),
 ])
 def test_every_urdf_rule_has_a_bad_file(tmp_path, change, message):
     path = tmp_path / "bad.urdf"

@@ -26,14 +26,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..infra.reading import ParamsError, Validator, read_bytes
 from .kinematics import joint_placements
-from .robot import Robot, register_reader
+from .robot import Robot, register_reader, robot_from_dict, with_provenance
 from .rotations import matrix_to_rpy
 
 __all__ = ["to_urdf", "from_urdf"]
 
 
 def _f(x: float) -> str:
+    """A number as URDF text: its ``repr`` (which reads back exactly), ``0`` for zero."""
     return repr(float(x)) if x != 0 else "0"
 
 
@@ -43,6 +45,8 @@ def _limit(x: float) -> str:
 
 
 def _origin(T: np.ndarray) -> str:
+    """The ``<origin>`` of a pose ``T`` ``(4, 4)``: ``xyz`` its translation [m], ``rpy`` URDF's
+    fixed-axis roll, pitch, yaw [rad] of its rotation (``R = Rz(y) · Ry(p) · Rx(r)``)."""
     xyz = " ".join(_f(v) for v in T[:3, 3])
     rpy = " ".join(_f(v) for v in matrix_to_rpy(T[:3, :3]))
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
@@ -64,6 +68,9 @@ def _cylinder(start: np.ndarray, end: np.ndarray, radius: float) -> str:
 
 
 def _link_visuals(points: list[np.ndarray], radius: float) -> list[str]:
+    """A link's visuals: the joint, a cylinder of radius ``1.25·radius`` [m] along the link
+    frame's z axis, and a cylinder along each segment (longer than 1 nm) of the polyline
+    ``points`` (each ``(3,)`` [m] in the link frame)."""
     out = [_cylinder(np.array([0, 0, -radius]), np.array([0, 0, radius]), 1.25 * radius)]
     for start, end in zip(points, points[1:]):
         if np.linalg.norm(end - start) > 1e-9:
@@ -90,64 +97,96 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
     """
     J, B = joint_placements(robot)
     n = robot.n
-    size = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d)))
-    radius = 0.04 * max(size, 0.25)  # visuals in proportion, and visible on a tiny chain
     tool = B[-1] @ robot.tool
-    lines = ['<?xml version="1.0"?>', f'<robot name="{robot.name}">',
-             f'  <material name="link"><color rgba="{" ".join(_f(c) for c in color)} 1"/></material>',
-             '  <link name="base_link">',
-             _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>',
-             '  <joint name="dh_frame0_fixed" type="fixed">',
-             f'    <parent link="base_link"/><child link="dh_frame0"/>{_origin(robot.base)}',
-             '  </joint>',
-             '  <link name="dh_frame0"/>']
+    radius = _visual_radius(robot)
+    lines = _header(robot.name, color, radius) + _fixed_frame("dh_frame0", "base_link", robot.base)
     for i in range(n):
-        child = f"link{i + 1}"
         parent = "base_link" if i == 0 else f"link{i}"
-        lo, hi = robot.qlim[i]
-        lines += [
-            f'  <joint name="{robot.joint_names[i]}" type="revolute">',
-            f'    <parent link="{parent}"/><child link="{child}"/>',
-            f'    {_origin(robot.base @ J[i] if i == 0 else J[i])}<axis xyz="0 0 1"/>',
+        lines += _revolute_joint(robot, i, parent, robot.base @ J[i] if i == 0 else J[i])
+        end = (J[i + 1] if i + 1 < n else tool)[:3, 3]
+        lines += _body_link(robot, i, B[i], end, radius)
+        lines += _fixed_frame(f"dh_frame{i + 1}", f"link{i + 1}", B[i])
+    lines += _fixed_frame("tool", f"link{n}", tool) + ['</robot>']
+    return _prefixed("\n".join(lines) + "\n", prefix)
+
+
+def _visual_radius(robot: Robot) -> float:
+    """The visual cylinders' radius [m]: 4 % of the chain's size ``Σ|a_i| + Σ|d_i|``, at least
+    0.01 m (so that a tiny chain stays visible)."""
+    size = float(np.sum(np.abs(robot.a)) + np.sum(np.abs(robot.d)))
+    return 0.04 * max(size, 0.25)
+
+
+def _header(name: str, color: tuple[float, float, float], radius: float) -> list[str]:
+    """The document's opening lines: the ``<robot>`` element, the links' material (RGB in
+    [0, 1], opaque) and ``base_link``, drawn as a cylinder of radius ``2·radius`` [m] below
+    its origin."""
+    return ['<?xml version="1.0"?>', f'<robot name="{name}">',
+            f'  <material name="link"><color rgba="{" ".join(_f(c) for c in color)} 1"/></material>',
+            '  <link name="base_link">',
+            _cylinder(np.array([0, 0, -2 * radius]), np.zeros(3), 2 * radius), '  </link>']
+
+
+def _fixed_frame(name: str, parent: str, T: np.ndarray) -> list[str]:
+    """A massless link ``name`` fixed to ``parent`` at ``T`` ``(4, 4)`` [m] (its pose in the
+    parent), by a fixed joint ``<name>_fixed``: a named frame to look up."""
+    return [f'  <joint name="{name}_fixed" type="fixed">',
+            f'    <parent link="{parent}"/><child link="{name}"/>{_origin(T)}',
+            '  </joint>',
+            f'  <link name="{name}"/>']
+
+
+def _revolute_joint(robot: Robot, i: int, parent: str, placement: np.ndarray) -> list[str]:
+    """Joint i+1 (0-based ``i``): about the z axis of ``placement`` ``(4, 4)`` (the joint in
+    ``parent``'s frame, :func:`~nfarm.model.kinematics.joint_placements`), turning
+    ``link{i+1}``, with its limits [rad], effort [N m] and velocity [rad/s] (0: none)."""
+    lo, hi = robot.qlim[i]
+    return [f'  <joint name="{robot.joint_names[i]}" type="revolute">',
+            f'    <parent link="{parent}"/><child link="link{i + 1}"/>',
+            f'    {_origin(placement)}<axis xyz="0 0 1"/>',
             f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="{_limit(robot.effort[i])}" '
             f'velocity="{_limit(robot.velocity[i])}"/>',
-            '  </joint>',
-        ]
-        # Inertial: the centre of mass and inertia are given in DH frame i+1 = B[i] in the body.
-        com = B[i] @ np.append(robot.com[i], 1.0)
-        inertial = B[i].copy()
-        inertial[:3, 3] = com[:3]
-        I = robot.inertia[i]
-        # Visual path: from the joint to the next joint (or the tool) through the DH frame.
-        end = (J[i + 1] if i + 1 < n else tool)[:3, 3]
-        if robot.convention == "standard":  # along z by d, then along the new x by a
-            path = [np.zeros(3), np.array([0, 0, robot.d[i]]), B[i][:3, 3], end]
-        else:  # G = Rx(α) Tx(a) Tz(d) Rz(offset): along x by a, then along the new z by d
-            a_next = robot.a[i + 1] if i + 1 < n else 0.0
-            path = [np.zeros(3), np.array([a_next, 0, 0]), end]
-        lines += [
-            f'  <link name="{child}">',
-            f'    <inertial>{_origin(inertial)}<mass value="{_f(robot.mass[i])}"/>'
+            '  </joint>']
+
+
+def _body_link(robot: Robot, i: int, B_i: np.ndarray, end: np.ndarray, radius: float) -> list[str]:
+    """``link{i+1}``, the body joint i+1 moves: its inertial and visuals. ``B_i`` ``(4, 4)`` is
+    DH frame i+1 in the body, ``end`` ``(3,)`` [m] the next joint's (or the tool's) origin in it."""
+    return [f'  <link name="link{i + 1}">',
+            _inertial(robot, i, B_i),
+            *_link_visuals(_visual_path(robot, i, B_i, end), radius),
+            '  </link>']
+
+
+def _inertial(robot: Robot, i: int, B_i: np.ndarray) -> str:
+    """Link i+1's ``<inertial>``: nfarm gives the centre of mass ``c`` [m] and the inertia about
+    it [kg m²] in DH frame i+1 = ``B_i`` in the body, so the inertial frame has ``B_i``'s axes
+    and its origin at ``B_i · [c; 1]``; mass [kg]."""
+    com = B_i @ np.append(robot.com[i], 1.0)
+    inertial = B_i.copy()
+    inertial[:3, 3] = com[:3]
+    I = robot.inertia[i]
+    return (f'    <inertial>{_origin(inertial)}<mass value="{_f(robot.mass[i])}"/>'
             f'<inertia ixx="{_f(I[0, 0])}" ixy="{_f(I[0, 1])}" ixz="{_f(I[0, 2])}" '
-            f'iyy="{_f(I[1, 1])}" iyz="{_f(I[1, 2])}" izz="{_f(I[2, 2])}"/></inertial>',
-            *_link_visuals(path, radius),
-            '  </link>',
-            f'  <joint name="dh_frame{i + 1}_fixed" type="fixed">',
-            f'    <parent link="{child}"/><child link="dh_frame{i + 1}"/>{_origin(B[i])}',
-            '  </joint>',
-            f'  <link name="dh_frame{i + 1}"/>',
-        ]
-    lines += [
-        '  <joint name="tool_fixed" type="fixed">',
-        f'    <parent link="link{n}"/><child link="tool"/>{_origin(tool)}',
-        '  </joint>',
-        '  <link name="tool"/>',
-        '</robot>',
-    ]
-    text = "\n".join(lines) + "\n"
-    if prefix:
-        text = re.sub(r'(<robot name="|<link name="|<joint name="|link=")', lambda m: m[1] + prefix, text)
-    return text
+            f'iyy="{_f(I[1, 1])}" iyz="{_f(I[1, 2])}" izz="{_f(I[2, 2])}"/></inertial>')
+
+
+def _visual_path(robot: Robot, i: int, B_i: np.ndarray, end: np.ndarray) -> list[np.ndarray]:
+    """The points ``(3,)`` [m], in link i+1's frame, of a polyline from joint i+1 to ``end``
+    along the DH parameters: standard DH along z by ``d[i]``, then along the new x by ``a[i]``
+    to DH frame i+1's origin; modified DH (the next joint at ``Rx(α) Tx(a) Tz(d) Rz(offset)``
+    of row i+1) along x by ``a[i+1]``, then along the new z by ``d[i+1]``."""
+    if robot.convention == "standard":
+        return [np.zeros(3), np.array([0, 0, robot.d[i]]), B_i[:3, 3], end]
+    a_next = robot.a[i + 1] if i + 1 < robot.n else 0.0
+    return [np.zeros(3), np.array([a_next, 0, 0]), end]
+
+
+def _prefixed(text: str, prefix: str) -> str:
+    """``text`` with ``prefix`` before the robot's, every link's and every joint's name."""
+    if not prefix:
+        return text
+    return re.sub(r'(<robot name="|<link name="|<joint name="|link=")', lambda m: m[1] + prefix, text)
 
 
 # --------------------------------------------------------------------------------------------
@@ -181,7 +220,6 @@ class _Reader:
     """The URDF's elements, validated, with one-line errors naming the file and element."""
 
     def __init__(self, source: str, root):
-        from ..infra.reading import Validator
         self.v = Validator(source)
         if root.tag != "robot":
             self.v.fail("<robot>", f"the root element must be <robot>, got <{root.tag}>")
@@ -282,9 +320,9 @@ class _Reader:
 
 
 def _parse(path: Path):
+    """The URDF's root element: at most 16 MiB, no DTD (so no entity expansion), well-formed."""
     import xml.etree.ElementTree as ET
 
-    from ..infra.reading import ParamsError, read_bytes
     raw = read_bytes(path, max_bytes=16 << 20, what="URDF")
     if b"<!DOCTYPE" in raw or b"<!ENTITY" in raw:
         raise ParamsError(f"{path}: <!DOCTYPE>/<!ENTITY> declarations are not accepted in a URDF")
@@ -293,87 +331,6 @@ def _parse(path: Path):
     except ET.ParseError as exc:
         line, column = exc.position
         raise ParamsError(f"{path}: not well-formed XML at line {line}, column {column + 1}") from None
-
-
-def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarray,
-                   x_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """DH frame origin on the line ``(p1, z1)`` and its x axis, from the line ``(o0, z0)``:
-    the foot of their common normal and its direction (skew lines); the intersection and
-    ``z0 × z1`` (intersecting); the foot of the normal through ``o0`` (parallel, so that
-    ``d = 0``); ``o0`` and ``x_prev`` (the same line)."""
-    cross = np.cross(z0, z1)
-    sine = float(np.linalg.norm(cross))
-    if sine < _PARALLEL:                                         # parallel or the same line
-        foot = p1 + np.dot(o0 - p1, z1) * z1
-        gap = foot - o0
-        gap -= np.dot(gap, z0) * z0
-        distance = float(np.linalg.norm(gap))
-        if distance < _NEAR:
-            return o0.copy(), x_prev.copy()
-        return o0 + gap, gap / distance
-    n = cross / sine
-    # Closest points o0 + t0 z0 and p1 + t1 z1.
-    w = o0 - p1
-    b = np.dot(z0, z1)
-    denom = 1 - b * b
-    t0 = (b * np.dot(z1, w) - np.dot(z0, w)) / denom
-    t1 = (np.dot(z1, w) - b * np.dot(z0, w)) / denom
-    f0, f1 = o0 + t0 * z0, p1 + t1 * z1
-    gap = f1 - f0
-    distance = float(np.linalg.norm(gap))
-    if distance < _NEAR:
-        return f1, n
-    return f1, gap / distance
-
-
-def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> list[np.ndarray]:
-    """World poses of DH frames 0..n from the joint axes (point, unit direction) at q = 0 and
-    the tip's origin (:func:`from_urdf`'s docstring)."""
-    n = len(axes)
-    z_0 = axes[0][1]
-    o_0 = axes[0][0] - np.dot(axes[0][0], z_0) * z_0          # on axis 1, nearest the origin
-    frames = [None] * (n + 1)
-    o, x = o_0, np.zeros(3)
-    for i in range(1, n):
-        o, x = _common_normal(o, axes[i - 1][1], *axes[i], x)
-        if not x.any():                                        # axes 1 and 2 the same line
-            x = _perpendicular(axes[0][1])
-        frames[i] = _frame(x, axes[i][1], o)
-    # Frame n at the tip's origin, z along axis n; x along the tip's offset from the axis.
-    z_n = axes[-1][1]
-    gap = p_tip - o
-    gap -= np.dot(gap, z_n) * z_n
-    if np.linalg.norm(gap) > _NEAR:
-        x = gap / np.linalg.norm(gap)
-    elif not x.any():
-        x = _perpendicular(z_n)
-    frames[n] = _frame(x, z_n, p_tip)
-    # Frame 0 on axis 1, x_0 = x_1 (offset_1 = 0).
-    x_1 = frames[1][:3, 0]
-    frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0)
-    frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
-    return frames
-
-
-def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-    T[:3, 3] = o
-    return T
-
-
-def _lump(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
-    """One rigid body from bodies ``(mass, com, inertia about the com)`` in one frame."""
-    m = sum(b[0] for b in bodies)
-    if not bodies:
-        return 0.0, np.zeros(3), np.zeros((3, 3))
-    # Massless bodies keep their rotational inertia (the Puma's first link is one).
-    com = sum(b[0] * b[1] for b in bodies) / m if m > 0 else bodies[0][1]
-    I = np.zeros((3, 3))
-    for mass, c, Ic in bodies:
-        r = c - com
-        I += Ic + mass * (r @ r * np.eye(3) - np.outer(r, r))
-    return m, com, I
 
 
 def from_urdf(path: str | os.PathLike, tip: str | None = None,
@@ -414,27 +371,16 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         >>> so101.a.round(4).tolist()     # [m]
         [0.0304, 0.116, 0.135, 0.0, 0.0079]
     """
-    from ..infra.reading import ParamsError, read_bytes
-    from .robot import robot_from_dict, with_provenance
-
     path = Path(path)
-    source = str(path)
-    r = _Reader(source, _parse(path))
+    r = _Reader(str(path), _parse(path))
     tree = _tree(r)
     tip, chain, moving = _chain(r, tree, tip)
     lock = _locks(r, chain, lock)
     pose = _world_poses(r, tree, chain, lock)
     frames = _dh_frames(_joint_axes(r, pose, moving), pose[tip][:3, 3])
-    joints = [{**row, **body} for row, body in zip(_dh_rows(frames), _link_bodies(r, tree, pose, frames, moving))]
-    tool = np.linalg.solve(frames[-1], pose[tip])
-    try:
-        robot = robot_from_dict({"name": name or r.name, "convention": "standard",
-                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
-                                "tool": tool.tolist(), "joints": joints,
-                                "description": f"from {path.name}, chain {tree.root} → {tip}"},
-                               source=source)
-    except ParamsError as exc:
-        raise ParamsError(f"{exc} (converted from the URDF)") from None
+    rows, bodies = _dh_rows(frames), _link_bodies(r, tree, pose, frames, moving)
+    robot = _build_robot(str(path), name or r.name, f"from {path.name}, chain {tree.root} → {tip}",
+                         frames, pose[tip], rows, bodies)
     how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
     return with_provenance(robot, read_bytes(path, max_bytes=16 << 20, what="URDF"), how)
 
@@ -552,6 +498,95 @@ def _joint_axes(r: _Reader, pose: Mapping[str, np.ndarray], moving: list[str]
     return axes
 
 
+def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> list[np.ndarray]:
+    """The DH frames ``F_0..F_n`` (each ``(4, 4)``, in the root's frame) from the ``n`` joint axes
+    at ``q = 0`` (a point ``(3,)`` [m] and a unit direction ``(3,)`` each) and the tip's origin
+    ``(3,)`` [m], by :func:`from_urdf`'s rule: ``z_i`` along axis i+1; frame i (0 < i < n) at
+    the foot of the common normal from axis i (:func:`_common_normal`), ``x_i`` along it, any
+    perpendicular when axes 1 and 2 are one line; frame n at the tip with ``x_n`` along the
+    tip's offset from axis n (else ``x_{n−1}``); frame 0 on axis 1 nearest the root's origin
+    with ``x_0`` the component of ``x_1`` across ``z_0``, made exactly orthonormal."""
+    n = len(axes)
+    z_0 = axes[0][1]
+    o_0 = axes[0][0] - np.dot(axes[0][0], z_0) * z_0          # on axis 1, nearest the origin
+    frames = [None] * (n + 1)
+    o, x = o_0, np.zeros(3)
+    for i in range(1, n):
+        o, x = _common_normal(o, axes[i - 1][1], *axes[i], x)
+        if not x.any():                                        # axes 1 and 2 the same line
+            x = _perpendicular(axes[0][1])
+        frames[i] = _frame(x, axes[i][1], o)
+    # Frame n at the tip's origin, z along axis n; x along the tip's offset from the axis.
+    z_n = axes[-1][1]
+    gap = p_tip - o
+    gap -= np.dot(gap, z_n) * z_n
+    if np.linalg.norm(gap) > _NEAR:
+        x = gap / np.linalg.norm(gap)
+    elif not x.any():
+        x = _perpendicular(z_n)
+    frames[n] = _frame(x, z_n, p_tip)
+    # Frame 0 on axis 1, x_0 = x_1 (offset_1 = 0).
+    x_1 = frames[1][:3, 0]
+    frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0)
+    frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
+    return frames
+
+
+def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarray,
+                   x_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """DH frame origin on the line ``(p1, z1)`` and its x axis, from the line ``(o0, z0)``:
+    the foot of their common normal and its direction (skew lines); the intersection and
+    ``z0 × z1`` (intersecting); the foot of the normal through ``o0`` (parallel, so that
+    ``d = 0``); ``o0`` and ``x_prev`` (the same line)."""
+    cross = np.cross(z0, z1)
+    sine = float(np.linalg.norm(cross))
+    if sine < _PARALLEL:                                         # parallel or the same line
+        foot = p1 + np.dot(o0 - p1, z1) * z1
+        gap = foot - o0
+        gap -= np.dot(gap, z0) * z0
+        distance = float(np.linalg.norm(gap))
+        if distance < _NEAR:
+            return o0.copy(), x_prev.copy()
+        return o0 + gap, gap / distance
+    n = cross / sine
+    # Closest points o0 + t0 z0 and p1 + t1 z1.
+    w = o0 - p1
+    b = np.dot(z0, z1)
+    denom = 1 - b * b
+    t0 = (b * np.dot(z1, w) - np.dot(z0, w)) / denom
+    t1 = (np.dot(z1, w) - b * np.dot(z0, w)) / denom
+    f0, f1 = o0 + t0 * z0, p1 + t1 * z1
+    gap = f1 - f0
+    distance = float(np.linalg.norm(gap))
+    if distance < _NEAR:
+        return f1, n
+    return f1, gap / distance
+
+
+def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
+    """The pose ``(4, 4)`` with origin ``o`` [m] and axes ``x``, ``z × x``, ``z`` (unit,
+    orthogonal, each ``(3,)``)."""
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = o
+    return T
+
+
+def _perpendicular(z: np.ndarray) -> np.ndarray:
+    """A unit vector ``(3,)`` across the unit ``z``: the world x axis (y when ``z`` is within
+    about 26° of x) less its component along ``z``, normalised."""
+    helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = helper - np.dot(helper, z) * z
+    return x / np.linalg.norm(x)
+
+
+def _orthonormal(R: np.ndarray) -> np.ndarray:
+    """The orthogonal matrix nearest ``R`` ``(3, 3)`` (Frobenius norm): ``U Vᵀ`` from the SVD
+    ``R = U Σ Vᵀ``, which removes rounding from a nearly orthonormal ``R``."""
+    U, _, Vt = np.linalg.svd(R)
+    return U @ Vt
+
+
 def _dh_rows(frames: list[np.ndarray]) -> list[dict[str, float]]:
     """Standard DH rows read off consecutive frames ``F_{i−1}, F_i`` (``n + 1`` frames):
     ``a = (o_i − o_{i−1})·x_i``, ``d = (o_i − o_{i−1})·z_{i−1}``, ``offset`` the angle from
@@ -566,6 +601,12 @@ def _dh_rows(frames: list[np.ndarray]) -> list[dict[str, float]]:
                      "offset": _snap(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
                      "alpha": _snap(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
     return rows
+
+
+def _snap(x: float, tol: float = 1e-12) -> float:
+    """A DH parameter, 0 when it is rounding (below 1e-12 m or rad): the frames are built
+    from products of rounded numbers, and a table of 1e-20 values reads as data."""
+    return 0.0 if abs(x) < tol else float(x)
 
 
 def _link_bodies(r: _Reader, tree: _Tree, pose: Mapping[str, np.ndarray], frames: list[np.ndarray],
@@ -597,21 +638,40 @@ def _link_bodies(r: _Reader, tree: _Tree, pose: Mapping[str, np.ndarray], frames
     return joints
 
 
-def _snap(x: float, tol: float = 1e-12) -> float:
-    """A DH parameter, 0 when it is rounding (below 1e-12 m or rad): the frames are built
-    from products of rounded numbers, and a table of 1e-20 values reads as data."""
-    return 0.0 if abs(x) < tol else float(x)
+def _lump(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+    """One rigid body from bodies ``(mass [kg], centre of mass (3,) [m], inertia about it
+    (3, 3) [kg m²])`` given in one frame: ``m = Σ m_k``, ``c = Σ m_k c_k / m`` and, by the
+    parallel-axis theorem, ``I = Σ I_k + m_k (|r_k|² 1 − r_k r_kᵀ)`` with ``r_k = c_k − c``.
+    No bodies: zero mass, centre and inertia; all massless: ``c`` the first body's."""
+    m = sum(b[0] for b in bodies)
+    if not bodies:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    # Massless bodies keep their rotational inertia (the Puma's first link is one).
+    com = sum(b[0] * b[1] for b in bodies) / m if m > 0 else bodies[0][1]
+    I = np.zeros((3, 3))
+    for mass, c, Ic in bodies:
+        r = c - com
+        I += Ic + mass * (r @ r * np.eye(3) - np.outer(r, r))
+    return m, com, I
 
 
-def _perpendicular(z: np.ndarray) -> np.ndarray:
-    helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
-    x = helper - np.dot(helper, z) * z
-    return x / np.linalg.norm(x)
+def _build_robot(source: str, name: str, description: str, frames: list[np.ndarray],
+                 T_tip: np.ndarray, rows: list[dict], bodies: list[dict]) -> Robot:
+    """The standard-DH :class:`Robot` from DH frames ``F_0..F_n`` (each ``(4, 4)``, in the root's
+    frame), the tip's pose ``T_tip`` ``(4, 4)`` and each joint's DH row and body: ``base = F_0``,
+    ``tool = F_n⁻¹ · T_tip`` (by a linear solve), gravity ``[0, 0, −9.81]`` m/s² in the root's
+    frame. A robot file's checks apply; their errors say the robot was converted."""
+    tool = np.linalg.solve(frames[-1], T_tip)
+    joints = [{**row, **body} for row, body in zip(rows, bodies)]
+    try:
+        return robot_from_dict({"name": name, "convention": "standard",
+                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                "tool": tool.tolist(), "joints": joints, "description": description},
+                               source=source)
+    except ParamsError as exc:
+        raise ParamsError(f"{exc} (converted from the URDF)") from None
 
 
-def _orthonormal(R: np.ndarray) -> np.ndarray:
-    U, _, Vt = np.linalg.svd(R)
-    return U @ Vt
 
 
 register_reader(".urdf", from_urdf)
