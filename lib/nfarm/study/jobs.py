@@ -274,8 +274,11 @@ def study_sized(study: study_files.Study, options: Mapping) -> dict:
         >>> from nfarm.infra.paths import PARAMS
         >>> from nfarm.study.study_files import load_study
         >>> study = load_study(PARAMS / "studies" / "intelbot5.yaml")
-        >>> study_sized(study, {"n_mfs": 3}) == {"n_mfs": 3, **study.learned_ik}   # the file's sizes win
-        True
+        >>> import dataclasses
+        >>> sized = dataclasses.replace(study, learned_ik={"n_mfs": [1, 4, 4, 4, 4, 1], "epochs": [5, 6, 7, 8, 9]})
+        >>> chosen = study_sized(sized, {"n_mfs": 3, "joint_options": [{"n_mfs": 1}, {}, {}, {}, {}]})
+        >>> chosen["n_mfs"], chosen["joint_options"][:2]          # the file's sizes win, per joint
+        ([1, 4, 4, 4, 4, 1], [{'n_mfs': 1, 'epochs': 5}, {'epochs': 6}])
     """
     chosen = dict(options)
     if "n_mfs" in study.learned_ik:
