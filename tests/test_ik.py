@@ -195,8 +195,9 @@ def test_bad_target_index_in_a_2d_batch(intelbot5):
 
 @pytest.mark.parametrize("rule", ["nan", "last row", "not orthonormal", "reflection"])
 def test_bad_targets_beyond_the_first_check_chunk_are_named(intelbot5, rule, monkeypatch):
+    import nfarm.solvers.arguments
     import nfarm.solvers.ik
-    monkeypatch.setattr(nfarm.solvers.ik, "_CHECK_CHUNK", 3)       # the pose sits in the second chunk
+    monkeypatch.setattr(nfarm.solvers.arguments, "_CHECK_CHUNK", 3)       # the pose sits in the second chunk
     make, message = BAD_TARGETS[rule]
     T = make(intelbot5)
     bad_row = {"nan": 2, "last row": 3, "not orthonormal": 1, "reflection": 2}[rule]

@@ -52,3 +52,27 @@ def test_lower_layers_never_import_upper_ones(relative):
 def test_the_package_itself_imports_no_layer_at_import_time():
     """``import nfarm`` runs only the allocator's tuning; public names load on first use."""
     assert imported_layers(PACKAGE.relative_to(PACKAGE) / "__init__.py") <= {"infra"}
+
+
+def _public(layer: str):
+    """``(name, object)`` of every function and class a module of ``layer`` defines and lists
+    in its ``__all__``."""
+    import importlib
+    import inspect
+    for relative in MODULES:
+        if relative.parts[0] != layer or relative.name == "__init__.py":
+            continue
+        module = importlib.import_module("nfarm." + ".".join(relative.with_suffix("").parts))
+        for name in getattr(module, "__all__", []):
+            obj = getattr(module, name)
+            if (inspect.isfunction(obj) or inspect.isclass(obj)) and obj.__module__ == module.__name__:
+                yield f"{module.__name__}.{name}", obj
+
+
+@pytest.mark.parametrize("layer", ["model", "solvers"])
+def test_every_public_function_of_the_model_and_solvers_has_an_example(layer):
+    """An example (run by --doctest-modules) in the docstring of each public function and class;
+    a result record may point to the function that makes it instead."""
+    missing = [name for name, obj in _public(layer)
+               if ">>>" not in (obj.__doc__ or "") and ", which has an example" not in (obj.__doc__ or "")]
+    assert not missing, f"public names without an example: {missing}"

@@ -1,5 +1,5 @@
-"""Infrastructure, the bottom layer: the one strict reader of user files (:mod:`.reading`),
-project paths and atomic output (:mod:`.paths`), the code digests that key every cache
+"""Infrastructure, the bottom layer: the one strict reader of user files (:mod:`.reading`)
+and the generic reader of a file's sections into dataclasses (:mod:`.typed`), project paths and atomic output (:mod:`.paths`), the code digests that key every cache
 (:mod:`.provenance`), time limits for long loops (:mod:`.limits`) and the allocator's tuning.
 
 Imports nothing else of nfarm.

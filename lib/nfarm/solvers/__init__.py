@@ -1,5 +1,7 @@
-"""Solvers on the model: inverse kinematics by damped least squares and Levenberg–Marquardt
-(:mod:`.ik`) and in closed form, every branch (:mod:`.geometric_ik`), joint trajectories
+"""Solvers on the model: iterative inverse kinematics (:mod:`.ik`, its update rules in
+:mod:`.ik_methods`: Levenberg–Marquardt, damped least squares, the pseudo-inverse, the
+Jacobian transpose) and in closed form, every branch (:mod:`.geometric_ik`), the argument
+checks they share (:mod:`.arguments`), joint trajectories
 (:mod:`.trajectory`), the tool paths an arm can hold (:mod:`.tool_paths`), and workspace and
 singularity analysis (:mod:`.workspace`).
 

@@ -104,6 +104,7 @@ import numpy as np
 from ..model.kinematics import fk, snap_right_angles
 from ..model.robot import Robot, joint_array
 from ..model.rotations import pose_error
+from .arguments import check_integer, check_number, check_targets, check_weights
 
 __all__ = ["BRANCHES", "ArmConstants", "ClosedFormResult", "closed_form", "check_class", "in_class", "class_refusal",
            "branch_of", "branch_margins", "planar_points", "elbow_meeting_angles", "count_distinct",
@@ -347,8 +348,7 @@ class ClosedFormResult:
         :data:`BRANCHES` order), else the one with the least ``w_p e_p² + w_r e_r²`` (``e_p``,
         ``e_r`` the position and orientation error norms, ``w_p``, ``w_r`` the means of the
         position and rotation ``weights`` of :func:`nfarm.solvers.ik.solve`)."""
-        from . import ik as _ik  # ik imports this module at its end
-        w = _ik._check_weights(weights)
+        w = check_weights(weights)
         cost = w[:3].mean() * self.pos_error ** 2 + w[3:].mean() * self.rot_error ** 2
         cost = np.where(self.valid, -1.0, cost)
         return np.argmin(cost, axis=-1)
@@ -604,20 +604,19 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
         >>> np.allclose(fk(robot, result.q[result.valid]), fk(robot, np.zeros(5)))
         True
     """
-    from . import ik as _ik  # ik imports this module at its end
     for name, value in (("tol_pos", tol_pos), ("tol_rot", tol_rot), ("axis_tol", axis_tol),
                         ("ortho_tol", ortho_tol)):
-        _ik._check_number(name, value, 0, None, open_lo=True)
+        check_number(name, value, 0, None, open_lo=True)
     arm = check_class(robot, axis_tol)
-    _ik._check_number("limit_tol", limit_tol, 0, None, open_lo=False)
-    _ik._check_integer("refine_iter", refine_iter, 1)
+    check_number("limit_tol", limit_tol, 0, None, open_lo=False)
+    check_integer("refine_iter", refine_iter, 1)
     if not isinstance(refine, (bool, np.bool_)):
         raise ValueError(f"refine must be True or False, got {refine!r}")
-    w = _ik._check_weights(weights)
+    w = check_weights(weights)
     if threads is None:
         threads = min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                       else os.cpu_count() or 1, 8)
-    _ik._check_integer("threads", threads, 1)
+    check_integer("threads", threads, 1)
     size = np.size(T_target) // 16 if isinstance(T_target, np.ndarray) else 0
     pool = None
     if threads > 1 and size > _CHUNK:
@@ -633,9 +632,9 @@ def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float
 
 def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, refine, refine_iter,
                  limit_tol, ortho_tol) -> ClosedFormResult:
-    from . import ik as _ik
+    from . import ik as _ik  # for the LM refinement; ik imports this module at its end
     map_chunks = map if pool is None else pool.map
-    T = _ik.check_targets(T_target, ortho_tol, map_chunks=map_chunks)   # every pose first
+    T = check_targets(T_target, ortho_tol, map_chunks=map_chunks)   # every pose first
     batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
     N = flat.shape[0]
     # Written in component layout (joint, branch, target) and handed out as its transposed

@@ -8,30 +8,10 @@ closed-form branch it converged to where the robot has one.
 
 All targets are solved together: every iteration evaluates the pose and the Jacobian of the
 still-unsolved targets as one batch (component layout, samples last), and a target leaves
-the batch as soon as it converges. Four update rules, each a small object that carries and
-checks its own options and supplies the step (``e`` the pose error of
-:func:`nfarm.model.rotations.pose_error`, ``J`` the geometric Jacobian, both scaled by the square
-roots of ``weights``; ``E = ½ eᵀe``)::
-
-    LM()    "lm"    Levenberg–Marquardt   (JᵀJ + λI) Δq = Jᵀe, λ adaptive (see ``damping``)
-    DLS()   "dls"   damped least squares  (JᵀJ + μ²I) Δq = Jᵀe, μ fixed     (Wampler 1986)
-    Pinv()  "pinv"  Newton–Raphson        Δq = J⁺ e  (truncated-SVD pseudo-inverse)
-    JT()    "jt"    Jacobian transpose    Δq = α Jᵀe, α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖² (Buss 2009)
-
-``solve(robot, T, method=LM(damping="marquardt"))`` picks one with its options; a name picks
-one with its defaults. ``LM(damping="sugihara")`` (default) is Sugihara's (2011) rule
-``λ = s·E + w̄``: the damping vanishes with the error, so the last iterations are Gauss–Newton
-(quadratic convergence).
-``"marquardt"`` is the classic schedule (λ ÷ ν after a step that lowers E, × ν after one that
-does not). Both keep the last accepted point and retry from it with ν times the damping after
-a step that raised E (for Sugihara's rule, a multiplier ≥ 1 of s·E + w̄): far from a solution,
-and always for an unreachable target, the Gauss–Newton model is poor and an unguarded step can
-climb. Measured on 10 000 reachable intelbot5 targets (``benchmarks/bench_ik.py``), Sugihara's
-rule needs fewer steps for the same success (9.1 against 10.5 per target), so it is the
-default. Our constants differ from Sugihara's (s = 1, w̄ = 1e-3): s = 0.1 takes bolder steps
-far from the target (9.1 against 10.8 steps per target), and w̄ = 1e-12 lets the steps become
-Gauss–Newton near targets next to a singularity, where w̄ = 1e-8 slows convergence to a crawl
-(0.06 % of the targets then run out of steps).
+the batch as soon as it converges. The update rule is an object of
+:mod:`nfarm.solvers.ik_methods` (``LM``, the default, ``DLS``, ``Pinv``, ``JT``) that carries and
+checks its own options and supplies the step; ``solve(robot, T, method=LM(damping="marquardt"))``
+picks one with its options, a name (``"dls"``) one with its defaults.
 
 A 5-DOF arm cannot reach most 6-D poses. A target is ``success`` when the weighted position
 and orientation errors are within ``tol_pos`` and ``tol_rot`` at a configuration within the
@@ -49,14 +29,14 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import ClassVar
 
 import numpy as np
 
 from ..model.kinematics import fk, pose_jacobian_T
-from ..model.linalg import cholesky_solve_T, gram_T
 from ..model.robot import Robot, sample_configurations
 from ..model.rotations import relative_log_T
+from .arguments import check_integer, check_number, check_targets, check_weights
+from .ik_methods import DLS, JT, LM, METHODS, Method, Pinv, method_of
 
 __all__ = ["IKResult", "solve", "solve_path", "check_targets", "METHODS", "REASONS", "Method", "LM", "DLS",
            "Pinv", "JT"]
@@ -132,88 +112,6 @@ class IKResult:
         }
 
 
-# --------------------------------------------------------------------------------------------
-# Input checks
-
-
-def _where(shape: tuple, flat_index: int) -> str:
-    if not shape:
-        return "T_target"
-    return f"T_target[{', '.join(map(str, np.unravel_index(flat_index, shape)))}]"
-
-
-_CHECK_CHUNK = 8192
-
-
-def check_targets(T_target, ortho_tol: float = 1e-9, *, map_chunks=map) -> np.ndarray:
-    """``T_target`` as a float array of rigid transforms ``(..., 4, 4)``, or a ``ValueError``
-    naming the first bad one (shape, NaN, last row, rotation not orthonormal to ``ortho_tol``,
-    reflection).
-
-    The poses are checked in chunks of 8192, so that the temporaries of each check stay in
-    the cache: checked whole, a batch of a million poses costs two to three times as much per
-    pose (the check is part of :func:`closed_form`'s time on 400 000 poses in
-    ``benchmarks/bench_ik_closed_form.py``). ``map_chunks(check, starts)`` applies the check to
-    each chunk in order (``map``, or an executor's ``map`` to check chunks side by side); the
-    first bad pose is named either way.
-
-    Example:
-        >>> check_targets(np.tile(np.eye(4), (2, 3, 1, 1))).shape     # (..., 4, 4)
-        (2, 3, 4, 4)
-        >>> check_targets(np.zeros((4, 4)))
-        Traceback (most recent call last):
-        ...
-        ValueError: T_target: last row must be [0, 0, 0, 1], got [0.0, 0.0, 0.0, 0.0]
-    """
-    def refused(what: str = "") -> ValueError:
-        return ValueError(f"T_target must be an array of numbers of shape (..., 4, 4), got "
-                          f"{what + ' ' if what else ''}({type(T_target).__name__} "
-                          f"{str(T_target)[:40]!r})")
-
-    try:
-        # Real numbers only: a complex pose would lose its imaginary part to the cast, and
-        # booleans or objects are no poses.
-        kind = (T_target if isinstance(T_target, np.ndarray) else np.asarray(T_target)).dtype.kind
-        T = np.asarray(T_target, dtype=float) if kind in "iuf" else None
-    except (TypeError, ValueError):
-        raise refused() from None
-    if T is None:
-        raise refused({"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
-                       "O": "objects or ragged lists"}.get(kind, f"dtype kind {kind!r}"))
-    if T.ndim < 2 or T.shape[-2:] != (4, 4):
-        raise ValueError(f"T_target must have shape (..., 4, 4), got {T.shape}")
-    batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
-
-    def check(start: int) -> None:
-        chunk = flat[start:start + _CHECK_CHUNK]
-        finite = np.isfinite(chunk)           # whole-chunk tests first, rows only on failure
-        if not finite.all():
-            bad = ~finite.all(axis=(1, 2))
-            raise ValueError(f"{_where(batch, start + np.argmax(bad))}: contains NaN or inf")
-        last = chunk[:, 3]
-        if not ((last[:, :3] == 0.0).all() and (last[:, 3] == 1.0).all()):
-            k = int(np.argmax((last != [0.0, 0.0, 0.0, 1.0]).any(axis=1)))
-            raise ValueError(f"{_where(batch, start + k)}: last row must be [0, 0, 0, 1], got "
-                             f"{chunk[k, 3].tolist()}")
-        # Columns x, y, z of every R as rows of the chunk's length (one copy): the dot products
-        # then run over contiguous samples (5× faster than an einsum over the 3 × 3 blocks).
-        x, y, z = chunk[:, :3, :3].transpose(2, 1, 0).copy()                  # (3, N) each
-        err = np.maximum.reduce([np.abs(np.einsum("kn,kn->n", u, v) - (1.0 if u is v else 0.0))
-                                 for u, v in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z))])
-        if (err > ortho_tol).any():                                           # |RᵀR − I|
-            k = int(np.argmax(err > ortho_tol))
-            raise ValueError(f"{_where(batch, start + k)}: rotation is not orthonormal "
-                             f"(max |RᵀR − I| = {err[k]:.3g} > {ortho_tol:g})")
-        det = np.einsum("kn,kn->n", np.cross(x, y, axis=0), z)                # (x × y)·z
-        if (det < 0).any():
-            raise ValueError(f"{_where(batch, start + int(np.argmax(det < 0)))}: rotation is "
-                             f"a reflection (determinant −1)")
-
-    for _ in map_chunks(check, range(0, len(flat), _CHECK_CHUNK)):
-        pass
-    return T
-
-
 def _check_q0(robot: Robot, q0, batch: tuple, respect_limits: bool) -> np.ndarray | None:
     lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
     if q0 is None:
@@ -236,18 +134,6 @@ def _check_q0(robot: Robot, q0, batch: tuple, respect_limits: bool) -> np.ndarra
         where = "q0" if single else f"q0[{', '.join(map(str, np.unravel_index(k, batch)))}]"
         raise ValueError(f"{where}: must be finite and within the joint limits, got {flat[k].tolist()}")
     return np.broadcast_to(q0, (*batch, robot.n)).reshape(-1, robot.n)
-
-
-def _check_weights(weights) -> np.ndarray:
-    if weights is None:
-        return np.ones(6)
-    w = np.asarray(weights, dtype=float)
-    if w.shape != (6,):
-        raise ValueError(f"weights must be 6 numbers (position x, y, z, then rotation x, y, z), "
-                         f"got shape {w.shape}")
-    if not np.isfinite(w).all() or (w < 0).any() or not w.any():
-        raise ValueError(f"weights must be finite, >= 0 and not all zero, got {w.tolist()}")
-    return w
 
 
 class _Seeds:
@@ -299,192 +185,6 @@ class _Seeds:
             rows = np.arange(new.size)[:, None]
             self.order[new] = part[rows, np.argsort(d[rows, part], axis=1, kind="stable")]
         return self.table[self.order[target, rank]]
-
-
-# --------------------------------------------------------------------------------------------
-# Update rules (component layout: e (6, A), J (6, n, A), everything already scaled by sqrt(weights))
-
-
-@dataclass(frozen=True)
-class Method:
-    """An update rule of :func:`solve`: its options (checked when it is made, one line naming the
-    option) and its step ``Δq (n, A)`` from the scaled Jacobians ``J (6, n, A)``, errors ``e (6,
-    A)``, ``E (A,)`` and each lane's damping state ``lam (A,)``.
-
-    ``max_iter``: the steps per attempt a solve gives it unless told otherwise. A ``guarded``
-    rule keeps each lane's last accepted point and steps from it again with more damping after
-    a step that raised E (:meth:`adapt`).
-
-    Example:
-        >>> J = np.zeros((6, 5, 3)); J[:5] = np.eye(5)[:, :, None]     # J (6, n, A): Δq = e[:5]
-        >>> e = np.ones((6, 3))                                          # e (6, A)
-        >>> dq = Pinv().step(J, e, 0.5 * (e * e).sum(0), np.ones(3))     # Δq (n, A)
-        >>> dq.shape, bool(np.allclose(dq, 1.0))
-        ((5, 3), True)
-        >>> all(isinstance(METHODS[name](), Method) for name in METHODS)
-        True
-    """
-
-    name: ClassVar[str]
-    max_iter: ClassVar[int]
-    guarded: ClassVar[bool] = False
-
-    def initial_damping(self) -> float:
-        """The damping state a new lane starts with."""
-        return 1.0
-
-    def step(self, J: np.ndarray, e: np.ndarray, E: np.ndarray, lam: np.ndarray) -> np.ndarray:
-        """The step ``Δq (n, A)`` of every lane."""
-        raise NotImplementedError
-
-    def adapt(self, lam: np.ndarray, accept: np.ndarray) -> np.ndarray:
-        """A guarded rule's damping state after a step that was accepted (``accept``) or not."""
-        return lam
-
-
-@dataclass(frozen=True)
-class LM(Method):
-    """Levenberg–Marquardt: ``(JᵀJ + λI) Δq = Jᵀe`` (module docstring).
-
-    Args:
-        damping: ``"sugihara"`` (λ = ν · (scale · E + bias), the multiplier ν starting at 1) or
-            ``"marquardt"`` (λ from ``lambda0``); either way ÷ ``factor`` after an accepted
-            step, × ``factor`` after a rejected one.
-        scale, bias: Sugihara's ``s`` and ``w̄`` (not both 0).
-        lambda0: Marquardt's first λ.
-        factor: ν's step, > 1.
-
-    Example:
-        >>> LM(damping="marquardt").name, LM.max_iter
-        ('lm', 25)
-        >>> LM(factor=1.0)
-        Traceback (most recent call last):
-        ...
-        ValueError: LM: factor must be a finite number > 1, got 1.0
-    """
-
-    name: ClassVar[str] = "lm"
-    max_iter: ClassVar[int] = 25
-    guarded: ClassVar[bool] = True
-    damping: str = "sugihara"
-    scale: float = 0.1
-    bias: float = 1e-12
-    lambda0: float = 1e-3
-    factor: float = 10.0
-
-    def __post_init__(self) -> None:
-        if self.damping not in ("sugihara", "marquardt"):
-            raise ValueError(f"LM: damping must be 'sugihara' or 'marquardt', got {self.damping!r}")
-        _check_number("LM: lambda0", self.lambda0, 0, None, open_lo=True)
-        _check_number("LM: factor", self.factor, 1, None, open_lo=True)
-        for name in ("scale", "bias"):
-            _check_number(f"LM: {name}", getattr(self, name), 0, None, open_lo=False)
-        if self.damping == "sugihara" and self.scale == 0 and self.bias == 0:
-            raise ValueError("LM: scale and bias must not both be 0 (no damping at all)")
-
-    @property
-    def marquardt(self) -> bool:
-        return self.damping == "marquardt"
-
-    def initial_damping(self) -> float:
-        return self.lambda0 if self.marquardt else 1.0
-
-    def step(self, J, e, E, lam):
-        return _step_lm(J, e, lam if self.marquardt else lam * (self.scale * E + self.bias))
-
-    def adapt(self, lam, accept):
-        floor = 1e-15 if self.marquardt else 1.0
-        return np.where(accept, np.maximum(lam / self.factor, floor), np.minimum(lam * self.factor, 1e15))
-
-
-@dataclass(frozen=True)
-class DLS(Method):
-    """Damped least squares: ``(JᵀJ + μ²I) Δq = Jᵀe`` with a fixed ``damping`` μ [m].
-
-    Example:
-        >>> DLS().damping, DLS.max_iter
-        (0.05, 100)
-    """
-
-    name: ClassVar[str] = "dls"
-    max_iter: ClassVar[int] = 100
-    damping: float = 0.05
-
-    def __post_init__(self) -> None:
-        _check_number("DLS: damping", self.damping, 0, None, open_lo=True)
-
-    def step(self, J, e, E, lam):
-        return _step_lm(J, e, self.damping ** 2)
-
-
-@dataclass(frozen=True)
-class Pinv(Method):
-    """Newton–Raphson through the pseudo-inverse: ``Δq = J⁺ e``, singular values below ``rcond``
-    times the largest cut off.
-
-    Example:
-        >>> Pinv(rcond=1e-8).rcond, Pinv.max_iter
-        (1e-08, 50)
-    """
-
-    name: ClassVar[str] = "pinv"
-    max_iter: ClassVar[int] = 50
-    rcond: float = 1e-6
-
-    def __post_init__(self) -> None:
-        _check_number("Pinv: rcond", self.rcond, 0, 1, open_lo=True)
-
-    def step(self, J, e, E, lam):
-        return _step_pinv(J, e, self.rcond)
-
-
-@dataclass(frozen=True)
-class JT(Method):
-    """The Jacobian transpose with Buss's step length: ``Δq = α Jᵀe``, ``α = ⟨e, JJᵀe⟩ / ‖JJᵀe‖²``.
-
-    Example:
-        >>> JT().name, JT.max_iter
-        ('jt', 2000)
-    """
-
-    name: ClassVar[str] = "jt"
-    max_iter: ClassVar[int] = 2000
-
-    def step(self, J, e, E, lam):
-        return _step_jt(J, e)
-
-
-#: The update rules by name: ``solve(..., method="dls")`` is ``method=DLS()``.
-METHODS: dict[str, type[Method]] = {cls.name: cls for cls in (LM, DLS, Pinv, JT)}
-
-
-def _method(method) -> Method:
-    if isinstance(method, Method):
-        return method
-    if isinstance(method, str) and method in METHODS:
-        return METHODS[method]()
-    raise ValueError(f"method must be one of {', '.join(METHODS)} or an update rule (LM(), DLS(), Pinv(), "
-                     f"JT()), got {method!r}")
-
-
-def _step_lm(J, e, damping):
-    A = gram_T(J)
-    for i in range(J.shape[1]):
-        A[i, i] += damping
-    return cholesky_solve_T(A, np.einsum("kim,km->im", J, e))
-
-
-def _step_pinv(J, e, rcond):
-    Jn = np.moveaxis(J, -1, 0)
-    return np.einsum("mik,mk->im", np.linalg.pinv(Jn, rcond=rcond), e.T)
-
-
-def _step_jt(J, e):
-    g = np.einsum("kim,km->im", J, e)
-    Jg = np.einsum("kim,im->km", J, g)
-    denominator = np.einsum("km,km->m", Jg, Jg)
-    alpha = np.einsum("km,km->m", e, Jg) / np.where(denominator > 0, denominator, 1.0)
-    return alpha * g
 
 
 def _wrap_into_limits(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -556,20 +256,20 @@ def solve(robot: Robot, T_target, q0=None, *, method: str | Method = "lm", weigh
         >>> solve(robot, fk(robot, q), method=LM(damping="marquardt")).success.tolist()
         [True, True]
     """
-    method = _method(method)
+    method = method_of(method)
     for name, value, lo, hi in (("tol_pos", tol_pos, 0, None), ("tol_rot", tol_rot, 0, None),
                                 ("ortho_tol", ortho_tol, 0, 1), ("stall_rtol", stall_rtol, 0, 1)):
-        _check_number(name, value, lo, hi, open_lo=True)
+        check_number(name, value, lo, hi, open_lo=True)
     max_iter = method.max_iter if max_iter is None else max_iter
     for name, value, lo in (("max_iter", max_iter, 1), ("restarts", restarts, 0),
                             ("restart_batch", restart_batch, 1), ("seed", seed, 0),
                             ("guess_table", guess_table, 1), ("stall_iters", stall_iters, 1),
                             ("chunk", chunk, 1)):
-        _check_integer(name, value, lo)
+        check_integer(name, value, lo)
     T = check_targets(T_target, ortho_tol)
     batch = T.shape[:-2]
     q_start = _check_q0(robot, q0, batch, respect_limits)
-    w = _check_weights(weights)
+    w = check_weights(weights)
     first_rank = 1 if q_start is None else 0  # the table rank of the first restart
     if restarts + first_rank > guess_table:
         raise ValueError(f"restarts ({restarts}) must be below guess_table ({guess_table})")
@@ -604,19 +304,6 @@ def _with_branch(robot: Robot, result: IKResult) -> IKResult:
     if not in_class(robot):
         return result
     return dataclasses.replace(result, branch=branch_of(robot, result.q))
-
-
-def _check_number(name, value, lo, hi, open_lo):
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(value) or (value <= lo if open_lo else value < lo) \
-            or (hi is not None and value >= hi):
-        bounds = f"{'>' if open_lo else '>='} {lo}" + ("" if hi is None else f" and < {hi}")
-        raise ValueError(f"{name} must be a finite number {bounds}, got {value!r}")
-
-
-def _check_integer(name, value, lo):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name} must be an integer >= {lo}, got {value!r}")
 
 
 def _concatenate(results: list[IKResult], batch: tuple, n: int) -> IKResult:

@@ -197,7 +197,8 @@ def near_stretched(robot: Robot, stretched: np.ndarray, degrees: float) -> np.nd
 
 @dataclass(frozen=True)
 class Volume:
-    """A Monte Carlo estimate of the workspace's volume (:func:`workspace_volume`)."""
+    """A Monte Carlo estimate of the workspace's volume: made by
+    :func:`workspace_volume`, which has an example."""
 
     volume: float        # [m³]
     std_error: float     # [m³], one standard error of the estimate

@@ -1,6 +1,14 @@
 """Study files: what a study of one arm declares (the IK region and data sizes, the ID trajectory
-generator and its measured arm, the seed), read and validated into a :class:`Study` (schema in
-``params/README.md``), and the studies derived from one (smoke-sized, redrawn).
+generator and its measured arm, the seed), and the studies derived from one (smoke-sized,
+redrawn).
+
+A file is read in two steps. The generic reader (:func:`nfarm.infra.typed.read_typed`) reads
+it into a :class:`StudyFile`, a tree of dataclasses that is the schema (``params/README.md``,
+"Studies", documents the same fields, and a test checks that it does): every field's type,
+range and length, unknown keys refused. Then :func:`study_from_dict` checks the rules that
+involve two fields or the robot's model (a region within the joint limits that the arm
+reaches, a step within the shortest segment, breakaway friction above the Coulomb level) and
+builds the :class:`Study` the data sets are made from, in SI units and radians.
 
 A study file is refused before any work when a data set it asks for would not fit the memory
 budget (:func:`work_estimates`, :func:`memory_budget`).
@@ -15,27 +23,30 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal, Optional, Union, get_args
 
 import numpy as np
 
 from ..infra.paths import project_path
-from ..infra.reading import ParamsError, Validator, load_yaml, show
+from ..infra.reading import ParamsError, Validator, load_yaml
+from ..infra.typed import JOINTS, ORDERED, TEXT, Length, Range, read_typed, section_keys
 from ..model.kinematics import fk
 from ..model.robot import Robot, load_robot
 from ..solvers.ik import in_class
 from .id_trajectories import IDSettings
 from .regions import IKRegion
 
-__all__ = ["Study", "SPLITS", "load_study", "study_from_dict", "smoke_study", "redrawn",
+__all__ = ["Study", "StudyFile", "SPLITS", "load_study", "study_from_dict", "smoke_study", "redrawn",
            "memory_budget", "work_estimates", "PER_JOINT_MAX"]
 
-SPLITS = ("train", "val", "test")
+Split = Literal["train", "val", "test"]
+SPLITS: tuple[str, ...] = get_args(Split)
 
 
 @dataclass(frozen=True, eq=False)
 class Study:
-    """A validated study file (schema in ``params/README.md``)."""
+    """A validated study file, in SI units and radians, with what the data sets are made from
+    (the region, the trajectory generator); ``file`` holds the file as written."""
 
     source: str
     name: str
@@ -54,6 +65,8 @@ class Study:
     #: 0 for the study's own data; k for its training and validation data drawn again
     #: (:func:`redrawn`).
     draw: int = 0
+    #: The file as written (degrees, as in the file), typed and checked field by field.
+    file: StudyFile | None = field(default=None, repr=False)
 
     @property
     def data_params(self) -> dict:
@@ -61,21 +74,107 @@ class Study:
         return {k: v for k, v in self.params.items() if k != "learned_ik"}
 
 
-_TOP = {"name": True, "description": False, "robot_file": True, "seed": True, "ik": True,
-        "id": True, "learned_ik": False}
-_LEARNED_IK = {"n_mfs": False, "epochs": False}
-_IK = {"region": True, "sampler": False, "sizes": True, "check": True, "full_range": False}
-_REGION = {"joints_deg": True, "radial_m": False, "reach_m": False, "height_m": False,
-           "approach": False}
-_APPROACH = {"axis": True, "max_angle_deg": True}
-_SIZES = dict.fromkeys(SPLITS, True)
-_CHECK = {"targets": True, "starts": True}
-_ID = {"trajectories": True, "via_points": True, "segment_time_s": True, "dt_s": True,
-       "margin_deg": False, "max_velocity_deg_s": True, "max_acceleration_deg_s2": True,
-       "measured": False}
-_MEASURED = {"viscous": True, "coulomb": True, "coulomb_velocity_deg_s": True, "armature": True,
-             "noise_nm": True, "stribeck": False, "stribeck_velocity_deg_s": False,
-             "load_coefficient": False, "encoder_counts": False, "filter_window": False}
+#: ``[lo, hi]``, either ``null`` for no bound, ``lo < hi`` where both are given.
+Bounds = Annotated[tuple[Optional[float], Optional[float]], ORDERED]
+#: One number for every joint, or one per joint.
+PerJoint = Union[float, Annotated[list[float], JOINTS]]
+#: The largest per-joint drive, noise, speed or acceleration value a study may give: every
+#: plausible one is far below, and 1.7e308 would turn the data sets' torques into inf.
+PER_JOINT_MAX = 1e6
+_DRIVE = Range(lo=0.0, hi=PER_JOINT_MAX)                       # >= 0
+_RATE = Range(lo=0.0, lo_open=True, hi=PER_JOINT_MAX)          # > 0
+
+
+@dataclass(frozen=True, kw_only=True)
+class ApproachSection:
+    """``ik.region.approach``: the tool's approach (z) axis within ``max_angle_deg`` of
+    ``axis`` (base frame)."""
+
+    axis: tuple[float, float, float]
+    max_angle_deg: Annotated[float, Range(lo=0.0, lo_open=True, hi=180.0)]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RegionSection:
+    """``ik.region``: one ``[lo, hi]`` per joint [deg] (``null``: its limits) and the tool
+    point's filters [m]."""
+
+    joints_deg: Annotated[list[Optional[Annotated[tuple[float, float], ORDERED]]], JOINTS]
+    radial_m: Annotated[Optional[Bounds], Range(lo=0.0)] = None
+    reach_m: Optional[Bounds] = None
+    height_m: Optional[Bounds] = None
+    approach: Optional[ApproachSection] = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class CheckSection:
+    """``ik.check``: chapter 05's single-valuedness check, its targets and LM starts each."""
+
+    targets: Annotated[int, Range(lo=1, hi=1_000_000)]
+    starts: Annotated[int, Range(lo=1, hi=1024)]
+
+
+@dataclass(frozen=True, kw_only=True)
+class IKSection:
+    """``ik``: the region, the sampler, the sizes of the splits and the check."""
+
+    region: RegionSection
+    sampler: Literal["sobol", "uniform"] = "sobol"
+    sizes: Annotated[dict[Split, int], Range(lo=1, hi=50_000_000)]
+    check: CheckSection
+    full_range: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeasuredSection:
+    """``id.measured``: the "real" arm's drives, friction, sensor noise and encoders."""
+
+    viscous: Annotated[PerJoint, _DRIVE]                    # N·m·s/rad
+    coulomb: Annotated[PerJoint, _DRIVE]                    # N·m
+    coulomb_velocity_deg_s: Annotated[PerJoint, _RATE]
+    armature: Annotated[PerJoint, _DRIVE]                   # kg·m²
+    noise_nm: Annotated[PerJoint, _DRIVE]
+    stribeck: Optional[Annotated[PerJoint, _DRIVE]] = None
+    stribeck_velocity_deg_s: Optional[Annotated[PerJoint, _RATE]] = None
+    load_coefficient: Optional[Annotated[PerJoint, Range(lo=0.0, hi=1.0, hi_open=True)]] = None
+    encoder_counts: Optional[Annotated[int, Range(lo=16, hi=2 ** 31)]] = None
+    filter_window: Annotated[int, Range(lo=5, hi=101)] = 7
+
+
+@dataclass(frozen=True, kw_only=True)
+class IDSection:
+    """``id``: the random trajectories and the measured arm."""
+
+    trajectories: Annotated[dict[Split, int], Range(lo=1, hi=1_000_000)]
+    via_points: Annotated[int, Range(lo=2, hi=10_000)]
+    segment_time_s: Annotated[tuple[float, float], Range(lo=0.0, lo_open=True), ORDERED]
+    dt_s: Annotated[float, Range(lo=0.0, lo_open=True)]
+    margin_deg: Annotated[float, Range(lo=0.0)] = 0.0
+    max_velocity_deg_s: Annotated[PerJoint, _RATE]
+    max_acceleration_deg_s2: Annotated[PerJoint, _RATE]
+    measured: Optional[MeasuredSection] = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class LearnedIKSection:
+    """``learned_ik``: the chosen learned IK's functions per input and epochs."""
+
+    n_mfs: Optional[Annotated[Union[int, Annotated[list[int], Length(1, 16)]], Range(lo=1, hi=8)]] = None
+    epochs: Optional[Annotated[Union[int, Annotated[list[int], JOINTS]], Range(lo=1, hi=10_000)]] = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudyFile:
+    """A study file as written (``params/README.md``, "Studies"): typed and checked field by
+    field by :func:`~nfarm.infra.typed.read_typed`; angles in degrees, as in the file."""
+
+    name: str
+    description: Annotated[str, TEXT] = ""
+    robot_file: str
+    seed: Annotated[int, Range(lo=0, hi=2 ** 63 - 1)]
+    ik: IKSection
+    id: IDSection
+    learned_ik: Optional[LearnedIKSection] = None
 
 
 def memory_budget() -> float:
@@ -162,34 +261,16 @@ def load_study(path: str | os.PathLike) -> Study:
     return study_from_dict(data, source=str(path))
 
 
-def _bounds(v: Validator, value: Any, at: str, *, positive: bool = False) -> tuple:
-    pair = v.sequence(value, at, min_len=2, max_len=2)
-    out = tuple(None if x is None else v.number(x, f"{at}[{k}]", lo=0.0 if positive else None)
-                for k, x in enumerate(pair))
-    if None not in out and not out[0] < out[1]:
-        v.fail(at, f"must satisfy lo < hi, got {list(out)}")
-    return out
-
-
-#: The largest per-joint drive, noise, speed or acceleration value a study may give: every
-#: plausible one is far below, and 1.7e308 would turn the data sets' torques into inf.
-PER_JOINT_MAX = 1e6
-
-
-def _per_joint(v: Validator, value: Any, at: str, n: int, *, zero: bool = False) -> np.ndarray:
-    """One number for every joint, or one per joint; > 0 (``>= 0`` with ``zero``), at most
-    :data:`PER_JOINT_MAX`."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        values = [v.number(value, at, lo=0.0, lo_open=not zero, hi=PER_JOINT_MAX)] * n
-    else:
-        values = [v.number(x, f"{at}[{k}]", lo=0.0, lo_open=not zero, hi=PER_JOINT_MAX)
-                  for k, x in enumerate(v.sequence(value, at, min_len=n, max_len=n))]
-    return np.array(values, dtype=float)
+def _per_joint(value: float | list[float], n: int) -> np.ndarray:
+    """A :data:`PerJoint` value as ``(n,)`` floats."""
+    return np.array([value] * n if isinstance(value, float) else value, dtype=float)
 
 
 def study_from_dict(data: Any, source: str = "<dict>") -> Study:
-    """Validate a study mapping (as read from YAML) and build a :class:`Study`: the sections
-    in file order, each by its reader, the first broken rule one :class:`ParamsError` line
+    """Validate a study mapping (as read from YAML) and build a :class:`Study`: the robot
+    first (the per-joint fields are sized by it), the file into a :class:`StudyFile` by the
+    generic reader (every field's type and range), then the rules that involve two fields or
+    the robot, section by section; the first broken rule is one :class:`ParamsError` line
     naming the file and the field.
 
     Example:
@@ -199,181 +280,124 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
         >>> study = study_from_dict(data, "intelbot5.yaml")
         >>> study.robot.name, study.ik_sizes["train"] > 0, study.id.dt > 0
         ('intelbot5', True, True)
+        >>> study.file.id.segment_time_s                     # the file as written, typed
+        (0.6, 1.8)
         >>> study_from_dict({**data, "seed": -1}, "intelbot5.yaml")
         Traceback (most recent call last):
         ...
         nfarm.infra.reading.ParamsError: intelbot5.yaml: seed: must be >= 0, got -1
     """
     v = Validator(source)
-    v.mapping(data, "", _TOP)
-    name = v.string(data["name"], "name")
-    if "description" in data:
-        v.string(data["description"], "description", allow_empty=True)
+    v.mapping(data, "", section_keys(StudyFile))
     robot_file = v.string(data["robot_file"], "robot_file")
     try:
         robot = load_robot(project_path(robot_file))
     except ParamsError as exc:
         v.fail("robot_file", f"cannot load the robot: {exc}")
-    seed = v.integer(data["seed"], "seed", lo=0, hi=2**63 - 1)
-    ik = _read_ik(v, data["ik"], robot, seed)
-    id_settings = _read_id(v, data["id"], robot)
-    _check_work(v, {"ik_sizes": ik["ik_sizes"], "trajectories": id_settings.trajectories,
+    file = read_typed(StudyFile, data, v, joints=robot.n)
+    region = _region(v, file.ik.region, robot, file.seed)
+    id_settings = _id_settings(v, file.id, robot)
+    _check_work(v, {"ik_sizes": file.ik.sizes, "trajectories": id_settings.trajectories,
                     "via": id_settings.via_points, "segment": id_settings.segment_time,
                     "dt": id_settings.dt, "vmax": id_settings.max_velocity,
-                    "amax": id_settings.max_acceleration, "check_targets": ik["check_targets"],
-                    "check_starts": ik["check_starts"]}, robot)
-    if data["id"].get("measured") is not None:
-        id_settings = dataclasses.replace(id_settings, **_read_measured(v, data["id"]["measured"], robot))
-    learned_ik = _read_learned_ik(v, data["learned_ik"], robot.n) \
-        if data.get("learned_ik") is not None else {}
-    return Study(source=source, name=name, robot_file=robot_file, robot=robot, seed=seed, **ik,
-                 id=id_settings, learned_ik=learned_ik, params=json.loads(json.dumps(data)))
+                    "amax": id_settings.max_acceleration, "check_targets": file.ik.check.targets,
+                    "check_starts": file.ik.check.starts}, robot)
+    if file.id.measured is not None:
+        id_settings = dataclasses.replace(id_settings, **_measured(v, file.id.measured, robot))
+    learned_ik = {} if file.learned_ik is None else \
+        {k: x for k, x in dataclasses.asdict(file.learned_ik).items() if x is not None}
+    return Study(source=source, name=file.name, robot_file=robot_file, robot=robot, seed=file.seed,
+                 ik_region=region, ik_sampler=file.ik.sampler, ik_sizes=file.ik.sizes,
+                 ik_full_range=file.ik.full_range, check_targets=file.ik.check.targets,
+                 check_starts=file.ik.check.starts, id=id_settings, learned_ik=learned_ik,
+                 params=json.loads(json.dumps(data)), file=file)
 
 
-def _read_region(v: Validator, data: Any, robot: Robot, seed: int) -> IKRegion:
-    """Section ``ik.region``: the joint box [deg] within the limits, the task-space filters, and
-    a check that some pose of the box passes them."""
-    n = robot.n
-    region = v.mapping(data, "ik.region", _REGION)
-    joints = v.sequence(region["joints_deg"], "ik.region.joints_deg", min_len=n, max_len=n)
+def _region(v: Validator, section: RegionSection, robot: Robot, seed: int) -> IKRegion:
+    """``ik.region`` in radians: each joint's range within its limits, the reach filter only
+    for an arm whose first joint turns about the base z axis, and some pose of the box that
+    passes the filters."""
     box = robot.qlim.copy()
-    for i, pair in enumerate(joints):
-        at = f"ik.region.joints_deg[{i}]"
+    for i, pair in enumerate(section.joints_deg):
         if pair is None:
             continue
-        lo, hi = (math.radians(x) for x in v.vector(pair, at, 2))
-        if not lo < hi:
-            v.fail(at, f"must satisfy lo < hi, got {show(pair)}")
+        lo, hi = (math.radians(x) for x in pair)
         limits = robot.qlim[i]
         if lo < limits[0] - 1e-12 or hi > limits[1] + 1e-12:
-            v.fail(at, f"must lie within joint {i + 1}'s limits "
-                       f"[{math.degrees(limits[0]):.6g}, {math.degrees(limits[1]):.6g}] deg, "
-                       f"got {show(pair)}")
+            v.fail(f"ik.region.joints_deg[{i}]", f"must lie within joint {i + 1}'s limits "
+                   f"[{math.degrees(limits[0]):.6g}, {math.degrees(limits[1]):.6g}] deg, got {list(pair)}")
         box[i] = (max(lo, limits[0]), min(hi, limits[1]))
-    radial = _bounds(v, region["radial_m"], "ik.region.radial_m", positive=True) \
-        if region.get("radial_m") is not None else (None, None)
-    height = _bounds(v, region["height_m"], "ik.region.height_m") \
-        if region.get("height_m") is not None else (None, None)
-    reach = _bounds(v, region["reach_m"], "ik.region.reach_m") \
-        if region.get("reach_m") is not None else (None, None)
-    if reach != (None, None) and robot.convention == "modified" and \
+    if section.reach_m not in (None, (None, None)) and robot.convention == "modified" and \
             (abs(robot.a[0]) > 1e-12 or abs(math.remainder(robot.alpha[0], 2 * math.pi)) > 1e-12):
         v.fail("ik.region.reach_m", f"needs joint 1 to turn about the base z axis; {robot.name}'s "
                                     f"first joint has a = {robot.a[0]:g} m, alpha = "
                                     f"{math.degrees(robot.alpha[0]):g} deg")
     axis, angle = None, math.pi
-    if region.get("approach") is not None:
-        approach = v.mapping(region["approach"], "ik.region.approach", _APPROACH)
-        axis = np.array(v.vector(approach["axis"], "ik.region.approach.axis", 3))
+    if section.approach is not None:
+        axis = np.array(section.approach.axis)
         norm = float(np.linalg.norm(axis))
         if norm == 0:
             v.fail("ik.region.approach.axis", "must not be the zero vector")
-        axis = axis / norm
-        angle = math.radians(v.number(approach["max_angle_deg"], "ik.region.approach.max_angle_deg",
-                                      lo=0.0, hi=180.0, lo_open=True))
-    region_ = IKRegion(robot, box, radial, height, axis, angle, reach)
-    if region_.has_filters:        # 8 192 draws (a few ms): a region no pose of the box reaches
-        q_try = region_.box[:, 0] + (region_.box[:, 1] - region_.box[:, 0]) * \
-            np.random.default_rng(seed).random((8192, n))
-        if not region_.contains_pose(fk(robot, q_try), q_try).any():
+        axis, angle = axis / norm, math.radians(section.approach.max_angle_deg)
+    unbounded = (None, None)
+    region = IKRegion(robot, box, section.radial_m or unbounded, section.height_m or unbounded,
+                      axis, angle, section.reach_m or unbounded)
+    if region.has_filters:        # 8 192 draws (a few ms): a region no pose of the box reaches
+        q_try = region.box[:, 0] + (region.box[:, 1] - region.box[:, 0]) * \
+            np.random.default_rng(seed).random((8192, robot.n))
+        if not region.contains_pose(fk(robot, q_try), q_try).any():
             v.fail("ik.region", "no pose of 8,192 drawn in the joint box passes its task-space filters "
                                 "(radial_m, height_m, reach_m, approach): the arm cannot reach it")
-    return region_
+    return region
 
 
-def _read_ik(v: Validator, data: Any, robot: Robot, seed: int) -> dict[str, Any]:
-    """Section ``ik``: the region, the sampler, the sizes and the solution check (the
-    :class:`Study` fields they fill)."""
-    ik = v.mapping(data, "ik", _IK)
-    region = _read_region(v, ik["region"], robot, seed)
-    sampler = v.choice(ik.get("sampler", "sobol"), "ik.sampler", ("sobol", "uniform"))
-    sizes = v.mapping(ik["sizes"], "ik.sizes", _SIZES)
-    ik_sizes = {k: v.integer(sizes[k], f"ik.sizes.{k}", lo=1, hi=50_000_000) for k in SPLITS}
-    check = v.mapping(ik["check"], "ik.check", _CHECK)
-    return {"ik_region": region, "ik_sampler": sampler, "ik_sizes": ik_sizes,
-            "check_targets": v.integer(check["targets"], "ik.check.targets", lo=1, hi=1_000_000),
-            "check_starts": v.integer(check["starts"], "ik.check.starts", lo=1, hi=1024),
-            "ik_full_range": v.boolean(ik.get("full_range", False), "ik.full_range")}
-
-
-def _read_id(v: Validator, data: Any, robot: Robot) -> IDSettings:
-    """Section ``id`` but its ``measured`` arm: the trajectory generator, SI units inside."""
-    n = robot.n
-    idd = v.mapping(data, "id", _ID)
-    counts = v.mapping(idd["trajectories"], "id.trajectories", _SIZES)
-    trajectories = {k: v.integer(counts[k], f"id.trajectories.{k}", lo=1, hi=1_000_000)
-                    for k in SPLITS}
-    via = v.integer(idd["via_points"], "id.via_points", lo=2, hi=10_000)
-    segment = _bounds(v, idd["segment_time_s"], "id.segment_time_s", positive=True)
-    if None in segment or segment[0] <= 0:
-        v.fail("id.segment_time_s", f"must be two durations 0 < lo < hi [s], got "
-                                    f"{show(idd['segment_time_s'])}")
-    dt = v.number(idd["dt_s"], "id.dt_s", lo=0.0, lo_open=True, hi=segment[0])
-    margin = math.radians(v.number(idd.get("margin_deg", 0.0), "id.margin_deg", lo=0.0))
+def _id_settings(v: Validator, section: IDSection, robot: Robot) -> IDSettings:
+    """``id`` but its ``measured`` arm, in SI units and radians: the step within the shortest
+    segment, the margin within the narrowest joint range."""
+    segment = section.segment_time_s
+    if section.dt_s > segment[0]:
+        v.fail("id.dt_s", f"must be <= {segment[0]:g} (the shortest segment, id.segment_time_s), "
+                          f"got {section.dt_s!r}")
+    margin = math.radians(section.margin_deg)
     narrowest = float(np.min(robot.qlim[:, 1] - robot.qlim[:, 0]))
     if 2 * margin >= narrowest:
         v.fail("id.margin_deg", f"must leave room inside the narrowest joint range "
                                 f"({math.degrees(narrowest):.6g} deg), got {math.degrees(margin):.6g}")
-    vmax = np.radians(_per_joint(v, idd["max_velocity_deg_s"], "id.max_velocity_deg_s", n))
-    amax = np.radians(_per_joint(v, idd["max_acceleration_deg_s2"], "id.max_acceleration_deg_s2", n))
-    return IDSettings(trajectories, via, segment, dt, margin, vmax, amax)
-
-
-def _read_measured(v: Validator, data: Any, robot: Robot) -> dict[str, Any]:
-    """Section ``id.measured``: the "real" arm's drives, friction, sensor noise and encoders
-    (the :class:`IDSettings` fields they fill)."""
     n = robot.n
-    m = v.mapping(data, "id.measured", _MEASURED)
-    drives = {key: _per_joint(v, m[key], f"id.measured.{key}", n, zero=True)
-              for key in ("viscous", "coulomb", "armature")}
-    drives["coulomb_velocity"] = np.radians(_per_joint(
-        v, m["coulomb_velocity_deg_s"], "id.measured.coulomb_velocity_deg_s", n))
-    out: dict[str, Any] = {"measured": dataclasses.replace(robot, **drives),
-                           "noise": _per_joint(v, m["noise_nm"], "id.measured.noise_nm", n, zero=True)}
+    return IDSettings(section.trajectories, section.via_points, segment, section.dt_s, margin,
+                      np.radians(_per_joint(section.max_velocity_deg_s, n)),
+                      np.radians(_per_joint(section.max_acceleration_deg_s2, n)))
+
+
+def _measured(v: Validator, section: MeasuredSection, robot: Robot) -> dict[str, Any]:
+    """``id.measured`` as the :class:`IDSettings` fields it fills: the robot with the drives,
+    the noise, the Stribeck and load terms (breakaway friction at least the Coulomb level,
+    with its speed), the encoders and an odd filter window."""
+    n = robot.n
+    drives = {key: _per_joint(getattr(section, key), n) for key in ("viscous", "coulomb", "armature")}
+    drives["coulomb_velocity"] = np.radians(_per_joint(section.coulomb_velocity_deg_s, n))
     friction: dict[str, np.ndarray] = {}
-    if "stribeck" in m:
-        friction["stribeck"] = _per_joint(v, m["stribeck"], "id.measured.stribeck", n, zero=True)
+    if section.stribeck is not None:
+        friction["stribeck"] = _per_joint(section.stribeck, n)
         low = np.flatnonzero(friction["stribeck"] < drives["coulomb"])
         if low.size:
             v.fail("id.measured.stribeck", f"the breakaway friction must be at least the Coulomb "
                                            f"friction (joint {low[0] + 1}: {friction['stribeck'][low[0]]:g} "
                                            f"< {drives['coulomb'][low[0]]:g} N·m)")
-        if "stribeck_velocity_deg_s" not in m:
+        if section.stribeck_velocity_deg_s is None:
             v.fail("id.measured", "stribeck needs stribeck_velocity_deg_s (> 0)")
-    if "stribeck_velocity_deg_s" in m:
-        friction["stribeck_velocity"] = np.radians(_per_joint(
-            v, m["stribeck_velocity_deg_s"], "id.measured.stribeck_velocity_deg_s", n))
-    if "load_coefficient" in m:
-        friction["load_coefficient"] = _per_joint(v, m["load_coefficient"], "id.measured.load_coefficient",
-                                                  n, zero=True)
-        if (friction["load_coefficient"] >= 1).any():
-            v.fail("id.measured.load_coefficient", "must be < 1 (a fraction of the joint's load torque)")
-    out["friction"] = friction
-    if m.get("encoder_counts") is not None:
-        out["encoder_counts"] = v.integer(m["encoder_counts"], "id.measured.encoder_counts", lo=16, hi=2**31)
-    out["filter_window"] = v.integer(m.get("filter_window", 7), "id.measured.filter_window", lo=5, hi=101)
-    if out["filter_window"] % 2 == 0:
-        v.fail("id.measured.filter_window", f"must be an odd number of samples, got {out['filter_window']}")
+    if section.stribeck_velocity_deg_s is not None:
+        friction["stribeck_velocity"] = np.radians(_per_joint(section.stribeck_velocity_deg_s, n))
+    if section.load_coefficient is not None:
+        friction["load_coefficient"] = _per_joint(section.load_coefficient, n)
+    if section.filter_window % 2 == 0:
+        v.fail("id.measured.filter_window", f"must be an odd number of samples, got {section.filter_window}")
+    out: dict[str, Any] = {"measured": dataclasses.replace(robot, **drives),
+                           "noise": _per_joint(section.noise_nm, n), "friction": friction,
+                           "filter_window": section.filter_window}
+    if section.encoder_counts is not None:
+        out["encoder_counts"] = section.encoder_counts
     return out
-
-
-def _read_learned_ik(v: Validator, data: Any, n: int) -> dict[str, Any]:
-    """Section ``learned_ik``: the chosen learned IK's functions per input and epochs."""
-    chosen = v.mapping(data, "learned_ik", _LEARNED_IK)
-    learned_ik: dict[str, Any] = {}
-    if "n_mfs" in chosen:
-        mfs = chosen["n_mfs"]
-        learned_ik["n_mfs"] = v.integer(mfs, "learned_ik.n_mfs", lo=1, hi=8) \
-            if not isinstance(mfs, list) else \
-            [v.integer(m, f"learned_ik.n_mfs[{i}]", lo=1, hi=8)
-             for i, m in enumerate(v.sequence(mfs, "learned_ik.n_mfs", min_len=1, max_len=16))]
-    if "epochs" in chosen:
-        epochs = chosen["epochs"]
-        learned_ik["epochs"] = v.integer(epochs, "learned_ik.epochs", lo=1, hi=10_000) \
-            if not isinstance(epochs, list) else \
-            [v.integer(e, f"learned_ik.epochs[{j}]", lo=1, hi=10_000)
-             for j, e in enumerate(v.sequence(epochs, "learned_ik.epochs", min_len=n, max_len=n))]
-    return learned_ik
 
 
 def smoke_study(study: Study, factor: int = 50) -> Study:

@@ -1,0 +1,223 @@
+"""Parameter files read into dataclasses by their type annotations: one generic loader for
+every section of a file, as Drake's ``yaml_load_typed`` reads the ``Scenario`` of Tedrake's
+*manipulation* course. A section is a frozen dataclass whose fields are the file's keys; a field
+with a default may be left out, one without is required, and a key that is no field is refused
+(with the closest field's name as a hint). Every broken rule is one
+:class:`~nfarm.infra.reading.ParamsError` line naming the file, the field and the rule, from
+:class:`~nfarm.infra.reading.Validator`.
+
+Annotations read:
+
+================================  ============================================================
+``str``, ``int``, ``float``,      one value of that kind (a truth value is no number; an
+``bool``                          ``int`` may be given for a ``float``, read as a float)
+``Literal["a", "b"]``             one of the texts
+``X | None``                      ``null`` is allowed, read as ``None``
+``X | list[X]``                   one value, or a list of them (chosen by the value)
+``tuple[X, Y]``                   a list of exactly those items, read as a tuple
+``list[X]``                       a list of any length (see :class:`Length`, :data:`JOINTS`)
+``dict[Literal["a", "b"], X]``    a mapping with exactly those keys, each an ``X``
+a dataclass                       a nested section
+================================  ============================================================
+
+Rules ride on ``typing.Annotated``: :class:`Range` bounds every number under it (an annotation
+on a list or a mapping bounds its items), :class:`Length` and :data:`JOINTS` (one item per
+joint of the robot the reader is given) the length of the list it annotates, :data:`ORDERED`
+a pair ``[lo, hi]`` (``lo < hi`` where both are given), :data:`TEXT` a string that may be empty.
+Rules that involve two fields or the robot's model are the caller's, after the read.
+
+Example:
+    >>> from dataclasses import dataclass
+    >>> from typing import Annotated, Literal
+    >>> @dataclass(frozen=True, kw_only=True)
+    ... class Sizes:
+    ...     split: dict[Literal["train", "test"], Annotated[int, Range(lo=1)]]
+    ...     sampler: Literal["sobol", "uniform"] = "sobol"
+    ...     speed_deg_s: Annotated[float | list[float], Range(lo=0, lo_open=True), JOINTS]
+    >>> read_typed(Sizes, {"split": {"train": 8, "test": 2}, "speed_deg_s": 90}, "s.yaml", joints=5)
+    Sizes(split={'train': 8, 'test': 2}, sampler='sobol', speed_deg_s=90.0)
+    >>> read_typed(Sizes, {"split": {"train": 8, "test": 2}, "speed_deg_s": [90, -1, 0, 1, 1]},
+    ...            "s.yaml", joints=5)
+    Traceback (most recent call last):
+    ...
+    nfarm.infra.reading.ParamsError: s.yaml: speed_deg_s[1]: must be > 0, got -1.0
+    >>> read_typed(Sizes, {"split": {"train": 8}, "speed_deg_s": 90, "samplr": "x"}, "s.yaml", joints=5)
+    Traceback (most recent call last):
+    ...
+    nfarm.infra.reading.ParamsError: s.yaml: samplr: unknown field (did you mean 'sampler'?)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import types
+import typing
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal, Union
+
+from .reading import Validator
+
+__all__ = ["read_typed", "Range", "Length", "JOINTS", "ORDERED", "TEXT", "section_keys"]
+
+
+@dataclass(frozen=True)
+class Range:
+    """Every number under the annotation lies in ``[lo, hi]`` (``lo < x`` with ``lo_open``,
+    ``x < hi`` with ``hi_open``); ``None``: no bound."""
+
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+
+
+@dataclass(frozen=True)
+class Length:
+    """The annotated list holds ``lo`` to ``hi`` items; ``joints=True``: one per joint."""
+
+    lo: int = 0
+    hi: int | None = None
+    joints: bool = False
+
+
+@dataclass(frozen=True)
+class _Flag:
+    name: str
+
+    def __repr__(self) -> str:
+        return self.name
+
+
+#: One item per joint of the robot (the ``joints`` given to :func:`read_typed`).
+JOINTS = Length(joints=True)
+#: A pair ``[lo, hi]`` with ``lo < hi`` where both are given.
+ORDERED = _Flag("ORDERED")
+#: A string that may be empty.
+TEXT = _Flag("TEXT")
+
+
+def read_typed(cls: type, data: Any, source: str | Validator, at: str = "", *,
+               joints: int | None = None) -> Any:
+    """Read ``data`` (as parsed from YAML) into the dataclass ``cls`` by its annotations
+    (module docstring); ``source`` names the file in errors; ``at`` is the section's path in
+    it; ``joints`` is the robot's joint count for :data:`JOINTS` lists.
+
+    Raises:
+        ParamsError: the first broken rule, one line naming the file and the field.
+        TypeError: ``cls`` holds an annotation this reader does not know (a programming error).
+    """
+    v = source if isinstance(source, Validator) else Validator(source)
+    return _Reader(v, joints).section(cls, data, at)
+
+
+def section_keys(cls: type) -> dict[str, bool]:
+    """``{key: required}`` of a section's dataclass, in its fields' order."""
+    return {f.name: f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+            for f in dataclasses.fields(cls)}
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls, include_extras=True)
+
+
+def _split(hint: Any) -> tuple[Any, tuple]:
+    """``Annotated[T, *rules]`` → ``(T, rules)``, nested annotations flattened."""
+    rules: tuple = ()
+    while typing.get_origin(hint) is Annotated:
+        hint, *more = typing.get_args(hint)
+        rules = (*rules, *more)
+    return hint, rules
+
+
+def _is_union(hint: Any) -> bool:
+    return typing.get_origin(hint) in (Union, types.UnionType)
+
+
+def _is_list(value: Any) -> bool:
+    return isinstance(value, Sequence) and not isinstance(value, str)
+
+
+class _Reader:
+    """One read: the validator that names the file, the robot's joint count; ``value`` reads one
+    field by its annotation, ``bound`` the nearest :class:`Range` above it."""
+
+    def __init__(self, v: Validator, joints: int | None):
+        self.v = v
+        self.joints = joints
+
+    def section(self, cls: type, data: Any, at: str) -> Any:
+        self.v.mapping(data, at, section_keys(cls))
+        hints = _hints(cls)
+        values = {f.name: self.value(hints[f.name], data[f.name], _join(at, f.name), None)
+                  for f in dataclasses.fields(cls) if f.name in data}
+        return cls(**values)
+
+    def value(self, hint: Any, value: Any, at: str, bound: Range | None) -> Any:
+        hint, rules = _split(hint)
+        bound = next((r for r in rules if isinstance(r, Range)), bound)
+        length = next((r for r in rules if isinstance(r, Length)), None)
+        if _is_union(hint):
+            arms = [a for a in typing.get_args(hint) if a is not type(None)]
+            if value is None and len(arms) < len(typing.get_args(hint)):
+                return None
+            if len(arms) == 1:
+                return self.value(Annotated[(arms[0], *rules)] if rules else arms[0], value, at, bound)
+            listed = [a for a in arms if typing.get_origin(_split(a)[0]) is list]
+            if len(arms) != 2 or len(listed) != 1:
+                raise TypeError(f"{at}: unsupported union {hint!r}")
+            arm = listed[0] if _is_list(value) else next(a for a in arms if a is not listed[0])
+            return self.value(Annotated[(arm, *rules)] if rules else arm, value, at, bound)
+        if dataclasses.is_dataclass(hint):
+            return self.section(hint, value, at)
+        origin, args = typing.get_origin(hint), typing.get_args(hint)
+        if origin is Literal:
+            return self.v.choice(value, at, args)
+        if origin is tuple:
+            items = self.v.sequence(value, at, min_len=len(args), max_len=len(args))
+            out = tuple(self.value(a, x, f"{at}[{k}]", bound) for k, (a, x) in enumerate(zip(args, items)))
+            if ORDERED in rules:
+                self.ordered(out, at)
+            return out
+        if origin is list:
+            lo, hi = (length.lo, length.hi) if length else (0, None)
+            if length and length.joints:
+                if self.joints is None:
+                    raise TypeError(f"{at}: a per-joint list needs the robot's joint count")
+                lo = hi = self.joints
+            items = self.v.sequence(value, at, min_len=lo, max_len=hi)
+            return [self.value(args[0], x, f"{at}[{k}]", bound) for k, x in enumerate(items)]
+        if origin is dict:
+            keys, item = args
+            if typing.get_origin(keys) is not Literal:
+                raise TypeError(f"{at}: a mapping's keys must be a Literal, got {keys!r}")
+            self.v.mapping(value, at, dict.fromkeys(typing.get_args(keys), True))
+            return {k: self.value(item, value[k], f"{at}.{k}", bound) for k in typing.get_args(keys)}
+        if hint is bool:
+            return self.v.boolean(value, at)
+        if hint is str:
+            return self.v.string(value, at, allow_empty=TEXT in rules)
+        if hint is int or hint is float:
+            return self.number(value, at, bound or Range(), integer=hint is int)
+        raise TypeError(f"{at}: unsupported annotation {hint!r}")
+
+    def number(self, value: Any, at: str, b: Range, *, integer: bool) -> float:
+        if integer:
+            x = self.v.integer(value, at, lo=None if b.lo_open else b.lo, hi=None if b.hi_open else b.hi)
+        else:
+            x = self.v.number(value, at, lo=b.lo, hi=None if b.hi_open else b.hi, lo_open=b.lo_open)
+        if integer and b.lo_open and b.lo is not None and x <= b.lo:
+            self.v.fail(at, f"must be > {b.lo:g}, got {x}")
+        if b.hi_open and b.hi is not None and x >= b.hi:
+            self.v.fail(at, f"must be < {b.hi:g}, got {x!r}")
+        return x
+
+    def ordered(self, pair: tuple, at: str) -> None:
+        if None not in pair and not pair[0] < pair[1]:
+            self.v.fail(at, f"must satisfy lo < hi, got {list(pair)}")
+
+
+def _join(at: str, key: str) -> str:
+    return f"{at}.{key}" if at else key
