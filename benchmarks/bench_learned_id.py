@@ -19,7 +19,7 @@ import papermill
 from common import best_of
 from nfarm.study import datasets, study_files
 from nfarm.model.dynamics import regressor, rnea
-from nfarm.learning.learned import LearnedID
+from nfarm.learning.learned_id import LearnedID
 from nfarm.infra.paths import NOTEBOOKS, PARAMS
 from nfarm.presentation.tables import Table
 

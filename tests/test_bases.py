@@ -14,7 +14,7 @@ from nfarm.learning import bases
 from nfarm.study.study_files import load_study
 from nfarm.study.id_trajectories import random_trajectories
 from nfarm.model.dynamics import rnea
-from nfarm.learning.learned import LearnedID, id_features
+from nfarm.learning.learned_id import LearnedID, id_features
 from nfarm.infra.paths import PARAMS
 from nfarm.model.robot import load_robot
 

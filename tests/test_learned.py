@@ -310,7 +310,7 @@ def test_threads_share_the_chunks_without_changing_a_bit(fitted, data):
 
 from nfarm.study.id_trajectories import random_trajectories  # noqa: E402
 from nfarm.model.dynamics import inertial_parameters, rnea  # noqa: E402
-from nfarm.learning.learned import LearnedID, id_features, regressor_columns  # noqa: E402
+from nfarm.learning.learned_id import LearnedID, id_features, regressor_columns  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -435,7 +435,7 @@ def test_id_fit_refuses_bad_input_before_any_work(id_data, kwargs, change, messa
 
 # -- the model cache ---------------------------------------------------------------------------
 
-from nfarm.learning.learned import fit_cached  # noqa: E402
+from nfarm.learning.model_cache import fit_cached  # noqa: E402
 
 
 @pytest.mark.parametrize("kind", ["ik", "id"])

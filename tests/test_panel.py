@@ -18,7 +18,8 @@ from nfarm.study.study_files import load_study
 from nfarm.model.dynamics import rnea
 from nfarm.solvers.geometric_ik import in_class
 from nfarm.model.kinematics import fk, fk_all
-from nfarm.learning.learned import LearnedID, LearnedIK
+from nfarm.learning.learned import LearnedIK
+from nfarm.learning.learned_id import LearnedID
 from nfarm.publishing.panel import ArmPanel, Panel
 from nfarm.infra.paths import PARAMS
 from nfarm.model.robot import load_robot, sample_configurations

@@ -11,7 +11,8 @@ import pytest
 from nfarm.study import datasets, id_trajectories, study_files, sweep
 from nfarm.infra import provenance
 from nfarm.model.dynamics import rnea
-from nfarm.learning.learned import LearnedID, fit_cached
+from nfarm.learning.learned_id import LearnedID
+from nfarm.learning.model_cache import fit_cached
 from nfarm.infra.paths import ROOT
 from nfarm.publishing.report import _chapter_key, notebook_modules
 
@@ -34,8 +35,8 @@ def edit(package: Path, module: str) -> None:
 
 
 def test_the_closure_follows_imports_and_stops_at_the_layers_above():
-    learned = provenance.code_modules("learning.learned")
-    assert {"learning.learned", "learning.anfis", "learning.fuzzy", "learning.bases", "model.kinematics",
+    learned = provenance.code_modules("learning.model_cache")      # the key of every fitted model
+    assert {"learning.learned", "learning.learned_id", "learning.anfis", "learning.fuzzy", "learning.bases", "model.kinematics",
             "__init__", "learning.__init__", "model.__init__", "model.urdf"} <= set(learned)
     assert not {m for m in learned if m.split(".")[0] in ("presentation", "study", "publishing")}
     # A function-level import counts: jobs imports the learners at the top, sweep runs notebooks lazily.
@@ -51,12 +52,13 @@ def test_the_public_names_of_the_package_are_not_in_every_key():
     assert "learning.learned" not in provenance.code_modules("model.robot")
 
 
-@pytest.mark.parametrize("module, changes", [("learning.anfis", True), ("learning.learned", True), ("model.kinematics", True),
+@pytest.mark.parametrize("module, changes", [("learning.anfis", True), ("learning.learned", True),
+                                             ("learning.learned_id", True), ("model.kinematics", True),
                                              ("presentation.plotting", False), ("publishing.report", False), ("publishing.course", False)])
 def test_the_learners_digest_changes_with_their_code_only(package, module, changes):
-    before = provenance.code_digest("learning.learned")
+    before = provenance.code_digest("learning.model_cache")
     edit(package, module)
-    assert (provenance.code_digest("learning.learned") != before) == changes
+    assert (provenance.code_digest("learning.model_cache") != before) == changes
 
 
 def test_a_model_is_retrained_after_a_training_module_changes_and_reused_after_a_presentation_one(

@@ -57,7 +57,8 @@ PUBLIC: dict[str, str] = {
     **dict.fromkeys(["closed_form"], "solvers.geometric_ik"),
     **dict.fromkeys(["Trajectory", "cubic", "quintic", "via_points"], "solvers.trajectory"),
     **dict.fromkeys(["ANFIS"], "learning.anfis"),
-    **dict.fromkeys(["LearnedIK", "LearnedID", "OutsideTrainingWarning"], "learning.learned"),
+    **dict.fromkeys(["LearnedIK", "OutsideTrainingWarning"], "learning.learned"),
+    "LearnedID": "learning.learned_id",
     **dict.fromkeys(["BaselineID"], "learning.baselines"),
     "load_study": "study.study_files",
     "build_datasets": "study.datasets",
@@ -84,7 +85,8 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:   # for readers and type checkers; at run time the names come from __getattr__
     from .learning.anfis import ANFIS
     from .learning.baselines import BaselineID
-    from .learning.learned import LearnedID, LearnedIK, OutsideTrainingWarning
+    from .learning.learned import LearnedIK, OutsideTrainingWarning
+    from .learning.learned_id import LearnedID
     from .model.dynamics import coriolis, gravity_torques, joint_drive_torques, mass_matrix, regressor, rnea
     from .model.kinematics import fk, fk_all, jacobian, manipulability, min_singular_value
     from .model.robot import ParamsError, ParamsWarning, Robot, load_robot, robot_hash, sample_configurations

@@ -1,7 +1,7 @@
 """What a cached artefact was made by: the content of the code that makes it.
 
 Data sets (:func:`nfarm.study.datasets.build_datasets`), trained models
-(:func:`nfarm.learning.learned.fit_cached`), sweep cells (:func:`nfarm.study.sweep.code_key`)
+(:func:`nfarm.learning.model_cache.fit_cached`), sweep cells (:func:`nfarm.study.sweep.code_key`)
 and chapter runs (:func:`nfarm.publishing.report.build_report`) are reused while the hash of
 their inputs is unchanged. The code is part of those inputs, and a version number is not the
 code: a key holding nfarm's version let models trained before a change to ANFIS survive it and

@@ -48,6 +48,7 @@ from ..model.dynamics import rnea
 from ..model.robot import Robot
 from .bases import BASES, basis
 from .estimator import Estimator
+from .learned_id import id_states
 
 __all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label"]
 
@@ -180,14 +181,13 @@ class BaselineID(Estimator):
 
         from sklearn.exceptions import ConvergenceWarning
 
-        from .learned import _states
 
         options = self._options()
         if not isinstance(self.residual, bool):
             raise ValueError(f"residual must be True or False, got {self.residual!r}")
         if self.learner == "friction" and not self.residual:
             raise ValueError("learner 'friction' identifies the drives beside Newton–Euler: give residual=True")
-        q, qd, qdd, tau = _states(train, robot, "train")
+        q, qd, qdd, tau = id_states(train, robot, "train")
         self.robot_, self.options_ = robot, options
         target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
         if self.learner == "friction":      # a physical law: no offset, no scaling
@@ -208,9 +208,8 @@ class BaselineID(Estimator):
     def predict(self, q, qd, qdd) -> np.ndarray:
         """Torques ``(N, n)`` [N·m] for states ``(N, n)``."""
         self._check_fitted()
-        from .learned import _states
 
-        q, qd, qdd = _states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)
+        q, qd, qdd = id_states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)
         y = self.model_.predict(self._features(q, qd, qdd)).reshape(len(q), -1)
         tau = y * self.y_scale_ + self.y_mean_
         if self.residual:

@@ -26,7 +26,7 @@ Bases (:func:`basis`; each is ``dynamic_terms ⊗ configuration terms``):
   exactly, so a linear fit of it is an identification in disguise — chapter 06 says so;
 * ``"generic_linear"``, ``"chain_linear"`` — dynamic terms times ``1`` and the ``sin, cos`` of
   the angles (and sums), *without* their products (231 and 357 features for intelbot5): what
-  one first-order rule of :class:`nfarm.learning.learned.LearnedID` with ``inputs="affine_generic"`` or
+  one first-order rule of :class:`nfarm.learning.learned_id.LearnedID` with ``inputs="affine_generic"`` or
   ``"affine"`` sees; the products it needs are left to the fuzzy rules over ``q``.
 
 All functions are pure and batched over the sample axis: ``q, qd, qdd (N, n)`` [rad, rad/s,

@@ -36,7 +36,7 @@ chooses by that comparison: a first-order rule's consequent is linear in its inp
 joint angles are far from linear in a quaternion's components.
 
 Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model,
-:func:`input_scaling`, which :class:`nfarm.learning.learned.LearnedID` uses for its state inputs
+:func:`input_scaling`, which :class:`nfarm.learning.learned_id.LearnedID` uses for its state inputs
 too), so grid partitions and clustering see every input alike.
 """
 

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..learning.anfis import ANFIS
 from ..learning.jang import rmse, sinc_data
-from ..learning.learned import LearnedID, LearnedIK
+from ..learning.learned import LearnedIK
+from ..learning.learned_id import LearnedID
 from ..model.dynamics import gravity_torques, rnea
 from ..model.kinematics import fk, jacobian, min_singular_value
 from ..model.robot import Robot, robot_from_dict, robot_to_dict, sample_configurations

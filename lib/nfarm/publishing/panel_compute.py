@@ -24,7 +24,8 @@ import numpy as np
 
 from ..infra.paths import BUILD, PARAMS, shown_path
 from ..infra.reading import ParamsError
-from ..learning.learned import LearnedID, LearnedIK
+from ..learning.learned import LearnedIK
+from ..learning.learned_id import LearnedID
 from ..model.dynamics import coriolis, gravity_torques, mass_matrix, rnea
 from ..model.kinematics import fk, manipulability, min_singular_value
 from ..model.robot import Robot

@@ -144,7 +144,7 @@ def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     (not the ``.md`` notes beside them), the locked environment and the numerics settings
     (``make report``'s pinned kernels). A change to a module no chapter imports (the course's)
     leaves the chapters as they are."""
-    from ..learning.learned import NUMERICS_ENV
+    from ..learning.model_cache import NUMERICS_ENV
     from ..infra.paths import PARAMS
 
     h = hashlib.sha256()

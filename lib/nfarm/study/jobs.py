@@ -33,7 +33,7 @@ always the study's own. A sweep's ``seeds: [0, 1, 2, 3, 4]`` thus gives each con
 spread over data and initialisation (:func:`nfarm.study.sweep.by_configuration`).
 
 The learned jobs reuse data sets and models (:func:`nfarm.study.datasets.build_datasets`,
-:func:`nfarm.learning.learned.fit_cached`, models under ``<models_dir>/ik/sweep/<options hash>/``): a
+:func:`nfarm.learning.model_cache.fit_cached`, models under ``<models_dir>/ik/sweep/<options hash>/``): a
 cell run again after a change to the code retrains nothing whose inputs are unchanged.
 """
 
@@ -60,7 +60,9 @@ from ..learning import jang
 from ..learning.anfis import ANFIS
 from ..learning.baselines import DEFAULTS as BASELINE_OPTIONS
 from ..learning.baselines import BaselineID
-from ..learning.learned import LearnedID, LearnedIK, fit_cached, n_parameters
+from ..learning.learned import LearnedIK
+from ..learning.learned_id import LearnedID
+from ..learning.model_cache import fit_cached, n_parameters
 from ..model.dynamics import rnea
 from .statistics import trajectory_maxima, trajectory_sums
 
@@ -76,7 +78,7 @@ CELL_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREAD
 @contextlib.contextmanager
 def cell_threads():
     """One BLAS/OpenMP thread, and the environment saying so (model caches key on it:
-    :func:`nfarm.learning.learned.fit_cached`), restored afterwards: how a sweep cell runs, and how a
+    :func:`nfarm.learning.model_cache.fit_cached`), restored afterwards: how a sweep cell runs, and how a
     chapter reads a cell's model (:func:`ik_model`, :func:`id_model`). A chapter's kernel with
     the machine's thread count would otherwise not match the cell's cache key and train the
     model again, serially, in the kernel."""

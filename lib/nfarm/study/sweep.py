@@ -175,7 +175,7 @@ def code_key(sweep: Sweep) -> str:
     transitively (:func:`nfarm.infra.provenance.code_digest`), and this module's own file (it runs the
     cell); a change to a presentation module (plotting, report) keeps the cells. For a
     notebook: the whole library, which a notebook may import at will, and the notebook."""
-    from ..learning.learned import NUMERICS_ENV
+    from ..learning.model_cache import NUMERICS_ENV
 
     h = hashlib.sha256()
     env = {k: os.environ.get(k) for k in NUMERICS_ENV} | CELL_ENV

@@ -1,0 +1,296 @@
+"""Learned inverse dynamics: one ANFIS per joint behind one object (chapters 06 and 07).
+
+:class:`LearnedID` maps joint states to torques. It feeds each joint's model one of six
+**input sets** (:func:`id_features`): the joint's own ``q, q̇, q̈`` (the likely dissertation
+design), every joint's, trigonometric features, the two ``affine`` sets — rules over the
+configuration, consequents over the terms every rigid arm's torque is a sum of
+(:mod:`nfarm.learning.bases`) — or the joint's row of the rigid-body regressor
+(:func:`nfarm.model.dynamics.regressor`), which needs the arm's geometry. Chapter 06 compares
+them on validation trajectories (``figures/tables/06_id_comparison``): the rules of the
+``affine`` sets supply the products of angle functions the inertia needs, which the
+dissertation's own-state design lacks. The regressor's row with one rule fits the torques
+exactly (they are linear in it, ``τ = Y π``): one rule is least squares on the inertial
+parameters, an identification, not a learning result. With ``residual=True`` a model learns
+``τ − rnea`` instead: what the rigid-body model misses on chapter 05's measured arm (friction,
+encoder states, sensor noise), compared with a least-squares friction identification in
+chapter 07 (``figures/tables/07_id_measured``).
+
+A model is saved into a directory as one JSON file (``learned_id.json``; no pickle) holding the
+robot's parameter hash; loading against another robot is an error, and the file is validated
+like a parameter file (:mod:`nfarm.infra.reading`).
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .. import __version__
+from ..infra.reading import Validator, json_ready, show
+from ..model.dynamics import regressor, rnea
+from ..model.robot import Robot, joint_array, robot_hash
+from .anfis import ANFIS
+from .bases import basis, basis_width
+from .encoding import check_scaling, input_scaling
+from .per_joint import (PerJointModel, CHUNK, FAR, beyond_range, check_far, check_joint_array, joint_anfis_options,
+                        model_lines, read_joint_models, warn_far)
+
+__all__ = ["LearnedID", "id_features", "id_states", "regressor_columns", "INPUT_SETS", "ID_FILE_NAME", "ID_FORMAT"]
+
+
+#: Input sets of :class:`LearnedID`: what each joint's model sees of a state ``(q, q̇, q̈)``.
+INPUT_SETS = ("own", "all", "trig", "affine_generic", "affine", "regressor")
+#: Input sets whose rules are built over the configuration ``q`` only (the first n columns).
+_CONFIGURATION_PREMISES = ("affine_generic", "affine")
+ID_FILE_NAME = "learned_id.json"
+ID_FORMAT = "nfarm-learned-id-1"
+
+
+def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, inputs: str
+                ) -> list[np.ndarray]:
+    """The inputs each joint's model sees of states ``q, qd, qdd (N, n)``: one ``(N, d_j)``
+    array per joint j.
+
+    * ``"own"`` — the joint's own ``q_j, q̇_j, q̈_j`` (3 inputs; the likely dissertation design);
+    * ``"all"`` — every joint's ``q, q̇, q̈`` (3n);
+    * ``"trig"`` — ``sin q, cos q`` (what gravity and the Coriolis terms see of the angles:
+      trigonometric, not linear), ``q̇``, ``q̈`` and ``q̇ ⊙ |q̇|`` (the sign-keeping square of the
+      centrifugal terms): 5n;
+    * ``"affine_generic"``, ``"affine"`` — the configuration ``q`` (the rules' premises: the
+      models are built with ``premise_inputs`` the first n columns), then the terms every rigid
+      arm's torque is a sum of — ``q̈_k``, ``q̇_k q̇_l`` and ``1``, each times ``1, sin, cos`` of
+      the joint angles (``"affine_generic"``: 230 columns for five joints) or of the angles and
+      the sums of every stretch of parallel joints (``"affine"``: 356 for intelbot5), in the
+      consequents only (:mod:`nfarm.learning.bases`, ``"generic_linear"`` and ``"chain_linear"`` less
+      their constant). No mass, length or inertia enters; within one rule the torque is linear
+      in trigonometric functions of the angles, and the rules over ``q`` supply their products
+      (chapter 06: from 37 % worst-joint NRMSE with one rule to 2.6 % with eight on intelbot5);
+    * ``"regressor"`` — row j of the rigid-body regressor ``Y(q, q̇, q̈)``
+      (:func:`nfarm.model.dynamics.regressor`): the columns of links j..n that are not zero for
+      every state (:func:`regressor_columns`; for intelbot5 34, 38, 28, 17 and 8). The
+      geometry (DH parameters) is known, the masses are not: ``τ_j`` is linear in these
+      inputs, so one rule (least squares) can already be exact.
+    """
+    if inputs == "own":
+        return [np.column_stack([q[:, j], qd[:, j], qdd[:, j]]) for j in range(robot.n)]
+    if inputs == "all":
+        X = np.concatenate([q, qd, qdd], axis=1)
+        return [X] * robot.n
+    if inputs == "trig":
+        X = np.concatenate([np.sin(q), np.cos(q), qd, qdd, qd * np.abs(qd)], axis=1)
+        return [X] * robot.n
+    if inputs in _CONFIGURATION_PREMISES:
+        kind = "chain_linear" if inputs == "affine" else "generic_linear"
+        X = np.concatenate([q, basis(robot, q, qd, qdd, kind)[:, 1:]], axis=1)
+        return [X] * robot.n
+    Y = regressor(robot, q, qd, qdd)
+    return [np.ascontiguousarray(Y[:, j, cols]) for j, cols in enumerate(regressor_columns(robot))]
+
+
+@functools.lru_cache(maxsize=16)
+def _regressor_columns(robot: Robot) -> tuple[tuple[int, ...], ...]:
+    rng = np.random.default_rng(0)
+    lo, hi = robot.qlim[:, 0], robot.qlim[:, 1]
+    q = lo + (hi - lo) * rng.random((256, robot.n))
+    Y = regressor(robot, q, rng.normal(size=q.shape), rng.normal(size=q.shape))
+    size = np.abs(Y).max(axis=0)                                           # (n, 10 n)
+    return tuple(tuple(int(k) for k in np.flatnonzero(row > 1e-9 * max(row.max(), 1e-300)))
+                 for row in size)
+
+
+def regressor_columns(robot: Robot) -> list[np.ndarray]:
+    """Per joint j, the columns of the regressor (:func:`nfarm.model.dynamics.regressor`) that
+    joint j's torque depends on: those not zero at any of 256 seeded random states (the
+    others are zero for every state — the parameters of links before j, and e.g. a link's
+    moments about axes its torque never sees)."""
+    return [np.array(cols, dtype=int) for cols in _regressor_columns(robot)]
+
+
+def _id_widths(inputs: str, robot: Robot) -> list[int]:
+    if inputs == "regressor":
+        return [len(cols) for cols in _regressor_columns(robot)]
+    n = robot.n
+    if inputs in _CONFIGURATION_PREMISES:
+        kind = "chain_linear" if inputs == "affine" else "generic_linear"
+        return [n + basis_width(robot, kind) - 1] * n
+    return [{"own": 3, "all": 3 * n, "trig": 5 * n}[inputs]] * n
+
+
+def id_states(data: Mapping, robot: Robot, what: str, *, tau: bool = True) -> list[np.ndarray]:
+    """``q, qd, qdd`` (and ``tau``) ``(N, n)`` of an ID data set, checked."""
+    keys = ("q", "qd", "qdd", "tau") if tau else ("q", "qd", "qdd")
+    if not isinstance(data, Mapping) or any(k not in data for k in keys):
+        raise ValueError(f"{what} must be a mapping with arrays {', '.join(map(repr, keys))} "
+                         f"(N, {robot.n}), e.g. an ID data set of nfarm.study.datasets.load")
+    arrays = [check_joint_array(data[k], robot, what, k) for k in keys]
+    if len({len(a) for a in arrays}) != 1:
+        raise ValueError(f"{what}: {', '.join(keys)} must have one row per sample, got "
+                         f"{', '.join(str(len(a)) for a in arrays)} rows")
+    return arrays
+
+
+class LearnedID(PerJointModel):
+    """Inverse dynamics learned by one ANFIS per joint (scikit-learn conventions).
+
+    Args:
+        inputs: what each joint's model sees (:data:`INPUT_SETS`, :func:`id_features`).
+        residual: learn ``τ − rnea(q, q̇, q̈)`` (what the rigid-body model misses: friction,
+            armature) and predict ``rnea + ANFIS`` (semi-parametric, Nguyen-Tuong & Peters
+            2010); ``False`` learns the torques themselves.
+        joint_options: ``None`` or one mapping per joint of ANFIS options overriding the shared.
+        **anfis_options: passed to every joint's :class:`nfarm.learning.anfis.ANFIS`.
+
+    Learned attributes: ``models_``, ``robot_`` (the robot it was fitted or loaded with),
+    ``robot_hash_``, ``robot_name_``, ``n_joints_``, ``input_lo_``, ``input_span_`` (per joint, the inputs' scaling to ``[0, 1]``),
+    ``fit_seconds_``.
+    """
+
+    _passed_to = ANFIS
+    file_name, file_format, what = ID_FILE_NAME, ID_FORMAT, "learned ID"
+
+    def __init__(self, inputs: str = "own", residual: bool = False,
+                 joint_options: Sequence[Mapping] | None = None, **anfis_options):
+        self.inputs = inputs
+        self.residual = residual
+        self.joint_options = joint_options
+        self.anfis_options = anfis_options
+
+    def _inputs(self, q, qd, qdd) -> list[np.ndarray]:
+        """Each joint's inputs, scaled to [0, 1] over the training data."""
+        return [(X - lo) / span for X, lo, span in
+                zip(id_features(self.robot_, q, qd, qdd, self.inputs), self.input_lo_,
+                    self.input_span_)]
+
+    def fit(self, robot: Robot, train: Mapping, val: Mapping | None = None) -> "LearnedID":
+        """Train one ANFIS per joint on ``train`` (arrays ``q, qd, qdd, tau (N, n)``), keeping
+        each model's epoch of least error on ``val`` when given.
+
+        Raises:
+            ValueError: bad options or data (shapes, NaN, lengths), before any training.
+        """
+        if self.inputs not in INPUT_SETS:
+            raise ValueError(f"inputs must be one of {', '.join(INPUT_SETS)}, got {self.inputs!r}")
+        if not isinstance(self.residual, bool):
+            raise ValueError(f"residual must be True or False, got {self.residual!r}")
+        n = robot.n
+        shared = dict(self.anfis_options)
+        if self.inputs in _CONFIGURATION_PREMISES:
+            shared.setdefault("premise_inputs", list(range(n)))
+        options = joint_anfis_options(shared, self.joint_options, n, _id_widths(self.inputs, robot))
+        q, qd, qdd, tau = id_states(train, robot, "train")
+        val_states = id_states(val, robot, "val") if val is not None else None
+        target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
+        if val_states is not None:
+            vq, vqd, vqdd, vtau = val_states
+            val_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
+        self.__dict__.pop("models_", None)       # a failed refit leaves no half-fitted model
+        self.robot_ = robot
+        scalings = [input_scaling(X) for X in id_features(robot, q, qd, qdd, self.inputs)]
+        self.input_lo_, self.input_span_ = [lo for lo, _ in scalings], [span for _, span in scalings]
+        X = self._inputs(q, qd, qdd)
+        Xv = self._inputs(vq, vqd, vqdd) if val_states is not None else [None] * n
+        models, seconds = [], []
+        for j in range(n):
+            start = time.perf_counter()
+            models.append(ANFIS(**options[j]).fit(X[j], target[:, j], Xv[j],
+                                                  None if val_states is None else val_target[:, j]))
+            seconds.append(time.perf_counter() - start)
+        self.robot_hash_, self.robot_name_, self.n_joints_ = robot_hash(robot), robot.name, n
+        self.models_, self.fit_seconds_ = models, seconds
+        return self
+
+    def predict(self, q, qd, qdd, *, far: float = FAR) -> np.ndarray:
+        """Joint torques ``(..., n)`` [N·m] for states ``q, qd, qdd (..., n)`` (batch shapes
+        broadcast; one state is the ``()`` batch). A residual model adds ``rnea`` of the robot
+        it was fitted or loaded with. States whose inputs lie more than ``far`` of their
+        training range beyond it are predicted with an :class:`OutsideTrainingWarning`.
+
+        Raises:
+            ValueError: states that are not real ``(..., n)`` arrays, or NaN, before any work;
+                states so far outside the training data that a torque overflows (named).
+        """
+        check_far(far)
+        self._check_fitted()
+        robot = self.robot_
+        arrays = [joint_array(robot, x, name) for x, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
+        try:
+            arrays = np.broadcast_arrays(*arrays)
+        except ValueError:
+            raise ValueError(f"q, qd, qdd batch shapes do not broadcast: "
+                             f"{', '.join(str(np.shape(a)) for a in arrays)}") from None
+        batch = arrays[0].shape[:-1]
+        flat = [np.ascontiguousarray(a.reshape(-1, robot.n)) for a in arrays]
+        if not all(np.isfinite(a).all() for a in flat):
+            raise ValueError("q, qd, qdd must be finite (NaN or inf found)")
+        tau = np.empty((len(flat[0]), robot.n))
+        beyond = np.empty(len(tau))
+        with np.errstate(over="ignore", invalid="ignore"):
+            for start in range(0, len(tau), CHUNK):
+                part = [a[start:start + CHUNK] for a in flat]
+                X = self._inputs(*part)
+                beyond[start:start + CHUNK] = np.max([beyond_range(x) for x in X], axis=0)
+                for j, model in enumerate(self.models_):
+                    tau[start:start + CHUNK, j] = model._predict_fast(X[j])[0]
+            if self.residual:
+                tau += rnea(robot, *flat)
+        bad = ~np.isfinite(tau).all(axis=1)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(f"the torques of {int(bad.sum())} of {len(tau)} states overflow (first: state {i}, "
+                             f"its inputs {beyond[i]:.3g} training ranges beyond the training states'): "
+                             f"q, qd, qdd far outside the data the model learned from")
+        warn_far(beyond, far, "states")
+        return tau.reshape(*batch, robot.n)
+
+    def describe(self) -> str:
+        self._check_fitted()
+        what = "τ − rnea (residual)" if self.residual else "τ"
+        head = (f"LearnedID for {self.robot_name_} ({self.n_joints_} joints), inputs "
+                f"{self.inputs!r} ({', '.join(str(len(lo)) for lo in self.input_lo_)} per joint), "
+                f"learning {what}")
+        return "\n".join([head] + model_lines(self.models_, "N·m"))
+
+    def to_dict(self) -> dict:
+        self._check_fitted()
+        return {"format": ID_FORMAT, "nfarm_version": __version__, "inputs": self.inputs,
+                "residual": self.residual, "anfis_options": json_ready(self.anfis_options),
+                "joint_options": json_ready(self.joint_options), "robot": self.robot_name_,
+                "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
+                "input_lo": json_ready(self.input_lo_), "input_span": json_ready(self.input_span_),
+                "fit_seconds": list(self.fit_seconds_),
+                "models": [m.to_dict() for m in self.models_]}
+
+    @classmethod
+    def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedID":
+        v = Validator(source)
+        v.mapping(data, "", dict.fromkeys(_ID_KEYS, True))
+        if data["format"] != ID_FORMAT:
+            v.fail("format", f"must be {ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
+        inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
+        residual = v.boolean(data["residual"], "residual")
+        widths = _id_widths(inputs, robot)
+        n, options, joint_options, fitted, seconds = read_joint_models(
+            v, data, robot, source, widths, f"input set {inputs!r}")
+        lo = [v.array(x, f"input_lo[{j}]", (d,)) for j, (x, d) in
+              enumerate(zip(v.sequence(data["input_lo"], "input_lo", min_len=n, max_len=n), widths))]
+        span = [v.array(x, f"input_span[{j}]", (d,)) for j, (x, d) in
+                enumerate(zip(v.sequence(data["input_span"], "input_span", min_len=n, max_len=n),
+                              widths))]
+        for j, (lo_j, span_j) in enumerate(zip(lo, span)):
+            check_scaling(v, lo_j, span_j, f"input_lo[{j}]", f"input_span[{j}]")
+        model = cls(inputs=inputs, residual=residual, joint_options=joint_options, **options)
+        model.models_, model.fit_seconds_ = fitted, seconds
+        model.input_lo_, model.input_span_ = list(lo), list(span)
+        model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
+            data["robot"], n
+        model.robot_ = robot
+        return model
+
+
+_ID_KEYS = ("format", "nfarm_version", "inputs", "residual", "anfis_options", "joint_options",
+            "robot", "robot_params_sha256", "n_joints", "input_lo", "input_span", "fit_seconds",
+            "models")
