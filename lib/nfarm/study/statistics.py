@@ -302,7 +302,7 @@ def tail_ratios(causes, error, *, share: float = 0.1, draws: int = 2000, level: 
         raise ValueError(f"share must be in (0, 0.5), got {share!r}")
     if not (isinstance(draws, int) and draws >= 100) or not 0 < level < 1:
         raise ValueError(f"draws must be an integer >= 100 and level in (0, 1), got {draws!r}, {level!r}")
-    value = np.array([_tail_ratio(x[None], error[None], share)[0] for x in X])
+    value = _tail_ratio(X, np.broadcast_to(error, X.shape), share)        # (k,), every cause at once
     rng = np.random.default_rng(seed)
     ratios = []
     for start in range(0, draws, batch):
