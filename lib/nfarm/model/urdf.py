@@ -17,18 +17,23 @@ the links' common normals and offsets.
 
 from __future__ import annotations
 
+import codecs
+import contextlib
 import json
+import math
 import os
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from xml.sax.saxutils import escape
 
 import numpy as np
 
-from ..infra.reading import ParamsError, Validator, read_bytes
+from ..infra.reading import MAX_BYTES, ParamsError, ParamsWarning, Validator, read_bytes, show
 from .kinematics import joint_placements
-from .robot import Robot, register_reader, robot_from_dict, with_provenance
+from .robot import MAX_PLAUSIBLE_LENGTH, Robot, register_reader, robot_from_dict, with_provenance
 from .rotations import matrix_to_rpy
 
 __all__ = ["to_urdf", "from_urdf"]
@@ -37,6 +42,21 @@ __all__ = ["to_urdf", "from_urdf"]
 def _f(x: float) -> str:
     """A number as URDF text: its ``repr`` (which reads back exactly), ``0`` for zero."""
     return repr(float(x)) if x != 0 else "0"
+
+
+#: Characters XML 1.0 cannot hold, even escaped.
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def _attr(text: str, source: str, field: str) -> str:
+    """``text`` as an XML attribute value between double quotes: ``&``, ``<``, ``>``, ``"`` and
+    the whitespace that attribute normalisation would turn into spaces escaped; a character
+    XML cannot hold at all is a :class:`ParamsError` naming ``source`` and ``field``."""
+    bad = _NOT_XML.search(text)
+    if bad:
+        raise ParamsError(f"{source}: {field}: {text!r} holds U+{ord(bad[0]):04X}, which XML "
+                          f"cannot hold: the robot cannot be written as a URDF")
+    return escape(text, {'"': "&quot;", "\t": "&#9;", "\n": "&#10;", "\r": "&#13;"})
 
 
 def _limit(x: float) -> str:
@@ -99,7 +119,8 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
     n = robot.n
     tool = B[-1] @ robot.tool
     radius = _visual_radius(robot)
-    lines = _header(robot.name, color, radius) + _fixed_frame("dh_frame0", "base_link", robot.base)
+    lines = _header(_attr(robot.name, robot.source, "name"), color, radius) \
+        + _fixed_frame("dh_frame0", "base_link", robot.base)
     for i in range(n):
         parent = "base_link" if i == 0 else f"link{i}"
         lines += _revolute_joint(robot, i, parent, robot.base @ J[i] if i == 0 else J[i])
@@ -107,7 +128,7 @@ def to_urdf(robot: Robot, *, prefix: str = "", color: tuple[float, float, float]
         lines += _body_link(robot, i, B[i], end, radius)
         lines += _fixed_frame(f"dh_frame{i + 1}", f"link{i + 1}", B[i])
     lines += _fixed_frame("tool", f"link{n}", tool) + ['</robot>']
-    return _prefixed("\n".join(lines) + "\n", prefix)
+    return _prefixed("\n".join(lines) + "\n", _attr(prefix, "to_urdf", "prefix"))
 
 
 def _visual_radius(robot: Robot) -> float:
@@ -118,9 +139,9 @@ def _visual_radius(robot: Robot) -> float:
 
 
 def _header(name: str, color: tuple[float, float, float], radius: float) -> list[str]:
-    """The document's opening lines: the ``<robot>`` element, the links' material (RGB in
-    [0, 1], opaque) and ``base_link``, drawn as a cylinder of radius ``2·radius`` [m] below
-    its origin."""
+    """The document's opening lines: the ``<robot>`` element (``name`` already escaped), the
+    links' material (RGB in [0, 1], opaque) and ``base_link``, drawn as a cylinder of radius
+    ``2·radius`` [m] below its origin."""
     return ['<?xml version="1.0"?>', f'<robot name="{name}">',
             f'  <material name="link"><color rgba="{" ".join(_f(c) for c in color)} 1"/></material>',
             '  <link name="base_link">',
@@ -141,7 +162,8 @@ def _revolute_joint(robot: Robot, i: int, parent: str, placement: np.ndarray) ->
     ``parent``'s frame, :func:`~nfarm.model.kinematics.joint_placements`), turning
     ``link{i+1}``, with its limits [rad], effort [N m] and velocity [rad/s] (0: none)."""
     lo, hi = robot.qlim[i]
-    return [f'  <joint name="{robot.joint_names[i]}" type="revolute">',
+    name = _attr(robot.joint_names[i], robot.source, f"joints[{i}].name")
+    return [f'  <joint name="{name}" type="revolute">',
             f'    <parent link="{parent}"/><child link="link{i + 1}"/>',
             f'    {_origin(placement)}<axis xyz="0 0 1"/>',
             f'    <limit lower="{_f(lo)}" upper="{_f(hi)}" effort="{_limit(robot.effort[i])}" '
@@ -183,7 +205,8 @@ def _visual_path(robot: Robot, i: int, B_i: np.ndarray, end: np.ndarray) -> list
 
 
 def _prefixed(text: str, prefix: str) -> str:
-    """``text`` with ``prefix`` before the robot's, every link's and every joint's name."""
+    """``text`` with ``prefix`` (escaped) before the robot's, every link's and every joint's
+    name."""
     if not prefix:
         return text
     return re.sub(r'(<robot name="|<link name="|<joint name="|link=")', lambda m: m[1] + prefix, text)
@@ -196,6 +219,13 @@ def _prefixed(text: str, prefix: str) -> str:
 _CHAIN_TYPES = ("revolute", "fixed")
 #: Joint types a side branch may hold: locked at the position ``lock`` gives (default 0).
 _LOCKABLE = ("revolute", "continuous", "prismatic", "fixed")
+#: Joint types that move (about or along their axis), and so may mimic or be mimicked.
+_MOVING = ("revolute", "continuous", "prismatic")
+#: A URDF number: plain ASCII decimal, optionally with an exponent (no ``inf``, ``nan``, ``_``,
+#: hexadecimal or non-ASCII digits, all of which Python's ``float`` accepts).
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
+#: XML's white space, which separates the numbers of a list.
+_SPACE = re.compile(r"[ \t\n\r]+")
 #: Axes closer than this (the sine of their angle) are parallel; lines closer than
 #: ``_NEAR`` metres intersect.
 _PARALLEL = 1e-9
@@ -245,17 +275,23 @@ class _Reader:
         return name
 
     def _numbers(self, text, at: str, count: int, default=None) -> np.ndarray:
+        """``count`` numbers of URDF's grammar (:data:`_NUMBER`, separated by XML white
+        space), each finite."""
         if text is None:
             if default is None:
                 self.v.fail(at, "is required")
             return np.array(default, dtype=float)
         what = "a finite number" if count == 1 else f"{count} finite numbers"
-        try:
-            values = np.array([float(x) for x in text.split()])
-        except ValueError:
-            self.v.fail(at, f"must be {what}, got {text!r}")
-        if values.shape != (count,) or not np.isfinite(values).all():
-            self.v.fail(at, f"must be {what}, got {text!r}")
+        words = _SPACE.split(text.strip(" \t\n\r")) if text.strip(" \t\n\r") else []
+        for word in words[:count + 1]:
+            if not _NUMBER.match(word):
+                self.v.fail(at, f"must be {what}, got {show(text)}: {show(word)} is not a plain "
+                                f"decimal number (ASCII digits, a point, an exponent)")
+        if len(words) != count:
+            self.v.fail(at, f"must be {what}, got {show(text)}")
+        values = np.array([float(x) for x in words])
+        if not np.isfinite(values).all():
+            self.v.fail(at, f"must be {what}, got {show(text)}")
         return values
 
     def _origin(self, element, at: str) -> np.ndarray:
@@ -275,7 +311,7 @@ class _Reader:
         mass = self._numbers(None if mass_el is None else mass_el.get("value"),
                              f"{at} <inertial><mass value>", 1)[0]
         if mass < 0:
-            self.v.fail(f"{at} <inertial><mass value>", f"must be >= 0, got {mass!r}")
+            self.v.fail(f"{at} <inertial><mass value>", f"must be >= 0, got {float(mass)!r}")
         el = inertial.find("inertia")
         keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
         values = {k: self._numbers(None if el is None else el.get(k, "0"),
@@ -297,14 +333,20 @@ class _Reader:
         for key in ("parent", "child"):
             if not out[key]:
                 self.v.fail(f"{at} <{key} link>", "is required")
-        axis = self._numbers(None if joint.find("axis") is None else joint.find("axis").get("xyz"),
-                             f"{at} <axis xyz>", 3, (1, 0, 0))       # URDF's default axis
-        if kind in ("revolute", "continuous", "prismatic"):
-            norm = float(np.linalg.norm(axis))
+        text = None if joint.find("axis") is None else joint.find("axis").get("xyz")
+        axis = self._numbers(text, f"{at} <axis xyz>", 3, (1, 0, 0))       # URDF's default axis
+        if kind in _MOVING:
+            with np.errstate(over="ignore"):
+                norm = float(np.linalg.norm(axis))
+            if not np.isfinite(norm):
+                self.v.fail(f"{at} <axis xyz>", f"its length overflows, got {show(text)}: give a "
+                                                f"direction of moderate size, such as a unit vector")
             if norm < 1e-12:
-                self.v.fail(f"{at} <axis xyz>", "must not be the zero vector")
+                self.v.fail(f"{at} <axis xyz>", f"must not be the zero vector (length below 1e-12), "
+                                                f"got {show(text)}")
             axis = axis / norm
         out["axis"] = axis
+        out["mimic"] = self._mimic(joint, at, kind)
         limit = joint.find("limit")
         if kind == "revolute":
             if limit is None:
@@ -312,29 +354,98 @@ class _Reader:
             lo = self._numbers(limit.get("lower", "0"), f"{at} <limit lower>", 1)[0]
             hi = self._numbers(limit.get("upper", "0"), f"{at} <limit upper>", 1)[0]
             if not lo < hi:
-                self.v.fail(f"{at} <limit>", f"must satisfy lower < upper, got [{lo!r}, {hi!r}]")
+                self.v.fail(f"{at} <limit>", f"must satisfy lower < upper, got "
+                                             f"[{float(lo)!r}, {float(hi)!r}]")
             out["limits"] = (lo, hi)
-            out["effort"] = self._numbers(limit.get("effort"), f"{at} <limit effort>", 1)[0]
-            out["velocity"] = self._numbers(limit.get("velocity"), f"{at} <limit velocity>", 1)[0]
+            for key in ("effort", "velocity"):      # 0: none given (what to_urdf writes for none)
+                out[key] = self._numbers(limit.get(key), f"{at} <limit {key}>", 1)[0]
+                if out[key] < 0:
+                    self.v.fail(f"{at} <limit {key}>", f"must be > 0 (or 0 for no limit), got "
+                                                       f"{show(limit.get(key))}")
         return out
 
+    def _mimic(self, joint, at: str, kind: str) -> tuple[str, float, float] | None:
+        """A joint's ``<mimic joint= multiplier= offset=>`` (defaults 1 and 0): its position is
+        ``multiplier · q_joint + offset``; only a moving joint may mimic."""
+        mimic = joint.find("mimic")
+        if mimic is None:
+            return None
+        if kind not in _MOVING:
+            self.v.fail(f"{at} <mimic>", f"a {kind!r} joint cannot mimic another: only revolute, "
+                                         f"continuous and prismatic joints move")
+        driver = mimic.get("joint")
+        if not driver:
+            self.v.fail(f"{at} <mimic joint>", "is required")
+        multiplier = self._numbers(mimic.get("multiplier"), f"{at} <mimic multiplier>", 1, (1.0,))[0]
+        offset = self._numbers(mimic.get("offset"), f"{at} <mimic offset>", 1, (0.0,))[0]
+        return driver, float(multiplier), float(offset)
 
-def _parse(path: Path):
-    """The URDF's root element: at most 16 MiB, no DTD (so no entity expansion), well-formed."""
+
+#: Byte-order marks and, without one, the first bytes of ``<`` or ``<?`` (XML 1.0, appendix F):
+#: the encodings not compatible with ASCII, told apart before anything is read.
+_BOMS = ((b"\xef\xbb\xbf", "utf-8"), (b"\xff\xfe\x00\x00", "utf-32-le"),
+         (b"\x00\x00\xfe\xff", "utf-32-be"), (b"\xff\xfe", "utf-16-le"), (b"\xfe\xff", "utf-16-be"))
+_WIDE = ((b"\x00\x00\x00<", "utf-32-be"), (b"<\x00\x00\x00", "utf-32-le"),
+         (b"\x00<", "utf-16-be"), (b"<\x00", "utf-16-le"))
+#: The encoding an ASCII-compatible document declares in ``<?xml … encoding="…"?>``.
+_DECLARED = re.compile(rb"""<\?xml[ \t\r\n]+version[ \t\r\n]*=[ \t\r\n]*["'][^"']*["']"""
+                       rb"""[ \t\r\n]+encoding[ \t\r\n]*=[ \t\r\n]*["']([^"']*)["']""")
+#: Encodings read (Python's codec names): Unicode, ASCII and the ISO and Windows 8-bit pages.
+_ENCODINGS = re.compile(r"utf[-_]8|utf[-_](?:16|32)(?:[-_][bl]e)?|ascii|latin[-_]1|iso8859[-_]\d+"
+                        r"|cp125\d")
+#: A document type or entity declaration (only ever in a DTD).
+_DECLARATION = re.compile(r"<!(?:DOCTYPE|ENTITY)", re.IGNORECASE)
+
+
+def _decode(path: Path, raw: bytes) -> str:
+    """The URDF's text: UTF-16 or UTF-32 by their byte-order mark or first bytes, UTF-8 by its
+    mark, else the encoding the XML declaration names (default UTF-8)."""
+    for mark, encoding in _BOMS:
+        if raw.startswith(mark):
+            raw = raw[len(mark):]
+            break
+    else:
+        for start, encoding in _WIDE:
+            if raw.startswith(start):
+                break
+        else:
+            declared = _DECLARED.match(raw)
+            encoding = declared[1].decode("ascii", "replace") if declared else "utf-8"
+            try:
+                known = codecs.lookup(encoding).name
+            except (LookupError, ValueError):
+                known = ""
+            if not _ENCODINGS.fullmatch(known):
+                raise ParamsError(f"{path}: encoding {show(encoding)} (its XML declaration) is "
+                                  f"not read: save the URDF as UTF-8")
+    try:
+        return raw.decode(encoding)
+    except UnicodeDecodeError as exc:
+        raise ParamsError(f"{path}: not {encoding} text at byte {exc.start}: is it a binary "
+                          f"file, or in another encoding than it declares?") from None
+
+
+def _parse(path: Path, raw: bytes):
+    """The URDF's root element: decoded (:func:`_decode`), then no DTD in the text (so no
+    entity expansion, whatever the encoding), well-formed. The parser reads exactly the text
+    checked: its UTF-8, whatever the document declares."""
     import xml.etree.ElementTree as ET
 
-    raw = read_bytes(path, max_bytes=16 << 20, what="URDF")
-    if b"<!DOCTYPE" in raw or b"<!ENTITY" in raw:
+    text = _decode(path, raw)
+    if _DECLARATION.search(text):
         raise ParamsError(f"{path}: <!DOCTYPE>/<!ENTITY> declarations are not accepted in a URDF")
+    parser = ET.XMLParser(encoding="utf-8")
     try:
-        return ET.fromstring(raw)
+        parser.feed(text.encode("utf-8", "surrogatepass"))
+        return parser.close()
     except ET.ParseError as exc:
         line, column = exc.position
         raise ParamsError(f"{path}: not well-formed XML at line {line}, column {column + 1}") from None
 
 
 def from_urdf(path: str | os.PathLike, tip: str | None = None,
-              lock: Mapping[str, float] | None = None, *, name: str | None = None) -> Robot:
+              lock: Mapping[str, float] | None = None, *, name: str | None = None,
+              max_bytes: int = MAX_BYTES, near_parallel_deg: float = 5.0) -> Robot:
     """The serial chain of a URDF from its root link to ``tip`` as an nfarm :class:`Robot`
     (standard DH, a base and a tool transform).
 
@@ -343,7 +454,13 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         tip: the chain's last link (default: the single leaf; several leaves are an error that
             lists them). The tool frame is this link's frame.
         lock: positions [rad or m] of joints off the chain (e.g. a gripper's jaw), default 0.
+            A joint off the chain with a ``<mimic>`` follows its driving joint instead: it is
+            locked at ``multiplier · q_driver + offset`` (the driver's lock, or its mimic's).
         name: the robot's name (default the URDF's).
+        max_bytes: the largest file read [bytes] (checked before reading it).
+        near_parallel_deg: consecutive joint axes closer than this [deg] (but not parallel)
+            whose common normal puts DH lengths beyond 10 m get one warning naming them and
+            their angle, instead of a warning per length.
 
     The chain holds revolute and fixed joints. At ``q = 0`` each joint axis is a line in the
     world; DH frame i sits on axis i+1 (standard DH, ``z_i`` along it), at the foot of the
@@ -355,12 +472,24 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     then read off consecutive frames; ``base`` is frame 0 in the root's frame, ``tool`` the tip
     in frame n. Each moving link's inertia, with everything fixed or locked to it (side
     branches, massless frames), becomes one rigid body in its DH frame (parallel axes);
-    bodies before joint 1 never move and are left out. Limits, effort and velocity carry over;
-    gravity is ``[0, 0, −9.81]`` in the root's frame.
+    bodies before joint 1 never move and are left out. Limits, effort and velocity carry over
+    (an effort or velocity of 0 means none, as :func:`to_urdf` writes it); gravity is
+    ``[0, 0, −9.81]`` in the root's frame.
+
+    The file is decoded first (UTF-8, or UTF-16/32 by their marks, or the 8-bit encoding its
+    declaration names), then refused if its text holds a DTD or an entity declaration; numbers
+    are plain ASCII decimals (``1``, ``-0.25``, ``1.5e-3``: not ``inf``, ``nan``, ``1_0`` or
+    other digits).
 
     Raises:
         ParamsError: one line naming the file, the element and the rule (a prismatic or
-            continuous joint on the chain, a closed loop, a missing link, a malformed number…).
+            continuous joint on the chain, a mimic joint on the chain — nfarm's arms are serial
+            chains of independent joints — a closed loop, a missing link, a malformed number,
+            a negative effort…).
+
+    Warns:
+        ParamsWarning: nearly parallel consecutive axes (``near_parallel_deg``) that put the
+            DH table's lengths beyond 10 m, once per pair, naming the joints and the angle.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -372,17 +501,20 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         [0.0304, 0.116, 0.135, 0.0, 0.0079]
     """
     path = Path(path)
-    r = _Reader(str(path), _parse(path))
+    raw = read_bytes(path, max_bytes=max_bytes, what="URDF")
+    r = _Reader(str(path), _parse(path, raw))
     tree = _tree(r)
     tip, chain, moving = _chain(r, tree, tip)
     lock = _locks(r, chain, lock)
-    pose = _world_poses(r, tree, chain, lock)
-    frames = _dh_frames(_joint_axes(r, pose, moving), pose[tip][:3, 3])
+    pose = _world_poses(r, tree, chain, _mimic_positions(r, chain, lock))
+    axes = _joint_axes(r, pose, moving)
+    frames = _dh_frames(axes, pose[tip][:3, 3])
     rows, bodies = _dh_rows(frames), _link_bodies(r, tree, pose, frames, moving)
+    quiet = _near_parallel(r.v.source, moving, axes, rows, near_parallel_deg)
     robot = _build_robot(str(path), name or r.name, f"from {path.name}, chain {tree.root} → {tip}",
-                         frames, pose[tip], rows, bodies)
+                         frames, pose[tip], rows, bodies, quiet)
     how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
-    return with_provenance(robot, read_bytes(path, max_bytes=16 << 20, what="URDF"), how)
+    return with_provenance(robot, raw, how)
 
 
 @dataclass(frozen=True)
@@ -463,7 +595,52 @@ def _locks(r: _Reader, chain: list[str], lock: Mapping[str, float] | None) -> di
             v.fail(f"lock.{jname}", "names no joint of the URDF")
         if jname in chain:
             v.fail(f"lock.{jname}", "is on the chain: only joints off it are locked")
+        if r.joints[jname]["mimic"] is not None:
+            v.fail(f"lock.{jname}", f"joint {jname!r} mimics joint {r.joints[jname]['mimic'][0]!r}: "
+                                    f"it follows that joint; lock that one instead")
     return lock
+
+
+def _mimic_positions(r: _Reader, chain: list[str], lock: Mapping[str, float]) -> dict[str, float]:
+    """``lock`` and the position of every mimic joint off the chain, ``multiplier · q + offset``
+    of its driving joint's ``q`` (the driver's lock, 0 by default, or its own mimic position).
+    A mimic joint on the chain (one joint driving two), or a side joint driven by one on the
+    chain, is refused: nfarm's arms are serial chains of independent joints."""
+    v = r.v
+    mimics = {jname: j["mimic"] for jname, j in r.joints.items() if j["mimic"] is not None}
+    for jname, (driver, _, _) in mimics.items():
+        at = f"joint {jname!r} <mimic joint>"
+        if driver not in r.joints:
+            v.fail(at, f"names a joint that does not exist: {driver!r}")
+        if r.joints[driver]["type"] not in _MOVING:
+            v.fail(at, f"names joint {driver!r} of type {r.joints[driver]['type']!r}, which does "
+                       f"not move")
+        if jname in chain:
+            v.fail(f"joint {jname!r}", f"mimics joint {driver!r} but lies on the chain: mimic "
+                                       f"joints on the chain (one joint driving two) are not "
+                                       f"supported; nfarm's arms are chains of independent joints")
+        if driver in chain:
+            v.fail(f"joint {jname!r}", f"mimics joint {driver!r}, which lies on the chain: a side "
+                                       f"joint moved by the chain is not supported (it can only "
+                                       f"be locked)")
+    positions = dict(lock)
+    for jname in mimics:
+        trail = [jname]                 # the joint, its driver, the driver's driver…
+        while trail[-1] in mimics and trail[-1] not in positions:
+            driver = mimics[trail[-1]][0]
+            if driver in trail:
+                v.fail(f"joint {jname!r} <mimic joint>",
+                       f"mimic joints drive each other in a loop: {' → '.join(trail + [driver])}")
+            trail.append(driver)
+        value = float(positions.get(trail[-1], 0.0))
+        for follower in reversed(trail[:-1]):
+            _, multiplier, offset = mimics[follower]
+            driven = multiplier * value + offset
+            if not math.isfinite(driven):
+                v.fail(f"joint {follower!r} <mimic>", f"its position {multiplier!r} · "
+                                                      f"{value!r} + {offset!r} is not finite")
+            positions[follower] = value = driven
+    return positions
 
 
 def _world_poses(r: _Reader, tree: _Tree, chain: list[str], lock: Mapping[str, float]
@@ -519,8 +696,9 @@ def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> 
     # Frame n at the tip's origin, z along axis n; x along the tip's offset from the axis.
     z_n = axes[-1][1]
     gap = p_tip - o
+    scale = max(1.0, float(np.linalg.norm(o)), float(np.linalg.norm(p_tip)))   # of the rounding
     gap -= np.dot(gap, z_n) * z_n
-    if np.linalg.norm(gap) > _NEAR:
+    if np.linalg.norm(gap) > _NEAR * scale:
         x = gap / np.linalg.norm(gap)
     elif not x.any():
         x = _perpendicular(z_n)
@@ -545,7 +723,9 @@ def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarra
         gap = foot - o0
         gap -= np.dot(gap, z0) * z0
         distance = float(np.linalg.norm(gap))
-        if distance < _NEAR:
+        # Rounding grows with the points' distance from the origin (far off when the axes
+        # before were nearly parallel): below it, the lines are one.
+        if distance < _NEAR * max(1.0, float(np.linalg.norm(o0)), float(np.linalg.norm(foot))):
             return o0.copy(), x_prev.copy()
         return o0 + gap, gap / distance
     n = cross / sine
@@ -615,12 +795,12 @@ def _link_bodies(r: _Reader, tree: _Tree, pose: Mapping[str, np.ndarray], frames
     (side branches, massless frames) lumped into one rigid body in its DH frame (mass [kg],
     centre of mass [m], inertia about it [kg m²] by the parallel-axis theorem), with the
     joint's name, limits, effort and velocity. Links before joint 1 never move: left out."""
-    owner = {}
+    owner, index = {}, {jname: k for k, jname in enumerate(moving)}
     for link in tree.order:
         if link == tree.root:
             continue
         jname = tree.parent_joint[link]
-        owner[link] = moving.index(jname) if jname in moving else owner.get(r.joints[jname]["parent"])
+        owner[link] = index[jname] if jname in index else owner.get(r.joints[jname]["parent"])
     bodies = [[] for _ in moving]
     for link, k in owner.items():
         if k is None or r.links[link] is None:
@@ -655,19 +835,59 @@ def _lump(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np
     return m, com, I
 
 
+def _near_parallel(source: str, moving: list[str], axes: list[tuple[np.ndarray, np.ndarray]],
+                   rows: list[dict], near_parallel_deg: float) -> list[int]:
+    """Warn once for each pair of consecutive axes less than ``near_parallel_deg`` [deg] apart
+    (but not parallel, :data:`_PARALLEL`) that puts a DH length beyond 10 m into the rows
+    they shape: DH frame k lies at the foot of their common normal, far away, and so do the
+    frames on the parallel axes after it. Return the rows (0-based) whose "a length in
+    millimetres?" warnings this one replaces."""
+    def sine(i: int) -> float:              # of the angle between axes i and i+1
+        return float(np.linalg.norm(np.cross(axes[i][1], axes[i + 1][1])))
+
+    quiet = []
+    for k in range(1, len(axes)):
+        z0, z1 = axes[k - 1][1], axes[k][1]
+        angle = math.degrees(math.atan2(sine(k - 1), abs(float(np.dot(z0, z1)))))
+        if not (sine(k - 1) >= _PARALLEL and angle < near_parallel_deg):
+            continue
+        last = k                            # the run of axes parallel to axis k
+        while last + 1 < len(axes) and sine(last) < _PARALLEL:
+            last += 1
+        shaped = range(k - 1, last + 1)
+        longest = max(abs(rows[i][key]) for i in shaped for key in ("a", "d"))
+        if longest > MAX_PLAUSIBLE_LENGTH:
+            where = f"joints[{k - 1}]" + (f" and joints[{k}]" if last == k else f" to joints[{last}]")
+            warnings.warn(ParamsWarning(
+                f"{source}: joints {moving[k - 1]!r} and {moving[k]!r}: axes nearly parallel, "
+                f"{angle:.3g}° apart: their common normal puts DH lengths up to {longest:.4g} m "
+                f"into {where}; make the axes exactly parallel if they are meant to be"),
+                stacklevel=3)
+            quiet += shaped
+    return quiet
+
+
 def _build_robot(source: str, name: str, description: str, frames: list[np.ndarray],
-                 T_tip: np.ndarray, rows: list[dict], bodies: list[dict]) -> Robot:
+                 T_tip: np.ndarray, rows: list[dict], bodies: list[dict], quiet: list[int] = ()
+                 ) -> Robot:
     """The standard-DH :class:`Robot` from DH frames ``F_0..F_n`` (each ``(4, 4)``, in the root's
     frame), the tip's pose ``T_tip`` ``(4, 4)`` and each joint's DH row and body: ``base = F_0``,
     ``tool = F_n⁻¹ · T_tip`` (by a linear solve), gravity ``[0, 0, −9.81]`` m/s² in the root's
-    frame. A robot file's checks apply; their errors say the robot was converted."""
+    frame. A robot file's checks apply; their errors say the robot was converted. The rows
+    ``quiet`` (0-based) skip their "a length in millimetres?" warnings (nearly parallel axes
+    were named instead)."""
     tool = np.linalg.solve(frames[-1], T_tip)
     joints = [{**row, **body} for row, body in zip(rows, bodies)]
     try:
-        return robot_from_dict({"name": name, "convention": "standard",
-                                "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
-                                "tool": tool.tolist(), "joints": joints, "description": description},
-                               source=source)
+        with warnings.catch_warnings() if quiet else contextlib.nullcontext():
+            for i in sorted(set(quiet)):
+                warnings.filterwarnings(
+                    "ignore", re.escape(f"{source}: joints[{i}].") + r"(?:a|d|com\[\d\]): .*millimetres\?",
+                    ParamsWarning)
+            return robot_from_dict({"name": name, "convention": "standard",
+                                    "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                    "tool": tool.tolist(), "joints": joints,
+                                    "description": description}, source=source)
     except ParamsError as exc:
         raise ParamsError(f"{exc} (converted from the URDF)") from None
 
