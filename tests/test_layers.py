@@ -4,6 +4,7 @@ layer and the layers below it (``nfarm/__init__``'s docstring says what each hol
 from __future__ import annotations
 
 import ast
+from pathlib import Path
 
 import pytest
 
@@ -76,3 +77,81 @@ def test_every_public_function_of_the_model_and_solvers_has_an_example(layer):
     missing = [name for name, obj in _public(layer)
                if ">>>" not in (obj.__doc__ or "") and ", which has an example" not in (obj.__doc__ or "")]
     assert not missing, f"public names without an example: {missing}"
+
+
+# -- no cycles ----------------------------------------------------------------------------------
+
+
+def _module_file(root: Path, parts: list[str]) -> Path | None:
+    """The package file of the dotted module ``parts`` (from the package), or None."""
+    for candidate in (root.joinpath(*parts).with_suffix(".py") if parts else None,
+                      root.joinpath(*parts, "__init__.py")):
+        if candidate is not None and candidate.is_file():
+            return candidate.relative_to(root)
+    return None
+
+
+def module_imports(root: Path, relative: Path) -> set[Path]:
+    """The package modules the file ``relative`` names in an import statement anywhere in it
+    (at the top, inside a function, under ``if TYPE_CHECKING:``): ``from .x import y`` is
+    module ``x``, or ``x.y`` where that is a module; ``import nfarm.x`` and ``from nfarm.x import
+    y`` alike. The package's own ``__init__`` is read without its ``TYPE_CHECKING`` block, which
+    only declares the public names it loads on first use."""
+    tree = ast.parse((root / relative).read_bytes())
+    nodes = provenance._run_time_nodes(tree) if relative == Path("__init__.py") else ast.walk(tree)
+    own = list(relative.parent.parts)
+    found = set()
+    for node in nodes:
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                target = own[:len(own) - (node.level - 1)] + (node.module.split(".") if node.module else [])
+            elif node.module and node.module.split(".")[0] == root.name:
+                target = node.module.split(".")[1:]
+            else:
+                continue
+            for alias in node.names:
+                found.add(_module_file(root, target + [alias.name]) or _module_file(root, target))
+        elif isinstance(node, ast.Import):
+            found.update(_module_file(root, alias.name.split(".")[1:]) for alias in node.names
+                         if alias.name.split(".")[0] == root.name)
+    return found - {None, relative}
+
+
+def import_cycles(root: Path) -> list[tuple[str, str]]:
+    """Every pair of the package's modules each of which imports the other, directly or through
+    others (so each pair on a cycle), sorted."""
+    files = sorted(p.relative_to(root) for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+    graph = {f: module_imports(root, f) for f in files}
+    reach = {}
+    for start in files:
+        seen, todo = set(), [start]
+        while todo:
+            for nxt in graph.get(todo.pop(), ()):
+                if nxt not in seen:
+                    seen.add(nxt)
+                    todo.append(nxt)
+        reach[start] = seen
+    return sorted({tuple(sorted((a.as_posix(), b.as_posix()))) for a in files for b in reach[a]
+                   if a != b and a in reach.get(b, ())})
+
+
+def test_no_two_modules_import_each_other():
+    """Not even inside a function: a cycle makes two modules one unit to read, to test and to
+    change (and an import inside a function only hides it)."""
+    assert import_cycles(PACKAGE) == []
+
+
+@pytest.mark.parametrize("second", [
+    "def later():\n    from .a import f\n    return f\n",                           # inside a function
+    "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .a import f\n",  # for readers only
+    "import nfarm.sub.a\n",                                                         # absolute
+])
+def test_the_cycle_check_sees_every_kind_of_import(tmp_path, second):
+    root = tmp_path / "nfarm"
+    (root / "sub").mkdir(parents=True)
+    (root / "__init__.py").write_text("")
+    (root / "sub" / "__init__.py").write_text("")
+    (root / "sub" / "a.py").write_text("from . import b\n\ndef f():\n    return b\n")
+    (root / "sub" / "b.py").write_text(second)
+    (root / "sub" / "c.py").write_text("from .a import f\n")                       # imports, no cycle
+    assert import_cycles(root) == [("sub/a.py", "sub/b.py")]

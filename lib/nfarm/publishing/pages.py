@@ -14,17 +14,17 @@ import os
 import re
 import shutil
 import subprocess
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from ..infra.notebook_runs import DropMessage
 from ..infra.paths import ROOT, atomic_path, shown_path
+from .editions import Edition
 from .manifest import chapter_files
 
-if TYPE_CHECKING:
-    from .report import Edition
-
-__all__ = ["write_pages", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS", "MATHJAX"]
+__all__ = ["ReportPages", "write_pages", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+           "MATHJAX"]
 
 
 def chapter_title(notebook: Path) -> str:
@@ -336,19 +336,48 @@ def _write_index(report_dir: Path, figures_dir: Path,
         tmp.write_text("\n".join(parts), encoding="utf-8")
 
 
-def write_pages(everything, runs, comparing: set[str], arms, base: Path, report_dir: Path,
-                 figures_dir: Path, extra: dict, smoke: bool,
-                 recordings_dir: Path | None = None) -> None:
+@dataclass(frozen=True)
+class ReportPages:
+    """What :func:`write_pages` writes the pages of a report run from.
+
+    Attributes:
+        chapters: every chapter notebook (the sources ``NN_*.ipynb``), in order.
+        runs: per notebook file name, the editions it was run for, in order (none: not run).
+        comparing: the notebook file names of the chapters that compare the editions.
+        arms: the run's editions, the primary first.
+        executed_dir: where the executed notebooks are (an edition's under its ``subdir``).
+        report_dir: where the pages go.
+        figures_dir: the published figures and tables the index shows.
+        parameters: the run's parameters other than the defaults (the index names them).
+        smoke: a smoke run (the index says so).
+        recordings_dir: the rerun recordings the index links, or ``None``.
+    """
+
+    chapters: tuple[Path, ...]
+    runs: Mapping[str, tuple[Edition, ...]]
+    comparing: frozenset[str]
+    arms: tuple[Edition, ...]
+    executed_dir: Path
+    report_dir: Path
+    figures_dir: Path
+    parameters: Mapping[str, object]
+    smoke: bool
+    recordings_dir: Path | None = None
+
+
+def write_pages(report: ReportPages) -> None:
     """HTML pages of every executed chapter, with navigation within each arm's chapters, and
     the index."""
+    arms, comparing, report_dir = report.arms, report.comparing, report.report_dir
     pages: dict[str, list[tuple[str, str, str]]] = {}
     compared = []
     per_arm = set()              # chapters run for more than one arm: their titles name it
-    for nb in everything:
-        if len(list(runs(nb))) > 1:
+    for nb in report.chapters:
+        runs = report.runs.get(nb.name, ())
+        if len(runs) > 1:
             per_arm.add(nb.name[:2])
-        for arm, _ in runs(nb):
-            executed = base / "notebooks" / arm.subdir / nb.name
+        for arm in runs:
+            executed = report.executed_dir / arm.subdir / nb.name
             if not executed.exists():
                 continue
             entry = (nb.name[:2], chapter_title(nb), f"{arm.subdir}/{nb.stem}.html".lstrip("/"))
@@ -387,12 +416,13 @@ def write_pages(everything, runs, comparing: set[str], arms, base: Path, report_
                         links[f"previous ({other.name})"] = (copies(other)[pages[other.name].index(theirs[-1])],
                                                              theirs[-1][1])
                 links["next"] = links.pop("next")
-            executed = base / "notebooks" / page.replace(".html", ".ipynb")
+            executed = report.executed_dir / page.replace(".html", ".ipynb")
             page = here[k]
             same_for_all = prefix not in per_arm and (prefix, title, own[k][2]) not in compared and len(arms) > 1
             export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
                         title=f"{title} · {arm.name}" if prefix in per_arm else
                         f"{title} · the same for every arm" if same_for_all else title,
                         arm=arm.name if prefix in per_arm else "")
-    _write_index(report_dir, figures_dir, {a.name: pages.get(a.name, []) for a in arms}, arms,
-                 compared, parameters=extra, smoke=smoke, recordings_dir=recordings_dir)
+    _write_index(report_dir, report.figures_dir, {a.name: pages.get(a.name, []) for a in arms}, list(arms),
+                 compared, parameters=dict(report.parameters), smoke=report.smoke,
+                 recordings_dir=report.recordings_dir)

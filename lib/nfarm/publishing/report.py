@@ -48,61 +48,12 @@ from ..infra.notebook_runs import ReportError, chapters, declared_parameters, ru
 from ..infra.paths import BUILD, FIGURES, NOTEBOOKS, ROOT, atomic_path, shown_path
 from ..infra.provenance import digest_files as _digest_files
 from ..presentation.tables import DOCUMENTS
+from .editions import PRIMARY_STUDY, RECORDINGS, Edition, editions
 from .manifest import chapter_files, publish_chapter, publishing_lock, recover_figures
-from .pages import COURSE_TAGS, install_mathjax, write_pages
+from .pages import COURSE_TAGS, ReportPages, install_mathjax, write_pages
 
 __all__ = ["Edition", "editions", "build_report", "ReportRun", "ReportUsageError", "ReportInterrupted",
            "PRIMARY_STUDY", "RECORDINGS"]
-
-
-PRIMARY_STUDY = "intelbot5"      # the dissertation's arm: its edition publishes into figures/
-#: Where the chapters write their rerun recordings (their ``recordings_dir`` default); another
-#: edition's go to ``RECORDINGS/<name>/``.
-RECORDINGS = "build/recordings"
-
-
-@dataclass(frozen=True)
-class Edition:
-    """One arm's run of the chapters: a study file and its robot file (as the reader names
-    them). The primary edition runs every chapter with its default parameters and publishes
-    into ``figures/``; another runs the chapters that take a ``robot_file`` or ``study_file``
-    with its own and publishes into ``figures/<name>/``. A chapter that takes neither (04, on
-    Jang's benchmarks) is the same for every arm and runs once; a chapter that takes
-    ``study_files`` (08) compares the editions and runs once, after them."""
-
-    name: str
-    study_file: str
-    robot_file: str
-    primary: bool
-
-    @property
-    def subdir(self) -> str:
-        return "" if self.primary else self.name
-
-    def parameters(self, declared: Sequence[str]) -> dict | None:
-        """The parameters of this edition's run of a chapter declaring ``declared``, or None
-        when the chapter is not run for it."""
-        if self.primary:
-            return {}
-        chosen = {k: v for k, v in (("robot_file", self.robot_file),
-                                    ("study_file", self.study_file)) if k in declared}
-        if chosen and "recordings_dir" in declared:   # its recordings beside, not over, the primary's
-            chosen["recordings_dir"] = f"{RECORDINGS}/{self.name}"
-        return chosen or None
-
-
-def editions(params_dir: Path | None = None) -> list[Edition]:
-    """One edition per study file ``params/studies/*.yaml``, the primary (intelbot5) first;
-    a single primary edition with the chapters' defaults if there is no study file."""
-    from ..study.study_files import load_study          # the study's robot file, validated
-    from ..infra.paths import PARAMS
-
-    files = sorted(((params_dir or PARAMS) / "studies").glob("*.yaml"))
-    found = [Edition(f.stem, shown_path(f), load_study(f).robot_file, f.stem == PRIMARY_STUDY)
-             for f in files]
-    if not any(e.primary for e in found):
-        return [Edition(PRIMARY_STUDY, "", "", True)]
-    return sorted(found, key=lambda e: (not e.primary, e.name))
 
 
 def digest_files(h, paths) -> None:
@@ -321,8 +272,11 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         else:
             in_order([j for j in jobs if j[0].name not in comparing])
         in_order([j for j in jobs if j[0].name in comparing])
-        write_pages(everything, runs, comparing, arms, base, report_dir, figures_dir, extra, smoke,
-                    None if smoke or extra else build_dir / "recordings")
+        write_pages(ReportPages(
+            chapters=tuple(everything), runs={nb.name: tuple(arm for arm, _ in runs(nb)) for nb in everything},
+            comparing=frozenset(comparing), arms=tuple(arms), executed_dir=base / "notebooks",
+            report_dir=report_dir, figures_dir=figures_dir, parameters=extra, smoke=smoke,
+            recordings_dir=None if smoke or extra else build_dir / "recordings"))
     except KeyboardInterrupt:
         raise ReportInterrupted(f"interrupted; {shown_path(figures_dir)} holds the chapters published "
                                 f"before (its manifest matches)") from None

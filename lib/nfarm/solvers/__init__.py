@@ -1,7 +1,8 @@
-"""Solvers on the model: iterative inverse kinematics (:mod:`.ik`, its update rules in
-:mod:`.ik_methods`: Levenberg–Marquardt, damped least squares, the pseudo-inverse, the
-Jacobian transpose) and in closed form, every branch (:mod:`.geometric_ik`), the argument
-checks they share (:mod:`.arguments`), joint trajectories
+"""Solvers on the model: inverse kinematics (:mod:`.ik` gathers both kinds), iterative
+(:mod:`.iterative`, its update rules in :mod:`.ik_methods`: Levenberg–Marquardt, damped least
+squares, the pseudo-inverse, the Jacobian transpose) and in closed form, every branch
+(:mod:`.geometric_ik`; the class of arms it solves and its branches in :mod:`.arm_class`), the
+argument checks they share (:mod:`.arguments`), joint trajectories
 (:mod:`.trajectory`), the tool paths an arm can hold (:mod:`.tool_paths`), and workspace and
 singularity analysis (:mod:`.workspace`).
 
