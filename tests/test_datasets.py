@@ -466,13 +466,10 @@ def test_the_memory_budget_is_half_the_machine_or_what_nfarm_memory_gb_says(monk
 
 def test_a_region_too_narrow_for_its_size_is_refused_once_a_million_draws_say_so():
     """The filters' acceptance after a million draws predicts the draws a size needs: a size
-    out of reach is refused then, not after max_draws."""
-    import time
-
+    out of reach is refused then, not after max_draws: the refusal counts the draws it made,
+    about a million of the hundred million allowed (its time: ``benchmarks/bench_deadlines.py``)."""
     study = load_study(STUDY)
     region = study.ik_region
-    start = time.perf_counter()
     with pytest.raises(ValueError, match=r"accepted [\d,]+ of 1,04\d,\d+ draws, too few for the 50,000,000 asked "
                                          r"for within 100,000,000 draws: widen them"):
         region.sample(50_000_000, 0)
-    assert time.perf_counter() - start < 60
