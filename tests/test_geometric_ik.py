@@ -281,16 +281,22 @@ def test_elbow_up_is_above_the_shoulder_wrist_line(name):
 def test_elbow_up_holds_for_links_of_either_sign_and_without_gravity(robot, seed, weightless):
     """Random arms of the class with a vertical base axis (up along it, or against gravity):
     for front solutions the "up" branch's elbow lies above the line from the shoulder's axis to
-    the wrist-pitch axis (standard-DH frames 1 and 3)."""
+    the wrist-pitch axis (standard-DH frames 1 and 3; a modified-DH frame k is standard frame k
+    less its last ``Tx(a) Rx(α)``, the next joint's ``a`` and ``α`` in the modified table)."""
     from dataclasses import replace
     base = robot.base.copy()
     base[:3, :3] = np.eye(3)
     robot = replace(robot, base=base, gravity=np.zeros(3) if weightless else robot.gravity)
     q = sample_configurations(robot, 300, seed)
     result = closed_form(robot, fk(robot, q))
+    checked = 0
     for k in (0, 1):                                 # the front branches' own geometry
         qk = result.q[:, k]
         F = fk_all(robot, qk)
+        if robot.convention == "modified":           # the standard frames 1–3
+            F = F.copy()
+            for j in (1, 2, 3):
+                F[:, j] = F[:, j] @ _tx_rx(robot.a[j], robot.alpha[j])
         z1, x1 = F[:, 1, :3, 2], F[:, 1, :3, 0]
         shoulder, elbow, wrist = F[:, 1, :3, 3], F[:, 2, :3, 3], F[:, 3, :3, 3]  # the pitch axes
         line = wrist - shoulder
@@ -299,8 +305,11 @@ def test_elbow_up_holds_for_links_of_either_sign_and_without_gravity(robot, seed
         side = np.einsum("mi,mi->m", elbow - shoulder, normal)
         ahead = np.einsum("mi,mi->m", line, x1)
         clear = (np.abs(side) > 1e-6) & (ahead > 1e-3) & (np.abs(line[:, 2]) < 0.9 * np.linalg.norm(line, axis=1))
-        if robot.convention == "standard":
-            assert ((side > 0) == (k == 0))[clear].all()
+        assert ((side > 0) == (k == 0))[clear].all()
+        checked += clear.sum()
+    # Most front solutions are clear of the edges (at least 162 of 600 in every example drawn):
+    # a mask that kept a handful would check nothing.
+    assert checked >= 100, f"only {checked} of 600 solutions clear of the elbow's and the base axis's edges"
 
 
 @pytest.mark.parametrize("name", ARMS)

@@ -128,12 +128,29 @@ def test_marquardt_damping_also_solves(intelbot5):
     assert solve(intelbot5, T, method=LM(damping="marquardt")).success.all()
 
 
-@pytest.mark.parametrize("name", list(METHODS))
-def test_a_method_s_name_is_that_method_with_its_defaults(intelbot5, name):
+# What the documentation promises a name picks (nfarm.solvers.ik_methods: its table and the
+# constants its docstring argues for — Sugihara's rule with s = 0.1, w̄ = 1e-12, ν ×10; DLS's
+# μ = 0.05 m; the pseudo-inverse's cut-off 1e-6), written out rather than read from METHODS.
+DOCUMENTED = {"lm": LM(damping="sugihara", scale=0.1, bias=1e-12, factor=10.0), "dls": DLS(damping=0.05),
+              "pinv": Pinv(rcond=1e-6), "jt": JT()}
+# The same rules with another option: a name that picked one of these would be caught.
+OTHERS = {"lm": LM(damping="marquardt"), "dls": DLS(damping=0.5), "pinv": Pinv(rcond=0.5), "jt": DLS()}
+
+
+def test_the_documented_names_are_the_methods():
+    assert set(METHODS) == set(DOCUMENTED)
+
+
+@pytest.mark.parametrize("name", list(DOCUMENTED))
+def test_a_method_s_name_is_that_method_with_its_documented_defaults(intelbot5, name):
     T = good_targets(intelbot5, 20)
-    a, b = solve(intelbot5, T, method=name), solve(intelbot5, T, method=METHODS[name]())
-    for field in ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason"):
-        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    fields = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
+    by_name, documented = solve(intelbot5, T, method=name), solve(intelbot5, T, method=DOCUMENTED[name])
+    for field in fields:
+        np.testing.assert_array_equal(getattr(by_name, field), getattr(documented, field))
+    other = solve(intelbot5, T, method=OTHERS[name])
+    assert any(not np.array_equal(getattr(by_name, f), getattr(other, f)) for f in fields), \
+        "the comparison can tell rules apart"
 
 
 def test_the_methods_are_importable_from_the_top():
