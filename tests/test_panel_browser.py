@@ -18,7 +18,7 @@ from urllib.parse import urlparse
 import pytest
 
 from nfarm.__main__ import panel_command
-from nfarm.publishing.panel_server import check_port, voila_command, voila_environment
+from nfarm.publishing.panel_server import check_port, new_token, panel_url, voila_command, voila_environment
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 DRIVER = shutil.which("chromedriver")
@@ -53,9 +53,9 @@ def test_a_taken_port_is_refused_in_one_line(capsys, monkeypatch):
 
 @pytest.fixture
 def server(tmp_path):
-    port = free_port()
+    port, token = free_port(), new_token()
     log = open(tmp_path / "voila.log", "w")
-    proc = subprocess.Popen(voila_command(port, connection_dir=tmp_path), env=voila_environment(tmp_path),
+    proc = subprocess.Popen(voila_command(port, connection_dir=tmp_path), env=voila_environment(tmp_path, token),
                             stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
     base = f"http://127.0.0.1:{port}/"
     try:
@@ -71,7 +71,7 @@ def server(tmp_path):
                 if time.monotonic() > deadline:
                     pytest.fail("voila did not answer within 120 s")
                 time.sleep(0.25)
-        yield base
+        yield panel_url(port, token)       # the page needs the token, as make panel prints it
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGTERM)       # Voilà shuts its kernels down and exits

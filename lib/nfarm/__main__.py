@@ -119,18 +119,24 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def panel_command(port: int) -> int:
-    """``python -m nfarm panel``: the address, then the process becomes the Voilà server; 2 with
-    one line for a port that cannot be used."""
-    from .publishing.panel_server import check_port, serve
+    """``python -m nfarm panel``: the server prepared (port, directories), the address with its
+    token printed, then the process becomes the Voilà server; 2 with one line for a port or a
+    directory that cannot be used."""
+    from .publishing.panel_server import new_token, panel_url, prepare, serve
 
     try:
-        check_port(port)
+        prepare(port)
     except ValueError as error:
         print(f"panel: {error}", file=sys.stderr)
         return 2
-    print(f"panel: http://127.0.0.1:{port}/ (the page takes a few seconds to start its kernel; "
+    token = new_token()
+    print(f"panel: {panel_url(port, token)} (the page takes a few seconds to start its kernel; "
           f"Ctrl-C stops the server)", flush=True)
-    serve(port)
+    try:
+        serve(port, token)
+    except (ValueError, OSError) as error:
+        print(f"panel: cannot start the server: {error}", file=sys.stderr)
+        return 2
     return 0   # not reached: serve replaces the process
 
 
