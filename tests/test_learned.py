@@ -120,12 +120,16 @@ def test_small_seeded_training_reaches_a_stated_error(fitted, data):
 
 def test_the_dissertation_encoding_trains_too(data):
     """The dissertation's set-up (7 inputs, 2 bell functions each: 128 rules, 1 024 consequent
-    parameters per joint) on 1 500 poses: it runs, and overfits (tens of degrees)."""
+    parameters per joint) on 1 500 poses: it learns (on held-out poses every joint's error is
+    below that of predicting the training mean, which knows nothing of the pose), and falls far
+    short of the arm-plane encoding (tens of degrees where that reaches 3°)."""
     model = LearnedIK(encoding="quat_xyz", n_mfs=2, epochs=2).fit(ROBOT, data["train"])
     assert model.models_[0].rules_.shape == (128, 7)
-    rmse = np.degrees(np.sqrt(np.mean((model.predict(data["test"]["T"]) -
-                                       data["test"]["q"]) ** 2, axis=0)))
-    assert np.isfinite(rmse).all() and (rmse < 45).all(), rmse
+    test = data["test"]["q"]
+    rmse = np.degrees(np.sqrt(np.mean((model.predict(data["test"]["T"]) - test) ** 2, axis=0)))
+    knowing_nothing = np.degrees(np.sqrt(np.mean((data["train"]["q"].mean(axis=0) - test) ** 2, axis=0)))
+    assert (rmse < knowing_nothing).all(), (rmse, knowing_nothing)
+    assert rmse.max() > 10.0, rmse                            # tens of degrees
 
 
 def test_prediction_is_batched_over_leading_axes(fitted, data):
@@ -393,7 +397,9 @@ def test_id_save_load_batching_and_bad_input(id_data, tmp_path):
     # As for the IK: other BLAS kernels for one sample; this fcm model's consequents amplify the
     # difference (measured on an AMD EPYC: 1.9e-12 N·m on 0.106 N·m, relative 1.8e-11).
     np.testing.assert_allclose(model.predict(d["q"][4], d["qd"][4], d["qdd"][4]), flat[4], rtol=1e-9, atol=1e-12)
-    np.testing.assert_array_equal(model.predict(d["q"][:6], 0.0 * d["qd"][0], d["qdd"][:6]).shape, (6, 5))
+    still = np.zeros(5)                                       # one velocity for every sample: broadcast
+    np.testing.assert_array_equal(model.predict(d["q"][:6], still, d["qdd"][:6]),
+                                  model.predict(d["q"][:6], np.tile(still, (6, 1)), d["qdd"][:6]))
     path = model.save(tmp_path)
     loaded = LearnedID.load(tmp_path, ROBOT)
     np.testing.assert_array_equal(loaded.predict(d["q"], d["qd"], d["qdd"]),
