@@ -252,16 +252,19 @@ def test_the_animation_follows_the_trajectory(panels):
     ("dt", 0.0, "must be > 0"),
     ("dt", 1e-6, "the panel draws at most"),
 ])
-def test_bad_times_get_one_line_and_keep_the_last_trajectory(panels, field, value, says):
-    page = panels["so101"].trajectory
+def test_bad_times_get_one_line_and_clear_the_last_trajectory(panels, field, value, says):
+    panel = panels["so101"]
+    page = panel.trajectory
     page.t0.value, page.dt.value, page.tf.value = 0.0, 0.2, 6.0
     page.compute()
-    kept = page.trajectory
+    assert page.trajectory is not None and panel.dynamics.parts is not None
     getattr(page, field).value = value
     page.buttons["compute"].click()
     message = html.unescape(re.sub(r"<[^>]+>", "", page.message.value))
     assert says in message and "\n" not in message
-    assert page.trajectory is kept
+    # Nothing of the last trajectory stays on the page: no plot, no torques to save.
+    assert page.trajectory is None and panel.dynamics.parts is None
+    assert not any(ax.lines for ax in page.axes) and not any(ax.lines for ax in panel.dynamics.axes)
     page.t0.value, page.dt.value, page.tf.value = 0.0, 0.2, 6.0
 
 

@@ -205,3 +205,209 @@ def test_panel_start_up_errors_are_one_line_before_any_address(tmp_path, monkeyp
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1
     assert "panel/jupyter" in err and "is a file, not a directory" in err
+
+
+# -- the panel's values --------------------------------------------------------------------------
+
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    from nfarm.learning.learned import LearnedIK
+    from nfarm.learning.learned_id import LearnedID
+    from nfarm.model.kinematics import fk
+    from nfarm.model.robot import load_robot
+    from nfarm.presentation.recording import RecordingTooLarge, expected_bytes, record_trajectory
+    from nfarm.publishing.panel import ArmPanel
+
+    ROBOT = load_robot(pc.shipped_robots()["intelbot5"])
+    OTHER = load_robot(pc.shipped_robots()["so101"])
+Z = [0.0] * ROBOT.n
+
+
+@pytest.fixture(scope="module")
+def panel(tmp_path_factory):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ArmPanel("intelbot5", models_dir=tmp_path_factory.mktemp("no-models"),
+                        recordings_dir=tmp_path_factory.mktemp("recordings"))
+
+
+def set_trajectory(page, *, q0=Z, qf=(30.0,) * 5, v0=Z, vf=Z, t0=0.0, dt=0.2, tf=6.0, profile="cubic"):
+    for boxes, values in ((page.q0, q0), (page.qf, qf), (page.v0, v0), (page.vf, vf)):
+        for box, value in zip(boxes, values):
+            box.value = value
+    page.t0.value, page.dt.value, page.tf.value, page.profile.value = t0, dt, tf, profile
+
+
+def shows_nothing_old(panel) -> bool:
+    page, dynamics = panel.trajectory, panel.dynamics
+    return (page.trajectory is None and dynamics.parts is None and dynamics.peaks.value == ""
+            and not any(ax.lines for ax in [*page.axes, *dynamics.axes])
+            and np.size(page.view.path.get_data_3d()[0]) == 0 and page.frame.max == 0)
+
+
+@pytest.mark.parametrize("values, says", [
+    (dict(tf=1e-100, dt=1e-101, profile="quintic"), "below the bound of 0.001 s"),
+    (dict(tf=1e-160, dt=1e-161), "below the bound of 0.001 s"),
+    (dict(tf=1e80, dt=1e76), "end time: 1e+80 s is over the bound of 1e+06 s"),
+    (dict(t0=-1e300), "start time: -1e+300 s is below the bound of -1e+06 s"),
+    (dict(qf=(1e300,) * 5), "final position [deg]: 1e+300 for base_yaw is beyond the bound of ±3600"),
+    (dict(v0=(0, 1e200, 0, 0, 0), profile="quintic"), "initial velocity [deg/s]: 1e+200 for shoulder_pitch"),
+    (dict(vf=(0, 0, 0, 0, -2e5)), "final velocity [deg/s]: -200000 for wrist_roll is beyond the bound of ±100000"),
+    (dict(dt=5e-324), "gives more than 1e308 samples"),
+    (dict(dt=np.nan), "time step: a finite number needed, got nan"),
+])
+def test_trajectory_values_beyond_their_bounds_are_one_line_and_clear_the_page(panel, values, says):
+    page = panel.trajectory
+    set_trajectory(page)
+    page.compute()
+    assert page.trajectory is not None and panel.dynamics.parts is not None
+    set_trajectory(page, **values)
+    page.buttons["compute"].click()
+    message = one_line(page.message.value)
+    assert says in message and "\n" not in message and "np.float64" not in message, message
+    assert shows_nothing_old(panel)
+    # "save" now records nothing, not the trajectory before
+    page.save_button.click()
+    assert "compute a trajectory first" in one_line(page.message.value)
+    set_trajectory(page)
+
+
+@pytest.mark.parametrize("values", [
+    dict(tf=1e-3, dt=1e-3 / 4, qf=(3600,) * 5, v0=(1e5,) * 5, vf=(-1e5,) * 5, profile="quintic"),
+    dict(tf=1e-3, dt=1e-4, qf=(-3600,) * 5, v0=(-1e5,) * 5),
+    dict(t0=-1e6, tf=1e6, dt=1e2, qf=(3600,) * 5, vf=(1e5,) * 5, profile="quintic"),
+    dict(t0=1e6 - 1e-3, tf=1e6, dt=1e-5),
+])
+def test_no_nan_reaches_a_table_or_a_plot_within_the_bounds(panel, values):
+    page = panel.trajectory
+    set_trajectory(page, **values)
+    page.compute()
+    assert page.message.value == "" and panel.dynamics.message.value == ""
+    tr, parts = page.trajectory, panel.dynamics.parts
+    for values_ in (tr.t, tr.q, tr.qd, tr.qdd, parts.total, parts.inertial, parts.coriolis, parts.gravity):
+        assert np.isfinite(values_).all()
+    for ax in [*page.axes, *panel.dynamics.axes]:
+        for line in ax.lines:
+            assert np.isfinite(np.asarray(line.get_ydata(), dtype=float)).all()
+    assert "nan" not in panel.dynamics.peaks.value.lower() and "inf" not in panel.dynamics.peaks.value.lower()
+    set_trajectory(page)
+
+
+def test_a_failed_save_says_so_and_leaves_the_saved_file(panel, tmp_path):
+    page = panel.trajectory
+    set_trajectory(page)
+    page.compute()
+    page.save_button.click()
+    path = panel.recordings_dir / "intelbot5-panel-trajectory.rrd"
+    saved = path.read_bytes()
+    limit, panel.max_recording_bytes = panel.max_recording_bytes, 200_000
+    try:
+        page.save_button.click()
+    finally:
+        panel.max_recording_bytes = limit
+    message = one_line(page.message.value)
+    assert message.startswith("recording: ") and "\n" not in message
+    assert "31 samples would take about 0.3 MiB, over the limit of 0.2 MiB" in message and "nothing written" in message
+    assert path.read_bytes() == saved and [p.name for p in path.parent.iterdir()] == [path.name]
+
+
+# -- recordings ----------------------------------------------------------------------------------
+
+
+def recorded_size(tmp_path, samples: int, **options) -> int:
+    tr, _ = pc.joint_trajectory(ROBOT, Z, [30.0] * 5, Z, Z, dt=6.0 / samples, max_samples=samples + 2)
+    tau = pc.torque_parts(ROBOT, tr).total
+    path = record_trajectory(ROBOT, tr, tmp_path / f"r{samples}.rrd", tau=tau, **options)
+    size = path.stat().st_size
+    assert size <= expected_bytes(len(tr.t), transforms=5, scalars=15)
+    return size
+
+
+def test_a_recording_grows_linearly_with_its_samples(tmp_path):
+    """The tool path was a strip of every point so far at every step (K(K + 1)/2 points: the
+    size's second difference as large as its first); now one segment a step."""
+    s1, s2, s4 = (recorded_size(tmp_path, k) for k in (1000, 2000, 4000))
+    assert (s4 - s2) / (s2 - s1) < 2.5          # linear: 2; the old quadratic path: 3.8
+
+
+def test_a_recording_over_its_limit_is_refused_before_writing(tmp_path):
+    with pytest.raises(RecordingTooLarge) as refused:
+        recorded_size(tmp_path, 20_000, max_bytes=2**20)
+    message = str(refused.value)
+    assert "\n" not in message and "20,001 samples would take about 12.8 MiB, over the limit of 1.0 MiB" in message
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="max_bytes must be a positive whole number"):
+        recorded_size(tmp_path, 100, max_bytes=0)
+
+
+# -- the panel's computations called from Python -------------------------------------------------
+
+
+def other_robots_model(cls):
+    """A model as fitting it for the SO-101 leaves it (what the check reads), without the fit."""
+    from nfarm.model.robot import robot_hash
+
+    model = cls()
+    model.robot_hash_, model.robot_name_, model.n_joints_ = robot_hash(OTHER), OTHER.name, OTHER.n
+    return model
+
+
+T_HOME = fk(ROBOT, np.zeros(5))
+FAR = T_HOME.copy()
+FAR[:3, 3] = 1e158
+TRAJECTORY = pc.joint_trajectory(ROBOT, Z, [30.0] * 5, Z, Z)[0]
+
+
+@pytest.mark.parametrize("call, says", [
+    (lambda: pc.ik_answers(ROBOT, T_HOME, learned=other_robots_model(LearnedIK)), "learned: the model was trained for the robot"),
+    (lambda: pc.torque_parts(ROBOT, TRAJECTORY, learned=other_robots_model(LearnedID)), "learned: the model was trained for the robot"),
+    (lambda: pc.torque_parts(ROBOT, TRAJECTORY, learned=LearnedID()), "learned: the LearnedID is not fitted"),
+    (lambda: pc.torque_parts(ROBOT, TRAJECTORY, learned="model"), "learned: a LearnedID or None needed, got str"),
+    (lambda: pc.torque_parts(ROBOT, TRAJECTORY, chunk=-1), "chunk: a whole number >= 1 needed, got -1"),
+    (lambda: pc.torque_parts(ROBOT, TRAJECTORY, chunk=0), "chunk: a whole number >= 1 needed, got 0"),
+    (lambda: pc.torque_parts(ROBOT, TRAJECTORY, chunk=np.float64(8)), "chunk: a whole number >= 1 needed, got float64 8"),
+    (lambda: pc.torque_parts(ROBOT, "trajectory"), "trajectory: a Trajectory (joint_trajectory) needed, got str"),
+    (lambda: pc.ik_answers(ROBOT, np.stack([T_HOME, T_HOME])), "target pose: one pose of shape (4, 4) needed, got shape (2, 4, 4)"),
+    (lambda: pc.ik_answers(ROBOT, None), "target pose: numbers needed, got None"),
+    (lambda: pc.ik_answers(ROBOT, b"\x00" * 16), "target pose: numbers needed, got b'"),
+    (lambda: pc.ik_answers(ROBOT, "T_HOME"), "target pose: numbers needed, got 'T_HOME'"),
+    (lambda: pc.ik_answers(ROBOT, T_HOME + 0j), "target pose: real numbers needed, got complex numbers"),
+    (lambda: pc.ik_answers(ROBOT, np.where(np.eye(4) > 0, np.nan, T_HOME)), "target pose: finite numbers needed, got [nan"),
+    (lambda: pc.ik_answers(ROBOT, T_HOME.tolist()[:3]), "target pose: one pose of shape (4, 4) needed, got shape (3, 4)"),
+    (lambda: pc.ik_answers(ROBOT, FAR), "target pose: its position lies 1.73e+158 m from the arm's base, over the bound of"),
+    (lambda: pc.ik_answers(ROBOT, T_HOME, tol_mm=np.nan), "tol_mm: a finite number needed, got nan"),
+    (lambda: pc.ik_answers(ROBOT, T_HOME, tol_mm=-0.1), "tol_mm: must be > 0, got -0.1 mm"),
+    (lambda: pc.ik_answers(ROBOT, T_HOME, tol_deg="0.1"), "tol_deg: a real number needed, got str '0.1'"),
+    (lambda: pc.ik_answers(ROBOT, T_HOME, seed=-1), "seed: a whole number >= 0 needed, got -1"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, Z, Z, Z, dt="0.2"), "time step: a real number needed, got str '0.2'"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, Z, Z, Z, tf=np.float64(1.0), t0=np.float64(1.0)), "end time 1 s must be after the start time 1 s"),
+    (lambda: pc.joint_trajectory(ROBOT, [1j] * 5, Z, Z, Z), "initial position [deg]: real numbers needed, got complex"),
+    (lambda: pc.joint_trajectory(ROBOT, None, Z, Z, Z), "initial position [deg]: numbers needed, got None"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, b"12345", Z, Z), "final position [deg]: numbers needed, got b'12345'"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, Z, [np.float64(np.nan)] * 5, Z), "initial velocity [deg/s]: finite numbers needed, got [nan, nan"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, Z, Z, Z[:4]), "final velocity [deg/s]: shape (5,) needed, got (4,)"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, Z, Z, Z, profile=None), "profile: one of cubic, quintic, got None"),
+    (lambda: pc.joint_trajectory(ROBOT, Z, Z, Z, Z, max_samples=True), "max_samples: a whole number >= 2 needed, got bool True"),
+    (lambda: pc.pose_readout(ROBOT, [np.nan] * 5), "configuration q [rad]: finite numbers needed, got [nan"),
+    (lambda: pc.pose_readout(ROBOT, "0 0 0 0 0"), "configuration q [rad]: numbers needed, got '0 0 0 0 0'"),
+    (lambda: pc.target_pose([np.float64(np.nan), 0, 0], Z[:3]), "target position [mm]: finite numbers needed, got [nan, 0, 0]"),
+    (lambda: pc.target_pose(Z[:3], "abc"), "target roll, pitch, yaw [deg]: numbers needed, got 'abc'"),
+    (lambda: pc.parse_pose_matrix("1 0 0 0; 0 1 0 0; 0 0 1 0; 1e-9 0 0 1"), "the fourth row must be exactly 0 0 0 1, got 1e-09 0 0 1"),
+    (lambda: pc.parse_pose_matrix("1 0 0 0_0; 0 1 0 0; 0 0 1 0"), "typed pose: '0_0' is not a number"),
+    (lambda: pc.parse_pose_matrix("1 0 0 nan; 0 1 0 0; 0 0 1 0"), "typed pose: 'nan' is not a number"),
+    (lambda: pc.parse_pose_matrix("１ 0 0 0; 0 1 0 0; 0 0 1 0"), "typed pose: '１' is not a number"),
+    (lambda: pc.parse_pose_matrix("1 0 0 1e999; 0 1 0 0; 0 0 1 0"), "typed pose: finite numbers needed, got [inf]"),
+    (lambda: pc.parse_pose_matrix(None), "typed pose: text needed, got NoneType"),
+])
+def test_the_panels_computations_refuse_bad_arguments_in_their_own_line(call, says):
+    with pytest.raises(pc.PanelInputError) as refused:
+        call()
+    message = str(refused.value)
+    assert says in message, message
+    assert "\n" not in message and "np.float64" not in message and "q0" not in message
+
+
+def test_messages_show_numbers_as_they_read():
+    assert pc.shown(np.float64(1.0)) == "1" and pc.shown(np.int64(3)) == "3"
+    assert pc.shown([np.float64(0.25), np.float32(np.inf)]) == "[0.25, inf]"
+    assert pc.shown(np.arange(10.0)) == "[0, 1, 2, 3, 4, 5, 6, 7, …]"

@@ -1,8 +1,8 @@
 """Rerun recordings (``.rrd``) of joint trajectories, replayable in the rerun viewer.
 
 :func:`record_trajectory` holds the robot (its URDF from :func:`nfarm.model.urdf.to_urdf`, loaded by rerun's own
-URDF loader), the joint transforms over time (so the robot moves), the tool path as a growing
-line strip, and joint positions [deg], velocities [deg/s] and (optionally) torques [N·m] as
+URDF loader), the joint transforms over time (so the robot moves), the tool path growing with
+time (one segment a step, which the viewer accumulates up to the time cursor), and joint positions [deg], velocities [deg/s] and (optionally) torques [N·m] as
 scalar time series, in degrees like every figure of the report. It carries its viewer layout
 (a blueprint): the moving arm on the left, one plot each for positions, velocities and
 torques on the right.
@@ -28,39 +28,82 @@ import rerun as rr
 import rerun.blueprint as rrb
 import rerun.urdf as rru
 
-from ..infra.paths import atomic_path
+from ..infra.paths import atomic_path, shown_path
 from ..model.kinematics import fk
 from ..model.robot import Robot
 from ..model.rotations import pose_error
 from ..model.urdf import to_urdf
 from ..solvers.trajectory import Trajectory
 
-__all__ = ["record_trajectory", "record_ik_paths", "record_id_trajectory", "TIMELINE"]
+__all__ = ["record_trajectory", "record_ik_paths", "record_id_trajectory", "TIMELINE", "RecordingTooLarge",
+           "expected_bytes", "MAX_BYTES"]
 
 #: The timeline every recording uses (seconds of trajectory time).
 TIMELINE = "time"
+#: The default limit of a recording's size [bytes] (every function's ``max_bytes``).
+MAX_BYTES = 256 * 2**20
+# What a recording stores, in bytes (upper bounds of the sizes measured with rerun 0.41 on the
+# three shipped arms, 1 000 to 20 000 samples: 492-603 bytes a sample for intelbot5, 724 for the
+# Puma with torques; 81-109 kB besides): the arm's files and the layout, and per sample each
+# joint's transform, each scalar series' value, each tool path's segment.
+_FIXED_BYTES = 256 * 1024
+_TRANSFORM_BYTES, _SCALAR_BYTES, _SEGMENT_BYTES = 64, 20, 40
+
+
+class RecordingTooLarge(ValueError):
+    """A recording would be larger than its limit; nothing was written."""
+
+
+def expected_bytes(samples: int, *, transforms: int, scalars: int, paths: int = 1) -> int:
+    """About how many bytes a recording of ``samples`` time steps takes, with ``transforms``
+    joint transforms, ``scalars`` scalar series and ``paths`` growing tool paths (each one
+    value a step): it grows linearly with every count. An upper estimate (measured sizes are
+    5-15 % below it).
+
+    Example:
+        >>> round(expected_bytes(10_000, transforms=5, scalars=15) / 2**20, 1)    # intelbot5 with torques [MiB]
+        6.5
+    """
+    return _FIXED_BYTES + samples * (transforms * _TRANSFORM_BYTES + scalars * _SCALAR_BYTES + paths * _SEGMENT_BYTES)
+
+
+def _check_size(path: Path, samples: int, max_bytes: int, **counts) -> None:
+    """Raise :class:`RecordingTooLarge` (one line) before a byte is written when the recording of
+    ``path`` would exceed ``max_bytes``."""
+    if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes <= 0:
+        raise ValueError(f"max_bytes must be a positive whole number of bytes, got {type(max_bytes).__name__} "
+                         f"{max_bytes}")
+    size = expected_bytes(samples, **counts)
+    if size > max_bytes:
+        raise RecordingTooLarge(f"{shown_path(path)}: a recording of {samples:,} samples would take about "
+                                f"{size / 2**20:,.1f} MiB, over the limit of {max_bytes / 2**20:,.1f} MiB "
+                                f"(max_bytes): nothing written; take a larger time step")
 
 
 def record_trajectory(robot: Robot, trajectory: Trajectory, path: str | os.PathLike, *,
                       tau: np.ndarray | None = None, name: str = "trajectory",
-                      seed: int = 0) -> Path:
+                      seed: int = 0, max_bytes: int = MAX_BYTES) -> Path:
     """Write ``trajectory`` of ``robot`` to the rerun file ``path`` (atomically); return it.
 
     Entities: ``/{robot.name}`` (the URDF), ``/transforms/{joint}`` (joint motion),
     ``/tool_path`` (line strip of the tool origin so far), ``/q_deg/{joint}``,
-    ``/qd_deg_s/{joint}`` and, with ``tau (K, n)`` [N·m], ``/tau/{joint}``. The growing line strip stores K(K + 1)/2 points: a few
-    thousand samples are fine, resample longer trajectories first.
+    ``/qd_deg_s/{joint}`` and, with ``tau (K, n)`` [N·m], ``/tau/{joint}``. The size grows
+    linearly with K (:func:`expected_bytes`: about 0.6 kB a sample for a 5-joint arm).
+
+    Raises:
+        RecordingTooLarge: the recording would take more than ``max_bytes`` (checked first).
     """
     t, q = trajectory.t, trajectory.q
     if tau is not None and np.shape(tau) != q.shape:
         raise ValueError(f"tau must have the shape of q {q.shape}, got {np.shape(tau)}")
     path = Path(path)
+    _check_size(path, len(t), max_bytes, transforms=robot.n, scalars=robot.n * (2 if tau is None else 3))
     series = {"q_deg": np.degrees(q), "qd_deg_s": np.degrees(trajectory.qd)} | \
         ({} if tau is None else {"tau": np.asarray(tau)})
     titles = {"q_deg": "joint angle [deg]", "qd_deg_s": "joint velocity [deg/s]",
               "tau": "joint torque [N·m]"}
     blueprint = rrb.Blueprint(rrb.Horizontal(
-        rrb.Spatial3DView(origin="/", name=f"{robot.name}: arm and tool path"),
+        rrb.Spatial3DView(origin="/", name=f"{robot.name}: arm and tool path", overrides=_trail("tool_path")),
         rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/{key}", name=titles[key]) for key in series)),
         column_shares=[3, 2]), collapse_panels=True)
     with _recording(path, name, seed, blueprint, t) as (rec, times, tmp):
@@ -101,10 +144,23 @@ def _log_arm(rec, robot: Robot, q: np.ndarray, times, tmp: Path, *, prefix: str 
 
 
 def _log_growing_path(rec, entity: str, t: np.ndarray, points: np.ndarray, rgb) -> None:
-    """``points (K, 3)`` [m] as a line strip that grows with time ``t (K,)`` [s]."""
-    for k in range(len(t)):
-        rec.set_time(TIMELINE, duration=float(t[k]))
-        rec.log(entity, rr.LineStrips3D([points[: k + 1]], colors=[rgb], radii=0.002))
+    """``points (K, 3)`` [m] as a path that grows with time ``t (K,)`` [s]: at each time the one
+    segment from the point before, which the viewer accumulates (the entity's visible time
+    range, :func:`_trail`, runs from the start to the time cursor). Stored once each: 2 K points,
+    where a strip of the whole path so far at every time stored K(K + 1)/2."""
+    K = len(t)
+    segments = np.stack([points[np.maximum(np.arange(K) - 1, 0)], points], axis=1)
+    rec.send_columns(entity, indexes=[rr.TimeColumn(TIMELINE, duration=t)],
+                     columns=rr.LineStrips3D.columns(strips=segments, colors=np.tile(np.asarray(rgb, np.uint8), (K, 1)),
+                                                     radii=np.full(K, 0.002, dtype=np.float32)))
+
+
+def _trail(*entities: str) -> dict:
+    """A 3-D view's overrides that show each of ``entities`` from the start up to the time
+    cursor: the growing paths of :func:`_log_growing_path`."""
+    since_start = rrb.VisibleTimeRanges(timeline=TIMELINE, start=rrb.TimeRangeBoundary.infinite(),
+                                        end=rrb.TimeRangeBoundary.cursor_relative())
+    return {f"/{entity}": since_start for entity in entities}
 
 
 #: Link colours (RGB) and path colours (0–255) of the arms of :func:`record_ik_paths`.
@@ -114,7 +170,7 @@ _ARM_COLOURS = [((0.85, 0.55, 0.15), (230, 120, 30)), ((0.25, 0.45, 0.85), (60, 
 
 def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
                     solutions: dict[str, np.ndarray], path: str | os.PathLike, *,
-                    name: str = "ik_path", seed: int = 0) -> Path:
+                    name: str = "ik_path", seed: int = 0, max_bytes: int = MAX_BYTES) -> Path:
     """Write arms following one Cartesian path with different IK solutions to the rerun file
     ``path`` (atomically); return it.
 
@@ -128,6 +184,9 @@ def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
     ``/{label}_tool_path`` (the tool point so far), and the errors of ``fk(q)`` against the
     target as time series ``/position_error_mm/{label}`` [mm] and
     ``/orientation_error_deg/{label}`` [deg].
+
+    Raises:
+        RecordingTooLarge: the recording would take more than ``max_bytes`` (checked first).
     """
     t = np.asarray(t, dtype=float)
     T_path = np.asarray(T_path, dtype=float)
@@ -139,8 +198,11 @@ def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
         if np.shape(q) != (len(t), robot.n):
             raise ValueError(f"solutions[{label!r}] must have shape ({len(t)}, {robot.n}), got {np.shape(q)}")
     path = Path(path)
+    _check_size(path, len(t), max_bytes, transforms=robot.n * len(solutions), scalars=2 * len(solutions),
+                paths=len(solutions) + 1)
     blueprint = rrb.Blueprint(rrb.Horizontal(
-        rrb.Spatial3DView(origin="/", name=f"{robot.name}: {' and '.join(solutions)} on one path"),
+        rrb.Spatial3DView(origin="/", name=f"{robot.name}: {' and '.join(solutions)} on one path",
+                          overrides=_trail(*(f"{label}_tool_path" for label in solutions))),
         rrb.Vertical(rrb.TimeSeriesView(origin="/position_error_mm", name="tool position error [mm]"),
                      rrb.TimeSeriesView(origin="/orientation_error_deg", name="tool orientation error [deg]")),
         column_shares=[3, 2]), collapse_panels=True)
@@ -162,7 +224,7 @@ def record_ik_paths(robot: Robot, t: np.ndarray, T_path: np.ndarray,
 
 def record_id_trajectory(robot: Robot, t: np.ndarray, q: np.ndarray,
                          torques: dict[str, np.ndarray], path: str | os.PathLike, *,
-                         name: str = "id_trajectory", seed: int = 0) -> Path:
+                         name: str = "id_trajectory", seed: int = 0, max_bytes: int = MAX_BYTES) -> Path:
     """Write a joint trajectory of ``robot`` and labelled torques along it to the rerun file
     ``path`` (atomically); return it.
 
@@ -174,6 +236,9 @@ def record_id_trajectory(robot: Robot, t: np.ndarray, q: np.ndarray,
     Entities: the arm (``/{robot.name}``, ``/transforms/{joint}``), ``/tool_path``, and
     ``/tau/{joint}/{label}`` — one plot per joint in the blueprint, all labels in it, so that
     prediction and truth lie on top of each other.
+
+    Raises:
+        RecordingTooLarge: the recording would take more than ``max_bytes`` (checked first).
     """
     t = np.asarray(t, dtype=float)
     q = np.asarray(q, dtype=float)
@@ -185,8 +250,9 @@ def record_id_trajectory(robot: Robot, t: np.ndarray, q: np.ndarray,
         if np.shape(tau) != q.shape:
             raise ValueError(f"torques[{label!r}] must have shape {q.shape}, got {np.shape(tau)}")
     path = Path(path)
+    _check_size(path, len(t), max_bytes, transforms=robot.n, scalars=robot.n * len(torques))
     blueprint = rrb.Blueprint(rrb.Horizontal(
-        rrb.Spatial3DView(origin="/", name=f"{robot.name}: a held-out trajectory"),
+        rrb.Spatial3DView(origin="/", name=f"{robot.name}: a held-out trajectory", overrides=_trail("tool_path")),
         rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/tau/{joint}", name=f"{joint} torque [N·m]")
                        for joint in robot.joint_names)),
         column_shares=[3, 2]), collapse_panels=True)

@@ -57,7 +57,7 @@ from .panel_compute import (PROFILES, PanelInputError, ik_answers, joint_traject
 from ..infra.paths import BUILD, shown_path
 from ..model.robot import Robot, load_robot, sample_configurations
 from ..model.rotations import matrix_to_rpy
-from ..presentation.recording import record_trajectory
+from ..presentation.recording import RecordingTooLarge, record_trajectory
 
 __all__ = ["Panel", "ArmPanel"]
 
@@ -344,6 +344,7 @@ class IKPage:
     def solve(self) -> None:
         """Answer the typed target by every method and list the answers."""
         panel = self.panel
+        self.answers, self.answers_html.value, self.choice.options = [], "", []   # a failed solve shows none
         T = self.target()
         self.progress.layout.visibility = "visible"
         self.progress.value = 0
@@ -461,9 +462,10 @@ class TrajectoryPage:
         """Make the trajectory from the typed values, plot it, ready the animation and update
         the dynamics page."""
         robot = self.panel.robot
+        self.clear()            # a failed compute leaves nothing of the last trajectory, nor its torques
         values = [[b.value for b in boxes] for boxes in (self.q0, self.qf, self.v0, self.vf)]
         trajectory, notes = joint_trajectory(robot, *values, t0=self.t0.value, dt=self.dt.value, tf=self.tf.value,
-                                             profile=self.profile.value)
+                                             profile=self.profile.value, max_samples=self.panel.max_samples)
         self.trajectory = trajectory
         self.notes.value = "<br>".join(_line(n, _NOTE) for n in notes)
         t = trajectory.t
@@ -489,6 +491,20 @@ class TrajectoryPage:
             self.frame.value = 0
         self.panel.dynamics.compute()
 
+    def clear(self) -> None:
+        """Forget the trajectory: no plots, path, animation, notes or torques (the dynamics page
+        cleared too), until the next computation."""
+        self.trajectory = self.tip = None
+        self.notes.value = ""
+        for ax in self.axes:
+            ax.clear()
+        self.canvas.draw_idle()
+        self.view.show_path(None)
+        self.view.update()
+        self.frame.value = 0
+        self.frame.max = self.play.max = 0
+        self.panel.dynamics.clear()
+
     def _frame(self, change=None) -> None:
         if self.trajectory is None:
             return
@@ -499,11 +515,15 @@ class TrajectoryPage:
     def _save(self, _=None) -> None:
         if self.trajectory is None:
             raise PanelInputError("recording: compute a trajectory first")
-        parts = self.panel.dynamics.parts
+        dynamics = self.panel.dynamics
+        parts = dynamics.parts if dynamics.trajectory is self.trajectory else None
         path = self.panel.recordings_dir / f"{self.panel.robot.name}-panel-trajectory.rrd"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        record_trajectory(self.panel.robot, self.trajectory, path, tau=None if parts is None else parts.total,
-                          name=f"{self.panel.robot.name} panel trajectory")
+        try:
+            record_trajectory(self.panel.robot, self.trajectory, path, tau=None if parts is None else parts.total,
+                              name=f"{self.panel.robot.name} panel trajectory",
+                              max_bytes=self.panel.max_recording_bytes)
+        except RecordingTooLarge as error:
+            raise PanelInputError(f"recording: {error}") from None
         self.message.value = _line(f"saved {shown_path(path)} (open it with: rerun {shown_path(path)})")
 
 
@@ -528,8 +548,17 @@ class DynamicsPage:
         self.axes = grid.T.ravel()[:robot.n]           # joints down the first column, then the second
         for ax in grid.T.ravel()[robot.n:]:
             ax.set_visible(False)
-        self.parts = None
+        self.parts = self.trajectory = None
         self.widget = w.VBox([self.progress, self.notes, self.peaks, self.message, self.canvas])
+
+    def clear(self) -> None:
+        """Forget the torques: no plots, peaks or notes until the next computation."""
+        self.parts = self.trajectory = None
+        self.notes.value = self.peaks.value = ""
+        for ax in self.axes:
+            ax.clear()
+        self.fig.legends.clear()
+        self.canvas.draw_idle()
 
     @shows_errors
     def compute(self) -> None:
@@ -537,6 +566,7 @@ class DynamicsPage:
         panel = self.panel
         robot = panel.robot
         trajectory = panel.trajectory.trajectory
+        self.clear()
         if trajectory is None:
             raise PanelInputError("torques: compute a trajectory on the trajectory page first")
         self.progress.layout.visibility = "visible"
@@ -548,7 +578,7 @@ class DynamicsPage:
             parts = torque_parts(robot, trajectory, learned=panel.models.id, progress=step)
         finally:
             self.progress.layout.visibility = "hidden"
-        self.parts = parts
+        self.parts, self.trajectory = parts, trajectory
         notes = [panel.models.id_note if panel.models.id is None else "", parts.note]
         self.notes.value = "<br>".join(_line(n, _NOTE) for n in notes if n)
         t = trajectory.t
@@ -604,10 +634,16 @@ class ArmPanel:
         recordings_dir: where "save as rerun recording" writes (default ``build/panel/``).
         near_singular: the singularity warning's threshold (:func:`~nfarm.publishing.panel_compute.pose_readout`).
         seed: the seed of Levenberg–Marquardt's starting guesses and restarts.
+        max_samples: the most samples of a trajectory
+            (:func:`~nfarm.publishing.panel_compute.joint_trajectory`: at 100 000 every page
+            action takes 1-2.5 s).
+        max_recording_bytes: the largest "save as rerun recording" (checked before writing;
+            100 000 samples of a 6-joint arm with its torques take about 75 MiB).
     """
 
     def __init__(self, robot: Robot | str | Path, *, models_dir: str | Path | None = None,
-                 recordings_dir: str | Path | None = None, near_singular: float = 0.02, seed: int = 0):
+                 recordings_dir: str | Path | None = None, near_singular: float = 0.02, seed: int = 0,
+                 max_samples: int = 100_000, max_recording_bytes: int = 128 * 2**20):
         self.load_notes: list[str] = []
         if not isinstance(robot, Robot):
             robots = shipped_robots()
@@ -619,6 +655,7 @@ class ArmPanel:
         self.robot = robot
         self.near_singular = near_singular
         self.seed = seed
+        self.max_samples, self.max_recording_bytes = max_samples, max_recording_bytes
         self.recordings_dir = Path(recordings_dir) if recordings_dir else BUILD / "panel"
         self.models = trained_models(robot, Path(models_dir) if models_dir else None)
         self.fk = FKPage(self)
@@ -643,7 +680,8 @@ class Panel:
     def __init__(self, robot: str = "intelbot5", **options):
         robots = shipped_robots()
         if robot not in robots:
-            raise ValueError(f"robot: one of {', '.join(robots)}, got {robot!r}")
+            raise ValueError(f"robot: one of {', '.join(robots)}, got "
+                             f"{repr(str(robot)) if isinstance(robot, str) else type(robot).__name__}")
         self.options = options
         self.chooser = w.Dropdown(options=list(robots), value=robot, description="robot")
         self.message = w.HTML()

@@ -39,6 +39,13 @@ _NOT_LOADED = "@jupyter-notebook/lab-extension"
 TOKEN_ENV = "NFARM_PANEL_TOKEN"
 
 
+def _plain(value) -> str:
+    """A value in a message: a number as it reads (``8866``, not ``np.int64(8866)``), text quoted."""
+    if isinstance(value, (int, float)) or type(value).__module__ == "numpy" and hasattr(value, "item"):
+        return str(value.item() if hasattr(value, "item") else value)
+    return repr(str(value)) if isinstance(value, str) else type(value).__name__
+
+
 def new_token() -> str:
     """A random token for the panel's URL (``secrets.token_urlsafe``: 256 bits, URL-safe)."""
     return secrets.token_urlsafe(32)
@@ -62,7 +69,7 @@ def voila_command(port: int, notebook: Path = PANEL_NOTEBOOK, *, connection_dir:
     for name, value, low in (("max_kernels", max_kernels, 1), ("cull_idle_s", cull_idle_s, 0),
                              ("cull_interval_s", cull_interval_s, 1)):
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise ValueError(f"{name}: a whole number >= {low} needed, got {value!r}")
+            raise ValueError(f"{name}: a whole number >= {low} needed, got {_plain(value)}")
     command = [sys.executable, "-m", "nfarm.publishing.panel_app", str(notebook), "--no-browser",
                f"--port={port}", "--Voila.port_retries=0", "--Voila.ip=127.0.0.1", f"--template={TEMPLATE}",
                f"--VoilaConfiguration.extension_denylist={_NOT_LOADED}",
@@ -97,7 +104,7 @@ def voila_environment(state_dir: Path, token: str) -> dict[str, str]:
 def check_port(port: int) -> None:
     """Raise ``ValueError`` (one line) unless ``port`` is a port number free on 127.0.0.1."""
     if isinstance(port, bool) or not isinstance(port, int) or not 1 <= port <= 65535:
-        raise ValueError(f"PORT must be a whole number from 1 to 65535, got {port!r}")
+        raise ValueError(f"PORT must be a whole number from 1 to 65535, got {_plain(port)}")
     with socket.socket() as s:
         try:
             s.bind(("127.0.0.1", port))
