@@ -411,3 +411,43 @@ def test_messages_show_numbers_as_they_read():
     assert pc.shown(np.float64(1.0)) == "1" and pc.shown(np.int64(3)) == "3"
     assert pc.shown([np.float64(0.25), np.float32(np.inf)]) == "[0.25, inf]"
     assert pc.shown(np.arange(10.0)) == "[0, 1, 2, 3, 4, 5, 6, 7, …]"
+
+
+@pytest.mark.parametrize("out, says", [
+    ("README.md", "--out: README.md exists and is not a directory"),
+    ("README.md/course", "lies under"),
+    ("/proc/self/course", "lies in /proc, a system directory"),
+    ("/dev/null", "--out: /dev/null exists and is not a directory"),
+    ("unwritable/course", "cannot be written (no permission in"),
+])
+def test_course_out_is_checked_as_the_other_commands_check_theirs(out, says, tmp_path, monkeypatch, capsys):
+    from nfarm import __main__ as cli
+    from nfarm.infra.paths import ROOT
+    from nfarm.publishing import course
+
+    def not_built(*args, **kwargs):
+        raise AssertionError("the course was built")
+
+    monkeypatch.setattr(course, "build_course", not_built)
+    monkeypatch.chdir(ROOT)
+    if out.startswith("unwritable"):
+        (tmp_path / "unwritable").mkdir()
+        out = str(tmp_path / out)
+        real = os.access
+        monkeypatch.setattr(os, "access", lambda p, mode: False if Path(p) == tmp_path / "unwritable" else real(p, mode))
+    assert cli.main(["course", "--no-teacher", "--out", out]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("course: --out: ") and says in err and err.count("\n") == 1
+
+
+def test_the_command_line_loads_the_library_only_in_its_commands():
+    """A Ctrl-C while the library loads (the first second of a sweep) meets the one line of
+    ``nfarm: interrupted``, not a traceback through the imports: ``__main__`` imports nothing of
+    the library at its top, only inside the commands that ``_main`` runs."""
+    import ast
+
+    from nfarm.infra.paths import ROOT
+
+    tree = ast.parse((ROOT / "lib" / "nfarm" / "__main__.py").read_text())
+    top = [node for node in tree.body if isinstance(node, ast.ImportFrom) and (node.level or 0) > 0]
+    assert not top, [ast.unparse(node) for node in top]

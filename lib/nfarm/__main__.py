@@ -9,13 +9,15 @@ import os
 import sys
 import warnings
 
-from .model.robot import ParamsError, ParamsWarning, load_robot
+# Nothing of the library is imported here, only in the commands: a Ctrl-C while the library
+# loads then meets _main's one line, not a traceback through the imports.
 
 
 def _check_one(path: str) -> str:
     """Validate one robot, study or sweep file (told apart by their required fields); the
     summary."""
     from .infra.reading import load_yaml
+    from .model.robot import load_robot
 
     if path.lower().endswith(".urdf"):
         robot = load_robot(path)
@@ -40,6 +42,8 @@ def _check_one(path: str) -> str:
 
 def check_params(files: list[str]) -> int:
     """Print ``FILE: ok`` or the error for each file; 0 if all are valid, else 2."""
+    from .model.robot import ParamsError, ParamsWarning
+
     status = 0
     for path in files:
         with warnings.catch_warnings(record=True) as caught:
@@ -76,6 +80,9 @@ def main(argv: list[str] | None = None) -> int:
     report.add_argument("--cell-timeout", type=_seconds, default=1800, metavar="SECONDS",
                         help="fail a cell that runs longer (default 1800; a positive number of "
                              "seconds, or 'none' for no limit)")
+    report.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="a running Dask scheduler (tcp://host:8786) for chapter 6's missing sweep "
+                             "cells (default: a local cluster); the published files are the same")
     datasets = sub.add_parser("datasets", help="build a study's training and test data sets")
     datasets.add_argument("study", metavar="STUDY", help="params/studies/<robot>.yaml")
     datasets.add_argument("--out", default=None, metavar="DIR",
@@ -115,7 +122,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "sweep":
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
     return report_command(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
-                          force=args.force, parallel=False if args.serial else None)
+                          force=args.force, parallel=False if args.serial else None,
+                          scheduler=args.scheduler)
 
 
 def panel_command(port: int) -> int:
@@ -141,16 +149,25 @@ def panel_command(port: int) -> int:
 
 
 def course_command(out: str | None, smoke: bool, only, teacher: bool) -> int:
-    """``python -m nfarm course``: 0, or 1 with one line on standard error."""
+    """``python -m nfarm course``: 0; 2 with one line for an ``--out`` that cannot be the
+    course's directory; 1 with one line on standard error for a failed build."""
     from .infra.notebook_runs import ReportError
     from .infra.paths import shown_path
     from .publishing.course import build_course
 
+    problem = _output_directory("--out", out)
+    if problem:
+        print(f"course: {problem}", file=sys.stderr)
+        return 2
     try:
         where = build_course(out, smoke=smoke, only=only, teacher=teacher,
                              progress=lambda text: print(text, file=sys.stderr))
     except (ValueError, ReportError) as exc:
-        print(f"course: {exc}", file=sys.stderr)
+        print(f"course: {str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__}",
+              file=sys.stderr)
+        return 1
+    except OSError as exc:           # a directory that turned unwritable while the course was built
+        print(f"course: cannot write {exc.filename or out}: {exc.strerror or type(exc).__name__}", file=sys.stderr)
         return 1
     print(f"{shown_path(where)}: student/, teacher/ and index.html")
     return 0
@@ -209,6 +226,8 @@ def _output_directory(option: str, out: str | None) -> str | None:
     if system:
         return f"{option}: {out} lies in {system}, a system directory: give a directory of your own"
     parent = next((p for p in (path, *path.parents) if p.exists()), None)
+    if parent is not None and not parent.is_dir():
+        return f"{option}: {out} lies under {parent}, a file, not a directory"
     if parent is None or not os.access(parent, os.W_OK | os.X_OK):
         return f"{option}: {out} cannot be written (no permission in {parent})"
     return None
@@ -216,6 +235,7 @@ def _output_directory(option: str, out: str | None) -> str | None:
 
 def make_datasets(study_file: str, out: str | None, force: bool) -> int:
     """Build (or reuse) every data set of a study; one line per file."""
+    from .infra.reading import ParamsError
     from .study.datasets import build_datasets
     from .study.study_files import load_study
 
@@ -244,6 +264,7 @@ def run_sweep_file(path: str, scheduler: str | None, workers: int | None, out: s
     """Run a sweep; one line per failed cell and a closing line. 0 if every cell succeeded,
     1 if some failed, 2 for a bad sweep file or an unreachable scheduler."""
     from .infra.paths import BUILD, project_path, shown_path
+    from .infra.reading import ParamsError
     from .study.sweep import load_sweep, run_sweep
 
     if workers is not None and workers < 0:
