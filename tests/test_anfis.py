@@ -12,6 +12,7 @@ import pytest
 from nfarm.learning import jang
 from nfarm.learning.anfis import ANFIS, ANFISMulti, ANFISWarning, load
 from nfarm.infra.reading import ParamsError, with_content_digest
+from nfarm.learning import hybrid
 from nfarm.learning.fuzzy import mf_gradients, mf_rows, mf_values
 
 
@@ -42,11 +43,15 @@ def test_premise_gradient_matches_finite_differences_of_the_error(mf, partition)
     model = ANFIS(n_mfs=[2, 3], mf=mf, partition=partition, n_rules=3, radius=0.6, epochs=1,
                   random_state=0)
     mfs, rules = model._initial_structure(X, y, [2, 3])
-    mu, factors, w, total, w_bar = model._layers(X, mfs, rules)
-    theta = model._least_squares(model._design(w_bar, X), y).reshape(len(rules), 3)
-    f = model._rule_outputs(X, theta)
-    analytic = model._premise_gradient(X, y, mfs, rules, mu, factors, total, f, (w_bar * f).sum(1))
-    error = lambda m: ((y - model._predict_with(X, m, rules, theta)) ** 2).sum()  # noqa: E731
+    w = hybrid.firing(mf, X, mfs, rules)
+    total, w_bar = hybrid.normalised(w)
+    Xa = np.column_stack([X, np.ones(len(X))])
+    theta = hybrid.least_squares(w_bar, Xa, y[:, None]).reshape(len(rules), 3)
+    f = hybrid.rule_outputs(Xa, theta)
+    y_hat = (w_bar * f).sum(1)
+    D = (-2.0 * (y - y_hat) / total)[:, None] * (f - y_hat[:, None]) * w      # (∂E/∂w) ⊙ w
+    analytic = hybrid.premise_gradient(mf, X, mfs, rules, D)
+    error = lambda m: ((y - hybrid.network_outputs(mf, X, X, m, rules, theta)) ** 2).sum()  # noqa: E731
     h = 1e-6
     for i, params in enumerate(mfs):
         for k, p in np.ndindex(params.shape):
@@ -162,6 +167,18 @@ def test_error_goal_stops_early():
     assert model.n_epochs_ < 100 and model.loss_curve_[-1] <= 1.0
 
 
+def first_order_sugeno(X, bells, rules, theta):
+    """Jang's five layers written out from the paper, sample by sample and rule by rule:
+    bells ``μ = 1 / (1 + |(x − c)/a|^{2b})``, product firing, normalisation, ``f_r = p_r·x + r_r``."""
+    out = []
+    for x in X:
+        w = [math.prod(1 / (1 + abs((x[i] - bells[i][k][2]) / bells[i][k][0]) ** (2 * bells[i][k][1]))
+                       for i, k in enumerate(rule)) for rule in rules]
+        f = [sum(p * v for p, v in zip(t[:-1], x)) + t[-1] for t in theta]
+        out.append(sum(wr * fr for wr, fr in zip(w, f)) / sum(w))
+    return np.array(out)
+
+
 @pytest.mark.parametrize("solver", ["normal", "lstsq"])
 def test_one_epoch_is_genfis1_s_grid_and_the_least_squares_consequents(solver):
     """After one epoch (no premise step yet) the model is MATLAB genfis1's grid on the data's
@@ -190,18 +207,6 @@ def test_one_epoch_is_genfis1_s_grid_and_the_least_squares_consequents(solver):
     np.testing.assert_allclose(model.predict(Xc), reference, rtol=1e-6)
     np.testing.assert_allclose(model.loss_curve_[0], np.sqrt(np.mean((design @ theta.ravel() - y) ** 2)),
                                rtol=1e-7)
-def first_order_sugeno(X, bells, rules, theta):
-    """Jang's five layers written out from the paper, sample by sample and rule by rule:
-    bells ``μ = 1 / (1 + |(x − c)/a|^{2b})``, product firing, normalisation, ``f_r = p_r·x + r_r``."""
-    out = []
-    for x in X:
-        w = [math.prod(1 / (1 + abs((x[i] - bells[i][k][2]) / bells[i][k][0]) ** (2 * bells[i][k][1]))
-                       for i, k in enumerate(rule)) for rule in rules]
-        f = [sum(p * v for p, v in zip(t[:-1], x)) + t[-1] for t in theta]
-        out.append(sum(wr * fr for wr, fr in zip(w, f)) / sum(w))
-    return np.array(out)
-
-
 
 
 @pytest.mark.parametrize("partition, extra", [("fcm", dict(n_rules=4)), ("subtractive", dict(radius=0.5))])
@@ -485,7 +490,7 @@ def test_fast_grid_prediction_equals_the_training_path(n_mfs):
     y = np.sin(3 * X[:, 0]) + X[:, 1] * X[:, 3] - X[:, 2] ** 2
     model = ANFIS(n_mfs=n_mfs, epochs=3, random_state=0).fit(X, y)
     assert model._grid_sizes() == n_mfs
-    slow = model._predict_with(X, model.mfs_, model.rules_, model.consequents_)
+    slow = hybrid.network_outputs(model.mf, X, X, model.mfs_, model.rules_, model.consequents_)
     np.testing.assert_allclose(model.predict(X), slow, rtol=0, atol=1e-13)
 
 
@@ -513,12 +518,11 @@ def test_premise_inputs_equal_inputs_with_one_function(mf, partition):
 
 def test_normal_equations_in_blocks_equal_the_whole(monkeypatch):
     """A design too large to form is summed over blocks of samples: the same consequents."""
-    import nfarm.learning.anfis as anfis_module
     rng = np.random.default_rng(4)
     X = rng.random((500, 6))
     y = X[:, 0] * X[:, 1] + np.cos(2 * X[:, 2]) + 0.1 * X[:, 5]
     whole = ANFIS(n_mfs=2, premise_inputs=[0, 1, 2], epochs=3).fit(X, y)
-    monkeypatch.setattr(anfis_module, "_DESIGN_BYTES", 8 * 56 * 37)     # 37 rows per block
+    monkeypatch.setattr(hybrid, "DESIGN_BYTES", 8 * 56 * 37)     # 37 rows per block
     blocks = ANFIS(n_mfs=2, premise_inputs=[0, 1, 2], epochs=3).fit(X, y)
     np.testing.assert_allclose(blocks.consequents_, whole.consequents_, rtol=1e-7, atol=1e-9)
     np.testing.assert_allclose(blocks.loss_curve_, whole.loss_curve_, rtol=1e-9)
@@ -556,10 +560,6 @@ def test_jang_data_draws_are_seeded_uniform_and_keep_the_checking_grid(seed):
     assert not np.array_equal(X3, jang.three_input_data(seed=seed + 1)[0])
 
 
-def test_fuzzy_c_means_stops_at_its_tolerance():
-    """A looser tolerance stops the clustering sooner; the partition it starts from hardly moves."""
-    X = np.random.default_rng(0).random((400, 3))
-    y = np.sin(3 * X).sum(axis=1)
 def test_jang_grids_are_his_training_and_checking_points():
     """Jang (1993), example 2: 216 training points on the integer grid 1…6 and 125 checking
     points on 1.5…5.5, of ``(1 + x^0.5 + y^−1 + z^−1.5)²``."""
@@ -571,6 +571,10 @@ def test_jang_grids_are_his_training_and_checking_points():
     assert jang.three_input_data()[1][0] == 16.0                    # x = y = z = 1: (1 + 1 + 1 + 1)²
 
 
+def test_fuzzy_c_means_stops_at_its_tolerance():
+    """A looser tolerance stops the clustering sooner; the partition it starts from hardly moves."""
+    X = np.random.default_rng(0).random((400, 3))
+    y = np.sin(3 * X).sum(axis=1)
     tight = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_tolerance=1e-9, random_state=0).fit(X, y)
     loose = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_tolerance=1e-3, random_state=0).fit(X, y)
     one = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_max_iter=1, random_state=0).fit(X, y)

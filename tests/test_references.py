@@ -72,39 +72,13 @@ def test_mackey_glass_before_the_delay_acts_is_the_exact_decay(h):
     assert (np.abs(x - X0 * np.exp(-B * t)) <= bound + 1e-15).all()
 
 
-def jump_step_error(t: np.ndarray, h: float) -> np.ndarray:
-    """The error of ``jang.mackey_glass`` left by its step that ends at t = τ: the step's last
-    stage takes the delayed value x(0) = x0, the history's value just after its jump, where the
-    true delayed value is 0 over the whole step; RK4 weighs that stage by h/6, an error of
-    ``h/6 · a x0 / (1 + x0¹⁰)`` at t = τ. Until 2τ its delayed value is error-free, so it decays
-    as ``e^{−b (t − τ)}``."""
-    jump = A * X0 / (1 + X0 ** 10)
-    return np.where(t >= TAU, h / 6 * jump * np.exp(-B * (t - TAU)), 0.0)
-
-
-def test_mackey_glass_is_the_exact_solution_but_for_the_step_at_the_jump(exact_two_delays):
-    """Over the first two delays (t ≤ 2τ, before the error feeds back through the delay) the
-    series is the high-resolution solution plus the jump step's first-order error
-    (:func:`jump_step_error`), to second order: linear interpolation of the delayed value at
-    the half steps leaves O(h²), so halving h divides what is left by 4 (3.5–4.5 allowed;
-    measured 7.9e-6 → 2.0e-6 of a jump error of 5.6e-4 at h = 0.1)."""
-    t = np.arange(len(exact_two_delays), dtype=float)
-    rest = {}
-    for h in (0.1, 0.05):
-        x = jang.mackey_glass(t_end=2 * TAU, h=h)
-        error = x - exact_two_delays
-        assert np.abs(error).max() > 0.5 * jump_step_error(t, h).max()     # the first-order part is there
-        rest[h] = np.abs(error - jump_step_error(t, h)).max()
-    assert rest[0.1] < 0.05 * jump_step_error(t, 0.1).max()
-    assert 3.5 < rest[0.1] / rest[0.05] < 4.5, rest
-
-
-@pytest.mark.xfail(strict=True, reason="jang.mackey_glass's step ending at t = τ evaluates its last stage "
-                                       "at x(0) though its docstring says it sees 0 up to its end: an "
-                                       "O(h) error (h/6 · a x0/(1 + x0¹⁰) = 5.6e-4 at h = 0.1)")
 def test_mackey_glass_is_second_order_accurate(exact_two_delays):
-    """What the docstring promises (only the half-step stages interpolate; the step that crosses
-    t = τ sees 0 up to its end): second-order convergence to the exact solution."""
+    """What the docstring promises (only the half-step stages interpolate; the step that ends at
+    t = τ sees 0 up to its end): over the first two delays (before an error feeds back through
+    the delay) second-order convergence to the high-resolution solution — linear interpolation
+    of the delayed value at the half steps leaves O(h²), so halving h divides the error by 4
+    (3.5–4.5 allowed). Before issue 40's fix the step ending at τ took x(0) at its last stage,
+    an O(h) error of h/6 · a x0/(1 + x0¹⁰) = 5.6e-4 at h = 0.1."""
     errors = [np.abs(jang.mackey_glass(t_end=2 * TAU, h=h) - exact_two_delays).max() for h in (0.1, 0.05)]
     assert 3.5 < errors[0] / errors[1] < 4.5, errors
 

@@ -63,7 +63,9 @@ def mackey_glass(t_end: float = 1200.0, *, tau: float = 17.0, x0: float = 1.2, h
     f = lambda value, delayed: a * delayed / (1 + delayed**10) - b * value  # noqa: E731
     past = lambda k: x[k] if k >= 0 else 0.0  # noqa: E731  x at step k (0 before the start)
     for k in range(steps):
-        start, end = past(k - delay), past(k + 1 - delay)
+        # The history jumps from 0 to x0 at t = 0: the step that ends at t = τ sees 0 up to its
+        # end (its last stage takes the left limit), the next one starts from x0.
+        start, end = past(k - delay), (past(k + 1 - delay) if k + 1 > delay else 0.0)
         # Before t = 0 the history is exactly 0: the half step before the jump at t = τ is too.
         middle = 0.5 * (start + end) if k >= delay else 0.0
         if hold_delay:

@@ -260,7 +260,7 @@ def _first(data: Mapping, keys: tuple[str, ...], fraction: float, samples: int |
     return {k: data[k][:count][::stride] for k in keys}
 
 
-_ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint_options")
+_ANFIS_KEYS = ("partition", "n_mfs", "n_rules", "radius", "mf", "epochs", "joint_options", "patience")
 
 
 _POSES = {"region": "ik", "full_range": "ik_full"}
@@ -406,7 +406,7 @@ def _seed_like_split(p: dict, study, states: int) -> dict:
 
 def _id_model(p: dict, models: Path) -> tuple[LearnedID, Path]:
     """A ``learned_id`` cell's unfitted model and the directory its fitted one is kept in."""
-    options = {k: p[k] for k in ("inputs", "residual", *_ANFIS_KEYS) if p[k] is not None}
+    options = {k: p[k] for k in ("inputs", "residual", "shared_premises", *_ANFIS_KEYS) if p[k] is not None}
     model = LearnedID(**options, random_state=p["seed"])
     return model, _options_dir(models, "id", {**model.get_params(), "fraction": p["fraction"],
                                                "stride": p["stride"], "torques": p["torques"],
@@ -469,7 +469,7 @@ def idle(p: dict) -> dict:
 _STUDY = {"study_file": REQUIRED, "smoke": False, "data_dir": None, "models_dir": None,
           "seed": 0, "fraction": 1.0}
 _ANFIS = {"partition": "grid", "n_mfs": None, "n_rules": None, "radius": None, "mf": None,
-          "epochs": 10, "joint_options": None}
+          "epochs": 10, "joint_options": None, "patience": None}
 
 JOBS: dict[str, Job] = {
     "anfis_benchmark": Job(
@@ -489,7 +489,7 @@ JOBS: dict[str, Job] = {
     "learned_id": Job(
         learned_id,
         {**_STUDY, "stride": 1, "torques": "rigid", "seed_like": None, "inputs": "own", "residual": False,
-         **_ANFIS},
+         "shared_premises": False, **_ANFIS},
         ("val_rmse", "val_nrmse", "worst_nrmse", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned ID, one ANFIS per joint",

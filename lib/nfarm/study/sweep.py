@@ -539,11 +539,13 @@ def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
 
 
 def sweeps_results(sweeps: Sequence[Sweep], sweeps_dir: str | os.PathLike | None = None, *,
-                   workers: int | None = None) -> list[list[CellResult]]:
+                   workers: int | None = None, scheduler: str | None = None) -> list[list[CellResult]]:
     """:func:`sweep_results` of several sweeps, their unfinished cells run on one cluster
-    (:func:`run_sweeps`): a chapter runs everything it will show first, then reads it back."""
+    (:func:`run_sweeps`: a local one of ``workers`` processes, or the running Dask scheduler at
+    ``scheduler``): a chapter runs everything it will show first, then reads it back."""
     base = project_path(sweeps_dir) if sweeps_dir is not None else BUILD / "sweeps"
-    every = run_sweeps(sweeps, [base / s.name for s in sweeps], workers=workers, summary=False)
+    every = run_sweeps(sweeps, [base / s.name for s in sweeps], workers=workers, scheduler=scheduler,
+                       summary=False)
     for sweep, results in zip(sweeps, every):
         for r in results:
             if not r.ok:
