@@ -22,7 +22,7 @@ export PYTHONHASHSEED := 0
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
-.PHONY: setup report test bench sweep course lock lab panel verify clean distclean
+.PHONY: setup report test bench sweep course lock lab panel verify clean distclean worker
 
 setup: $(STAMP)
 
@@ -42,8 +42,10 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 	@install -D -m 644 jupyter/lab-overrides.json $(VENV)/share/jupyter/lab/settings/overrides.json
 	@touch $@
 
+# make report [SCHEDULER=tcp://host:8786]: chapter 6's missing sweep cells on a running Dask
+# cluster (its workers: this checkout and `make setup`); the published files are the same.
 report: $(STAMP)
-	$(REPORT_ENV) $(PY) -m nfarm report
+	$(REPORT_ENV) $(PY) -m nfarm report $(if $(SCHEDULER),--scheduler "$(SCHEDULER)")
 
 # Checks the checkout's figures/ against figures/MANIFEST.sha256 without regenerating anything.
 verify: $(STAMP)
@@ -68,6 +70,13 @@ course: $(STAMP)
 sweep: $(STAMP)
 	@test -n "$(SWEEP)" || { echo "make sweep: name a sweep file, e.g. make sweep SWEEP=params/sweeps/smoke.yaml" >&2; exit 2; }
 	$(REPORT_ENV) $(PY) -m nfarm sweep $(SWEEP) $(SWEEP_ARGS)
+
+# make worker SCHEDULER=tcp://host:8786 [WORKERS=N]: Dask workers for `make report SCHEDULER=…` and
+# `make sweep`, on any machine with this checkout: the report's numerics, one thread per cell, so
+# that the cells they run are the bits a local run makes (and the chapters reuse their models).
+worker: $(STAMP)
+	@test -n "$(SCHEDULER)" || { echo "make worker: name the scheduler, e.g. make worker SCHEDULER=tcp://host:8786" >&2; exit 2; }
+	$(REPORT_ENV) $(VENV)/bin/dask worker "$(SCHEDULER)" --nthreads 1 --nworkers $(or $(WORKERS),$(shell nproc))
 
 lock: $(STAMP)
 	$(UV) pip compile pyproject.toml --extra test --extra tools --generate-hashes \

@@ -680,3 +680,24 @@ def test_the_library_reports_by_return_and_exception_and_prints_nothing(project,
         library_build(only=["02"], **dirs)
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err == ""
+
+
+def test_a_scheduler_reaches_only_the_chapters_that_run_sweep_cells_and_is_no_input(tmp_path, monkeypatch, capsys):
+    """`make report SCHEDULER=…`: the address goes to the chapters declaring ``sweep_scheduler``
+    (chapter 6) and nowhere else; where cells run is not part of a chapter's key, so a report
+    made without it is up to date with it, and both publish into figures/."""
+    notebooks = tmp_path / "notebooks"
+    notebooks.mkdir()
+    make_chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"')
+    make_chapter(notebooks / "06_training.ipynb", 'study_file = "sa.yaml"\nsweep_scheduler = None')
+    runs = []
+    monkeypatch.setattr(report, "run_notebook", fake_run(runs))
+    dirs = dict(notebooks_dir=notebooks, figures_dir=tmp_path / "figures", build_dir=tmp_path / "build",
+                arms=[report.Edition("a", "sa.yaml", "ra.yaml", True)], parallel=False)
+    assert build_report(**dirs) == 0 and len(runs) == 2
+    assert build_report(scheduler="tcp://127.0.0.1:8786", **dirs) == 0 and len(runs) == 2   # up to date
+    assert capsys.readouterr().err.count("up to date") == 2
+    assert build_report(scheduler="tcp://127.0.0.1:8786", force=True, **dirs) == 0
+    assert runs[2:] == [("01_robot.ipynb", {"smoke": False}),
+                        ("06_training.ipynb", {"smoke": False, "sweep_scheduler": "tcp://127.0.0.1:8786"})]
+    assert (tmp_path / "figures" / "tables" / "06_given.csv").exists()          # published, not a variant

@@ -169,7 +169,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  notebooks_dir: Path = NOTEBOOKS, figures_dir: Path = FIGURES,
                  build_dir: Path = BUILD, extra_parameters: dict | None = None,
                  cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
-                 force: bool = False, parallel: bool | None = None,
+                 force: bool = False, parallel: bool | None = None, scheduler: str | None = None,
                  say: Callable[[str], None] = _quiet) -> ReportRun:
     """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
     export HTML and write the index.
@@ -183,6 +183,11 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     ``parallel`` (default: when this process may use two CPUs or more): the editions' chapters
     run side by side, one process per edition, each in chapter order (module docstring); the
     chapters that compare the editions run after them. Otherwise one after the other.
+
+    ``scheduler``: the address of a running Dask scheduler (``tcp://host:8786``) to which the
+    chapters that run sweep cells (those declaring ``sweep_scheduler``: chapter 6) send the cells
+    they miss. Where a cell runs changes none of its results, so it is neither part of a
+    chapter's key nor a reason to publish elsewhere.
 
     ``say`` receives a line per chapter as it starts, is found up to date, or is published
     (``python -m nfarm report`` prints them).
@@ -244,7 +249,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         stage.mkdir(parents=True)
         say(f"{label} …")
         try:
-            run_notebook(nb, executed, {**parameters, "out_dir": shown_path(stage)},
+            where = {"sweep_scheduler": scheduler} if scheduler and "sweep_scheduler" in declared[nb.name] else {}
+            run_notebook(nb, executed, {**parameters, **where, "out_dir": shown_path(stage)},
                          progress=sys.stderr.isatty() and not side_by_side, cell_timeout=cell_timeout,
                          remove_tags=COURSE_TAGS)
             published = publish_chapter(stage, figures_dir, prefix, arm.subdir)
