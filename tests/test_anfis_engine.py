@@ -232,3 +232,18 @@ def test_learned_id_refuses_shared_premises_it_cannot_share(id_split, kwargs, me
     kwargs = {"shared_premises": True, "n_mfs": 1, **kwargs}
     with pytest.raises(ValueError, match=message):
         LearnedID(**kwargs).fit(robot, train)
+
+
+@pytest.mark.parametrize("shape", [(3000, 50), (120, 80)])
+@pytest.mark.parametrize("outputs", [None, 3])
+def test_the_orthogonal_fall_back_is_the_minimum_norm_solution(shape, outputs):
+    """Rank-deficient designs (a repeated column, a sum of two): the fall-back's solution is the
+    pseudo-inverse's (an independent SVD), tall designs through their QR alike. scipy's gelsy
+    with its default cutoff (machine epsilon) keeps a direction of rounding here and returns
+    coefficients of 1e13 with a larger residual."""
+    rng = np.random.default_rng(sum(shape))
+    A = rng.normal(size=shape)
+    A[:, 5] = A[:, 6]
+    A[:, 7] = A[:, 1] + A[:, 2]
+    y = rng.normal(size=(shape[0],) if outputs is None else (shape[0], outputs))
+    np.testing.assert_allclose(hybrid._orthogonal(A, y), np.linalg.pinv(A) @ y, rtol=0, atol=1e-10)
