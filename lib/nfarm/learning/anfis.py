@@ -102,8 +102,8 @@ class ANFIS(Estimator):
             iterations cost O(samples × clusters) each. Measured on intelbot5's 20 000
             arm-plane training poses, 20 clusters, 10 epochs, seeds 0–2, one thread: the
             worst joint's validation RMSE is 1.40–1.50° from 3 000 samples against 1.40–1.41°
-            from all (1.44–1.62° from 1 000, 1.37–1.54° from 5 000), and the fit takes 13–18 s
-            against 92–102 s.
+            from all (1.44–1.62° from 1 000, 1.37–1.54° from 5 000), at a fraction of the
+            clustering's cost (``benchmarks/bench_anfis_train.py`` times the phases of a fit).
         radius: cluster radius for ``"subtractive"``, in the unit hypercube of the data.
         epochs: training epochs.
         step_size, step_increase, step_decrease: Jang's step size k and its factors.
