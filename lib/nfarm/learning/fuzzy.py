@@ -151,8 +151,8 @@ def fuzzy_cmeans(data: np.ndarray, c: int, *, m: float = 2.0, tolerance: float =
         >>> rng = np.random.default_rng(0)
         >>> data = np.concatenate([rng.normal(0, 0.1, (50, 2)), rng.normal(1, 0.1, (50, 2))])
         >>> centres, u, iterations = fuzzy_cmeans(data, 2, seed=0)
-        >>> np.round(np.sort(centres[:, 0]), 1), u.shape
-        (array([-0. ,  1. ]), (2, 100))
+        >>> bool(np.abs(np.sort(centres[:, 0]) - [0.0, 1.0]).max() < 0.05), u.shape, iterations < 1000
+        (True, (2, 100), True)
     """
     eps = np.finfo(float).eps
     data = np.asarray(data, dtype=float)

@@ -102,10 +102,10 @@ def firing(kind: str, Xp: np.ndarray, mfs: Sequence[np.ndarray], rules: np.ndarr
 
     Example:
         >>> from nfarm.learning.fuzzy import grid_params
-        >>> mfs = [grid_params("gauss", 0.0, 1.0, 2)] * 2
+        >>> mfs = [grid_params("gauss", 0.0, 1.0, 2)] * 2      # functions at 0 and 1, 1/16 at the other
         >>> rules = np.array([[0, 0], [0, 1], [1, 0], [1, 1]])
         >>> firing("gauss", np.array([[0.0, 1.0]]), mfs, rules).round(3)
-        array([[0.25 , 1.   , 0.062, 0.25 ]])
+        array([[0.062, 1.   , 0.004, 0.062]])
     """
     N, R = len(Xp), len(rules)
     w = np.empty((N, R))
