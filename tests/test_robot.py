@@ -12,7 +12,7 @@ import yaml
 
 from conftest import ROBOT_FILES, load_quietly
 from nfarm.__main__ import main
-from nfarm.infra.paths import ROOT
+from nfarm.infra.paths import PARAMS, ROOT
 from nfarm.model.robot import ParamsError, ParamsWarning, load_robot, robot_from_dict, robot_to_dict
 
 INTELBOT5 = ROOT / "params" / "robots" / "intelbot5.yaml"
@@ -111,7 +111,7 @@ BAD = {
     "tool last row": (set_top("tool", [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 1, 1]]), r"tool\[3\]: last row must be \[0, 0, 0, 1\]"),
     "tool not orthonormal": (set_top("tool", [[1, 0.1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), r"tool: rotation part must be orthonormal"),
     "tool reflection": (set_top("tool", [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), r"tool: rotation part must have determinant \+1"),
-    "empty name": (set_top("name", " "), r"name: must be a non-empty string"),
+    "empty name": (set_top("name", " "), r"name: must be 1-64 letters, digits"),
     "not a mapping": (lambda d: d.clear(), r"name: required field is missing"),
 }
 
@@ -190,3 +190,13 @@ def test_named_poses_are_the_files_own_checked_and_outside_the_hash(tmp_path):
         broken.write_text(bare + "poses_deg:\n" + bad)
         with pytest.raises(ParamsError, match=message):
             load_robot(broken)
+
+
+@pytest.mark.parametrize("name", ["../escape", "a/b", ".hidden", "", "with space", "x" * 65, "tab\tname", "a..b", 3])
+def test_a_robot_name_that_could_not_name_a_directory_is_refused_in_one_line(name):
+    """A robot's name names directories and files (data sets, models, recordings): no path
+    separators, no '..', nothing a file system would read otherwise."""
+    data = robot_to_dict(load_robot(PARAMS / "robots" / "intelbot5.yaml"))
+    data["name"] = name
+    with pytest.raises(ParamsError, match=r"name: must be 1-64 letters, digits, '_', '-' or '\.'"):
+        robot_from_dict(data)

@@ -5,6 +5,8 @@ line naming the file, the element and the rule."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import time
 import warnings
 import xml.etree.ElementTree as ET
@@ -234,9 +236,11 @@ NAMES = ['a&b', 'x<y>z', 'say "hi"', "it's", 'tab\tnew\nline', '&amp;', ']]>', '
 def test_names_with_xml_characters_are_escaped_and_read_back(tmp_path):
     robot = read(tmp_path, GOOD)
     for name in NAMES:
-        named = robot_from_dict({**robot_to_dict(robot), "name": name,
-                                 "joints": [{**j, "name": name + str(i)}
-                                            for i, j in enumerate(robot_to_dict(robot)["joints"])]})
+        # a robot file's name is a plain file name (robot.py's ROBOT_NAME); a URDF's is any text
+        named = dataclasses.replace(robot_from_dict({**robot_to_dict(robot), "name": "named",
+                                                     "joints": [{**j, "name": name + str(i)} for i, j in
+                                                                enumerate(robot_to_dict(robot)["joints"])]}),
+                                    name=name)
         for prefix in ("", "p&<\"'_"):
             text = to_urdf(named, prefix=prefix)
             root = ET.fromstring(text)                             # well-formed

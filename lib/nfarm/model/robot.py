@@ -26,6 +26,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import re
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -224,11 +225,24 @@ def load_robot(path: str | Path) -> Robot:
     return robot_from_dict(data, source=shown_path(path))     # messages name it relative to the checkout
 
 
+#: A robot's name: it names directories and files (``build/datasets/<name>/``, models,
+#: recordings), so letters, digits, ``_``, ``-`` and ``.``, starting with a letter or digit.
+ROBOT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
+
+
+def _robot_name(v, value) -> str:
+    """``value`` as a robot's name (:data:`ROBOT_NAME`), or a one-line error naming the field."""
+    if not isinstance(value, str) or not ROBOT_NAME.fullmatch(value) or ".." in value:
+        v.fail("name", f"must be 1-64 letters, digits, '_', '-' or '.', starting with a letter or digit "
+                       f"and without '..' (it names directories and files), got {show(value)}")
+    return value
+
+
 def _from_described_urdf(data: dict, path: Path) -> Robot:
     """A robot file naming a URDF (``urdf`` relative to the file) and what to take from it."""
     v = _Validator(str(path))
     v.mapping(data, "", URDF_FILE_KEYS)
-    name = v.string(data["name"], "name")
+    name = _robot_name(v, data["name"])
     urdf = path.parent / v.string(data["urdf"], "urdf")
     if urdf.suffix.lower() not in _READERS:
         v.fail("urdf", f"must name a .urdf file, got {show(data['urdf'])}")
@@ -278,7 +292,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
     """
     v = _Validator(source)
     v.mapping(data, "", TOP_KEYS)
-    name = v.string(data["name"], "name")
+    name = _robot_name(v, data["name"])
     convention = v.choice(data["convention"], "convention", CONVENTIONS)
     gravity = np.array(v.vector(data["gravity"], "gravity", 3))
     tool = v.pose(data["tool"], "tool") if data.get("tool") is not None else np.eye(4)

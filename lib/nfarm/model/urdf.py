@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import codecs
 import contextlib
+import dataclasses
 import json
 import math
 import os
@@ -884,10 +885,13 @@ def _build_robot(source: str, name: str, description: str, frames: list[np.ndarr
                 warnings.filterwarnings(
                     "ignore", re.escape(f"{source}: joints[{i}].") + r"(?:a|d|com\[\d\]): .*millimetres\?",
                     ParamsWarning)
-            return robot_from_dict({"name": name, "convention": "standard",
-                                    "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
-                                    "tool": tool.tolist(), "joints": joints,
-                                    "description": description}, source=source)
+            # A URDF's name is any text; a robot file's must name directories (ROBOT_NAME): the
+            # file's checks run under a plain name, and the robot keeps its URDF's.
+            robot = robot_from_dict({"name": "urdf", "convention": "standard",
+                                     "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                     "tool": tool.tolist(), "joints": joints,
+                                     "description": description}, source=source)
+            return dataclasses.replace(robot, name=name)
     except ParamsError as exc:
         raise ParamsError(f"{exc} (converted from the URDF)") from None
 

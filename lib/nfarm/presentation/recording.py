@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -132,7 +133,8 @@ def _log_arm(rec, robot: Robot, q: np.ndarray, times, tmp: Path, *, prefix: str 
              color: tuple[float, float, float] = (0.85, 0.55, 0.15)) -> None:
     """The arm's URDF (static; links and joints named with ``prefix``) and its joint motion
     ``q (K, n)`` [rad] at ``times``, under ``/{prefix}transforms/{joint}``."""
-    urdf = tmp / f"{prefix}{robot.name}.urdf"
+    # the robot's name as one plain file name (a URDF's robot name may be any text)
+    urdf = tmp / (re.sub(r"[^A-Za-z0-9_.-]", "_", f"{prefix}{robot.name}").lstrip(".") + ".urdf")
     urdf.write_text(to_urdf(robot, prefix=prefix, color=color), encoding="utf-8")
     rec.log_file_from_path(urdf, static=True)
     rec.flush()

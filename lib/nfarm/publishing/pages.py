@@ -59,7 +59,7 @@ def install_mathjax(report_dir: Path) -> None:
 
 
 def _nav(links: dict[str, tuple[str, str] | None]) -> str:
-    parts = [f"<a href='{html.escape(href)}'>{label}: {html.escape(title)}</a>"
+    parts = [f"<a href='{html.escape(href)}'>{html.escape(label)}: {html.escape(title)}</a>"
              for label, link in links.items() if link for href, title in [link]]
     return ("<nav style='font-family:sans-serif;margin:1em 2em;display:flex;gap:2em'>"
             + "".join(parts) + "</nav>")
@@ -289,7 +289,7 @@ def _write_index(report_dir: Path, figures_dir: Path,
     parts.append("</dl>")
     for prefix, title, page in compared:           # the arms side by side, first
         parts.append(f"<h2 id='ch{prefix}'>{html.escape(title)}</h2>"
-                     f"<p><a href='{page}'>The chapter in full</a></p>")
+                     f"<p><a href='{html.escape(str(page))}'>The chapter in full</a></p>")
         parts += _figures_html(figures_dir, "", prefix, shown)
 
     def own(edition: Edition, page: str) -> bool:
@@ -309,9 +309,9 @@ def _write_index(report_dir: Path, figures_dir: Path,
     for edition in arms:
         entries = pages.get(edition.name, [])
         if entries:
-            parts.append(f"<h2 id='{edition.name}'>Chapters for {html.escape(edition.name)}"
+            parts.append(f"<h2 id='{html.escape(edition.name)}'>Chapters for {html.escape(edition.name)}"
                          f"{' (the dissertation’s arm)' if edition.primary else ''}</h2><ol>")
-            parts += [f"<li value='{int(e[0])}'><a href='{read_at(edition, e)}'>{html.escape(e[1])}</a> · <a "
+            parts += [f"<li value='{int(e[0])}'><a href='{html.escape(str(read_at(edition, e)))}'>{html.escape(e[1])}</a> · <a "
                       f"href='#{anchor(edition, e)}'>its figures and tables</a>"
                       f"{'' if own(edition, e[2]) or e in compared else ' (the same for every arm)'}"
                       f"</li>" for e in entries]
@@ -327,8 +327,8 @@ def _write_index(report_dir: Path, figures_dir: Path,
             prefix, title, page = entry
             if entry in compared or not own(edition, page):
                 continue
-            parts.append(f"<h3 id='{edition.name}-ch{prefix}'>{html.escape(edition.name)} · "
-                         f"{html.escape(title)}</h3><p><a href='{page}'>The chapter in full "
+            parts.append(f"<h3 id='{html.escape(edition.name)}-ch{prefix}'>{html.escape(edition.name)} · "
+                         f"{html.escape(title)}</h3><p><a href='{html.escape(str(page))}'>The chapter in full "
                          f"(prose, code and results)</a></p>")
             parts += _figures_html(figures_dir, edition.subdir, prefix, shown)
     parts.append("</body></html>\n")
