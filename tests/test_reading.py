@@ -60,7 +60,7 @@ def alias_bomb() -> str:
      r"x.yaml: joints\[1\].qlim: must lie within \[-2π, 2π\] rad, got \[-90.0, 90.0\] \(degrees by mistake\?\)"),
     ("inertia: [5.1e-4, 1.0e-4, 5.1e-4, 0.0, 0.0, 0.0]", "inertia: [1e-20, 1e-20, 1e-20, 5e-20, 0, 0]",
      r"joints\[0\].inertia: must be positive semi-definite, got principal moments \[-4e-20"),
-    ("name: intelbot5", "name: true", r"x.yaml: name: must be a non-empty string, got True"),
+    ("name: intelbot5", "name: true", r"x.yaml: name: must be 1-64 letters, digits, .*, got True"),
 ])
 def test_bad_files_are_one_line_errors(tmp_path, old, new, message):
     path = variant(tmp_path, old, new)
