@@ -25,7 +25,7 @@ per phase, in each engine.
 Targets (issue 40, on 2 cores): IK ≥ 3× per epoch and per fit; the ID design's models ≥ 3×
 for the same epochs at equal or better validation error; peak memory ≤ 2 GB for the ID design on
 all training states; ``bench_anfis.py``'s comparison with anfis-toolbox stays ≥ 10×.
-About 15 minutes on one core.
+About 6 minutes on one core.
 """
 
 from __future__ import annotations
