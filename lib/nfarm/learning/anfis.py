@@ -116,8 +116,9 @@ class ANFIS(Estimator):
         progress: show a progress bar over the epochs (tqdm; in a notebook, a widget).
         premise_inputs: the columns of ``X`` the rules are built over (``None``: all); every
             column enters the consequents.
-        patience: with validation data, stop once the validation error has not fallen for
-            this many epochs (``None``: train every epoch); the best epoch is kept either way.
+        patience: stop once the validation error (the training error without validation
+            data) has not fallen for this many epochs (``None``: train every epoch); the best
+            epoch is kept either way.
 
     Learned attributes: ``mfs_`` (per premise input, ``(m_i, p)`` parameters),
     ``rules_ (R, n_p)`` (the function of each premise input in each rule),

@@ -88,22 +88,23 @@ def log_grades(kind: str, x: np.ndarray, params: np.ndarray) -> np.ndarray:
     return -((x - c) ** 2) / (2 * sigma**2)
 
 
-def mf_log_gradients(kind: str, x: np.ndarray, params: np.ndarray, mu: np.ndarray | None = None
-                     ) -> np.ndarray:
+def mf_log_gradients(kind: str, x: np.ndarray, params: np.ndarray) -> np.ndarray:
     """``(∂μ/∂θ) / μ (N, m, p)``: the derivatives of :func:`mf_gradients` divided by the grade,
-    finite where the grade underflows (``mu``, the bell's grades, is computed when not given).
+    finite where the grade underflows.
 
     A rule's firing strength ``w_r = Π_i μ_i`` then has ``∂w_r/∂θ_i = w_r · (∂μ_i/∂θ_i)/μ_i``:
     the premise gradient needs no product of the other inputs' grades. Gaussian:
     ``((x − c)²/σ³, (x − c)/σ²)``; bell, with ``u = (x − c)/a`` and ``|u|^{2b} μ = 1 − μ``:
-    ``(2b(1 − μ)/a, −2 ln|u| (1 − μ), 2b sign(u) |u|^{2b−1} μ / a)`` (0 where ``u = 0``)."""
+    ``(2b(1 − μ)/a, −2 ln|u| (1 − μ), 2b sign(u) |u|^{2b−1} μ / a)`` (0 where ``u = 0``). The
+    bell's grades are scikit-fuzzy's ``gbellmf`` (the same operations, so the same bits), with
+    ``|u|^{2b}`` overflowing quietly to a grade of 0 far from the centre."""
     if kind == "gbell":
-        mu = mf_values(kind, x, params) if mu is None else mu
         a, b, c = params[:, 0], params[:, 1], params[:, 2]
         u = (x[:, None] - c) / a
         au = np.abs(u)
-        rest = 1.0 - mu
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            mu = 1. / (1. + au ** (2 * b))
+            rest = 1.0 - mu
             d_a = 2 * b * rest / a
             d_b = np.where(au > 0, -2 * np.log(np.where(au > 0, au, 1.0)) * rest, 0.0)
             d_c = np.where(au > 0, 2 * b * np.sign(u) * au ** (2 * b - 1) * mu / a, 0.0)

@@ -345,7 +345,7 @@ def train(Xp: np.ndarray, X: np.ndarray, Y: np.ndarray, mfs: list[np.ndarray], r
             out.loss_curve.append(rmse[j])
             if X_val is not None:
                 out.val_loss_curve.append(scores[j])
-            if scores[j] < best[j]:
+            if epoch == 0 or scores[j] < best[j]:        # the first epoch even if its score is NaN
                 best[j] = scores[j]
                 out.mfs, out.consequents, out.best_epoch = mfs, theta[:, :, j].copy(), epoch
         score = scores[0] if k == 1 else math.sqrt(sum(c * e * e for c, e in zip(weights, scores)))
