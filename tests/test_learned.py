@@ -530,6 +530,26 @@ def test_poses_far_outside_the_training_data_are_predicted_with_a_warning(fitted
         fitted.predict(T.astype(complex))
 
 
+def test_the_outside_training_warning_carries_its_counts_as_fields():
+    """What the message states, a reader (chapter 7) reads as fields, the farthest unrounded."""
+    import pickle
+    import warnings
+    from nfarm.learning.per_joint import OutsideTrainingWarning, warn_far
+    beyond = np.array([0.0, 0.25, 0.75, 3.14159, 0.5])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", OutsideTrainingWarning)
+        warn_far(beyond, 0.5, "states")
+        warn_far(beyond, np.inf, "states")                       # none beyond: no warning
+    [w] = caught
+    m = w.message
+    assert isinstance(m, OutsideTrainingWarning)
+    assert (m.count, m.total, m.what, m.far, m.how_far, m.first) == (2, 5, "states", 0.5, 3.14159, 2)
+    assert str(m) == ("2 of 5 states lie beyond the training data's input range by more than 0.5 of it "
+                      "(up to 3.14; first: state 2): predicted by extrapolation")
+    again = pickle.loads(pickle.dumps(m))                          # e.g. from a worker process
+    assert (str(again), again.count, again.how_far) == (str(m), 2, 3.14159)
+
+
 def test_states_far_outside_the_training_data_warn_and_overflowing_ones_are_refused(id_data):
     from nfarm.learning.learned import OutsideTrainingWarning
     import warnings

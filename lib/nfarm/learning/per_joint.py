@@ -54,7 +54,23 @@ class PerJointModel(Estimator):
 
 
 class OutsideTrainingWarning(UserWarning):
-    """A learned model was asked about inputs far outside the range it was trained on."""
+    """A learned model was asked about inputs far outside the range it was trained on.
+
+    Its fields say what its message says: ``count`` of the ``total`` ``what`` (a plural noun:
+    ``"poses"``, ``"states"``) lie more than ``far`` spans of the training range beyond it, the
+    farthest ``how_far`` spans (unrounded), the first of them at row ``first``.
+    """
+
+    def __init__(self, count: int, total: int, what: str, far: float, how_far: float, first: int):
+        self.count, self.total, self.what = count, total, what
+        self.far, self.how_far, self.first = far, how_far, first
+        super().__init__(
+            f"{count} of {total} {what} lie beyond the training data's input range by more "
+            f"than {far:g} of it (up to {how_far:.3g}; first: {what[:-1]} {first}): predicted by "
+            f"extrapolation")
+
+    def __reduce__(self):
+        return type(self), (self.count, self.total, self.what, self.far, self.how_far, self.first)
 
 
 #: How far beyond its training range (in spans of that range) an input may lie before a
@@ -81,10 +97,8 @@ def warn_far(beyond: np.ndarray, far: float, what: str) -> None:
     out = beyond > far
     if out.any():
         i = int(np.argmax(out))
-        warnings.warn(OutsideTrainingWarning(
-            f"{int(out.sum())} of {len(beyond)} {what} lie beyond the training data's input range by more "
-            f"than {far:g} of it (up to {beyond.max():.3g}; first: {what[:-1]} {i}): predicted by "
-            f"extrapolation"), stacklevel=3)
+        warnings.warn(OutsideTrainingWarning(int(out.sum()), len(beyond), what, far, float(beyond.max()), i),
+                      stacklevel=3)
 
 
 #: Rows predicted at a time: the inputs' temporaries of a chunk stay in the cache.
