@@ -9,7 +9,7 @@ import pytest
 
 from nfarm.study.statistics import trajectory_maxima, trajectory_sums
 from nfarm.study.statistics import bootstrap_nrmse
-from nfarm.study.summary import (IK_METRICS, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
+from nfarm.study.summary import (IK_METRICS, ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_RECIPE, ROLES, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
                            long_table, read_long_table, resolved_sums, wide_table, with_resolved_worst)
 from nfarm.study.sweep import Cell, CellResult, Replicates
 
@@ -82,11 +82,11 @@ def test_the_abstract_reads_every_number_from_the_summary_table(tmp_path):
     rng = np.random.default_rng(4)
     anfis, base = ik_errors(5), {k: v * 3 for k, v in ik_errors(6).items()}
     base["orientation"] = base["orientation"] / 100          # the baseline wins on orientation
-    rows = ik_rows("ANFIS, chosen", "learned (chosen)", anfis, draws=300) + \
-        ik_rows("RBF", "best baseline (on validation)", base, draws=300)
+    rows = ik_rows("ANFIS, chosen", ROLE_CHOSEN, anfis, draws=300) + \
+        ik_rows("RBF", ROLE_BEST_BASELINE, base, draws=300)
     label = np.repeat(np.arange(10), 20)
     tau = rng.normal(size=(200, 2))
-    for name, role, noise in (("ANFIS, model-free", "learned (chosen)", 0.3), ("ridge", "best baseline (on validation)", 0.01)):
+    for name, role, noise in (("ANFIS, model-free", ROLE_CHOSEN, 0.3), ("ridge", ROLE_BEST_BASELINE, 0.01)):
         predicted = tau + rng.normal(0, noise, size=tau.shape)
         rows += id_rows(name, role, trajectory_sums(predicted, tau, label), trajectory_maxima(predicted, tau, label),
                         ["a", "b"], draws=300)
@@ -149,7 +149,7 @@ def test_the_abstract_leaves_the_joints_below_noise_out_and_names_them(tmp_path)
     label = np.repeat(np.arange(10), 20)
     tau = rng.normal(size=(200, 2)) * [1.0, 1e-4]
     predicted = tau + rng.normal(0, [0.02, 1e-4], size=tau.shape)
-    rows = id_rows("ANFIS, model-free", "learned (chosen)", trajectory_sums(predicted, tau, label),
+    rows = id_rows("ANFIS, model-free", ROLE_CHOSEN, trajectory_sums(predicted, tau, label),
                    trajectory_maxima(predicted, tau, label), ["a", "b"], resolved=[True, False], draws=300)
     long_table(rows).save(tmp_path, "07_summary")
     (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
@@ -163,9 +163,9 @@ def test_the_abstract_says_where_the_dissertations_recipe_beats_the_chosen_model
     recipe = {k: v.copy() for k, v in ik_errors(8).items()}
     recipe["position"] = recipe["position"] / 10                 # the recipe lands the tool closer
     recipe["joint"] = recipe["joint"] * 10                       # but misses the joints by more
-    rows = ik_rows("ANFIS, chosen", "learned (chosen)", chosen, draws=300) + \
-        ik_rows("ANFIS, dissertation's recipe, region", "dissertation's recipe (assumed)", recipe, draws=300) + \
-        ik_rows("ANFIS, dissertation's recipe, full range", "dissertation's recipe (assumed)",
+    rows = ik_rows("ANFIS, chosen", ROLE_CHOSEN, chosen, draws=300) + \
+        ik_rows("ANFIS, dissertation's recipe, region", ROLE_RECIPE, recipe, draws=300) + \
+        ik_rows("ANFIS, dissertation's recipe, full range", ROLE_RECIPE,
                 {k: 100 * v for k, v in chosen.items()}, draws=300)         # the first listed is the one compared
     long_table(rows).save(tmp_path, "07_summary")
     (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
@@ -198,3 +198,27 @@ def test_a_joint_below_the_noise_is_shown_without_an_interval():
     assert interval_text(row) == "75"
     resolved = Row("inverse dynamics", "m", "chosen", "τ4 wrist_flex", "%", 1.3, 1.13, 1.46, 2000, 0.95, "")
     assert interval_text(resolved) == "1.3 (1.13–1.46)"
+
+
+def test_the_roles_the_abstract_reads_are_the_roles_the_chapters_write(tmp_path):
+    """The abstract finds its rows by whole role labels (ROLES): chapter 7 writes each of them
+    (as the label or by the constant's name), its published summaries hold each, and a reworded
+    label is not read as the one it resembles."""
+    import json
+    from nfarm.infra.paths import ROOT
+    from nfarm.study import summary
+    names = {value: name for name in summary.__all__ if name.startswith("ROLE_")
+             for value in [getattr(summary, name)]}
+    assert set(names) == set(ROLES) and len(ROLES) == len(set(ROLES))
+    chapter = json.loads((ROOT / "notebooks" / "07_testing_error_analysis.ipynb").read_text(encoding="utf-8"))
+    source = "".join(line for cell in chapter["cells"] if cell["cell_type"] == "code" for line in cell["source"])
+    for role in ROLES:
+        assert f'"{role}"' in source or names[role] in source, f"chapter 7 writes no row of role {role!r}"
+    for table in (ROOT / "figures" / "tables" / "07_summary.csv", ROOT / "figures" / "so101" / "tables" / "07_summary.csv"):
+        assert set(ROLES) <= {r["role"] for r in read_long_table(table)}, table
+    rows = ik_rows("ANFIS, chosen", ROLE_CHOSEN, ik_errors(9), draws=300) + \
+        ik_rows("RBF", ROLE_BEST_BASELINE + ", reworded", ik_errors(10), draws=300)
+    long_table(rows).save(tmp_path, "07_summary")
+    table = read_long_table(tmp_path / "tables" / "07_summary.csv")
+    (line,) = abstract_lines("arm", table)
+    assert "RBF" not in line and "best baseline" not in line

@@ -41,10 +41,36 @@ from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
            "long_table", "wide_table", "interval_text", "ik_baselines", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
-           "target_verdict"]
+           "target_verdict", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT",
+           "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
 WORST_ID = "worst resolved joint NRMSE"
+
+# The roles of the summary rows :func:`abstract_lines` reads. The chapters write their rows with
+# these labels and the abstract finds its rows by them, matched whole: a label reworded on one side
+# only is caught by tests/test_summary.py rather than silently dropped from the abstract.
+#: The chosen model (IK, ID, and the residual model of the measured arm).
+ROLE_CHOSEN = "learned (chosen)"
+#: The dissertation's IK recipe (the first such method listed is the one compared).
+ROLE_RECIPE = "dissertation's recipe (assumed)"
+#: The best baseline, chosen on validation data (IK and ID).
+ROLE_BEST_BASELINE = "best baseline (on validation)"
+#: The closed-form IK.
+ROLE_EXACT = "exact reference"
+#: The dissertation's ID design (each joint's own state).
+ROLE_DESIGN = "dissertation's design (assumed)"
+#: The identification of the inertial parameters on the known geometry.
+ROLE_PHYSICS = "physics-informed reference"
+#: Newton–Euler alone on the measured arm (and LM in the IK rows).
+ROLE_NUMERICAL = "numerical reference"
+#: The least-squares friction identification on the measured arm.
+ROLE_FRICTION_ID = "baseline (friction identification)"
+#: The best learner as a residual on the measured arm, chosen on validation data.
+ROLE_RESIDUAL_BASELINE = "baseline (learner as residual, on validation)"
+#: Every role :func:`abstract_lines` reads.
+ROLES = (ROLE_CHOSEN, ROLE_RECIPE, ROLE_BEST_BASELINE, ROLE_EXACT, ROLE_DESIGN, ROLE_PHYSICS, ROLE_NUMERICAL,
+         ROLE_FRICTION_ID, ROLE_RESIDUAL_BASELINE)
 
 IK_BASELINES = {"nearest": "nearest neighbour", "rbf": "RBF interpolation", "linear": "linear least squares"}
 
@@ -395,14 +421,14 @@ def _unchosen(method: str) -> str:
 def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
     """Plain-text sentences (one per task) of one arm's answers, every number read from its
     summary rows: the chosen ANFIS, the dissertation's design (assumed), the best baseline and
-    the references, and on which metrics the baseline is better beyond both intervals."""
-    def find(task, role_start, metric):
-        return next((r for r in rows if r["task"] == task and r["role"].startswith(role_start)
-                     and r["metric"] == metric), None)
+    the references, and on which metrics the baseline is better beyond both intervals. Rows are
+    found by their whole role (:data:`ROLES`)."""
+    def find(task, role, metric):
+        return next((r for r in rows if r["task"] == task and r["role"] == role and r["metric"] == metric), None)
 
     lines = []
     task = "inverse kinematics"
-    chosen = [r for r in rows if r["task"] == task and r["role"] == "learned (chosen)"]
+    chosen = [r for r in rows if r["task"] == task and r["role"] == ROLE_CHOSEN]
     if chosen:
         get = {r["metric"]: r for r in chosen}
         text = (f"{arm}, inverse kinematics: the chosen model, {_unchosen(chosen[0]['method'])}, misses by "
@@ -410,7 +436,7 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
                 f"{_with_interval(get['position median'])} from the target at the median, "
                 f"{_with_interval(get['position p95'])} at the 95th percentile and "
                 f"{_with_interval(get['position max'])} at worst.")
-        first = find(task, "dissertation's recipe", "worst joint RMSE")    # on the region's data: listed first
+        first = find(task, ROLE_RECIPE, "worst joint RMSE")    # on the region's data: listed first
         recipe = {r["metric"]: r for r in rows if first and r["task"] == task and r["method"] == first["method"]}
         if "worst joint RMSE" in recipe:
             text += (f" The dissertation's recipe (assumed) on the same data: {_with_interval(recipe['worst joint RMSE'])}"
@@ -419,7 +445,7 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
                       for m, r in recipe.items() if m in get and _compare(r, get[m]) < 0]
             text += ("; it is better than the chosen model beyond both intervals on " + "; ".join(better) + "."
                      if better else ".")
-        base = [r for r in rows if r["task"] == task and r["role"].startswith("best baseline")]
+        base = [r for r in rows if r["task"] == task and r["role"] == ROLE_BEST_BASELINE]
         if base:
             wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
                     for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) < 0]
@@ -430,38 +456,38 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
                      f"intervals.")
             if losses:
                 text += f" The ANFIS is better on {', '.join(losses)}."
-        exact = find(task, "exact reference", "position max")
+        exact = find(task, ROLE_EXACT, "position max")
         if exact:
             text += f" The closed form is exact (largest tool position error {_with_interval(exact)})."
         lines.append(text)
     task = "inverse dynamics"
-    worst = next((m for m in (WORST_ID, "worst joint NRMSE") if find(task, "learned (chosen)", m)), WORST_ID)
-    free = find(task, "learned (chosen)", worst)
+    worst = next((m for m in (WORST_ID, "worst joint NRMSE") if find(task, ROLE_CHOSEN, m)), WORST_ID)
+    free = find(task, ROLE_CHOSEN, worst)
     if free:
-        below = [r["metric"].split()[0] for r in rows if r["task"] == task and r["role"] == "learned (chosen)"
+        below = [r["metric"].split()[0] for r in rows if r["task"] == task and r["role"] == ROLE_CHOSEN
                  and r["metric"].endswith("(below noise)")]
         text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {_unchosen(free['method'])}, "
                 f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE"
                 + (f"; {' and '.join(below)}, whose torque is below the sensor noise, left out" if below else "")
-                + f"), largest error {_with_interval(find(task, 'learned (chosen)', 'largest error'))}.")
-        base = find(task, "best baseline", worst)
+                + f"), largest error {_with_interval(find(task, ROLE_CHOSEN, 'largest error'))}.")
+        base = find(task, ROLE_BEST_BASELINE, worst)
         if base:
             verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
                        0: "no different from the ANFIS within the intervals"}[_compare(base, free)]
             text += f" The best baseline on validation, {base['method']}: {_with_interval(base)}, {verdict}."
-        recipe = find(task, "dissertation's design", worst)
+        recipe = find(task, ROLE_DESIGN, worst)
         if recipe:
             text += f" The dissertation's design (assumed, each joint's own state): {_with_interval(recipe)}."
-        ident = find(task, "physics-informed", worst)
+        ident = find(task, ROLE_PHYSICS, worst)
         if ident:
             text += f" Given the geometry, identifying the inertial parameters: {_with_interval(ident)}."
         lines.append(text)
     task = "ID, measured arm"
-    residual = find(task, "learned (chosen)", "worst joint RMSE")
+    residual = find(task, ROLE_CHOSEN, "worst joint RMSE")
     if residual:
-        alone = find(task, "numerical reference", "worst joint RMSE")
-        ls = find(task, "baseline (friction", "worst joint RMSE")
-        learner = find(task, "baseline (learner", "worst joint RMSE")
+        alone = find(task, ROLE_NUMERICAL, "worst joint RMSE")
+        ls = find(task, ROLE_FRICTION_ID, "worst joint RMSE")
+        learner = find(task, ROLE_RESIDUAL_BASELINE, "worst joint RMSE")
         text = (f"{arm}, an arm with friction (measured torques): Newton–Euler alone leaves {_with_interval(alone)} "
                 f"on the worst joint, Newton–Euler with an ANFIS residual {_with_interval(residual)}")
         if ls:
