@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from nfarm.infra.paths import PARAMS
 from nfarm.infra.reading import ParamsError
-from nfarm.infra.typed import JOINTS, ORDERED, TEXT, Length, Range, read_typed, section_keys
+from nfarm.infra.typed import JOINTS, ORDERED, TEXT, Length, Range, ReadBy, read_typed, section_keys
 from nfarm.study.study_files import StudyFile
 
 
@@ -128,6 +128,34 @@ def test_annotations_it_does_not_know_are_a_programming_error():
         read_typed(Odd, {"value": [1]}, "f.yaml")
     with pytest.raises(TypeError, match="needs the robot's joint count"):
         read_typed(Joints, {"value": [1.0]}, "f.yaml")
+
+
+def _even(v, value, at):
+    if v.integer(value, at) % 2:
+        v.fail(at, f"must be even, got {value}")
+    return value
+
+
+@dataclass(frozen=True, kw_only=True)
+class OwnReaders:
+    size: Annotated[int, ReadBy(_even)]
+    sizes: Annotated[list[Annotated[int, ReadBy(_even)]], Length(1, 2)] = dataclasses.field(default_factory=list)
+    maybe: Annotated[Optional[int], ReadBy(_even)] = None
+
+
+def test_a_field_read_by_its_own_reader_keeps_its_place_path_and_null():
+    """ReadBy: the reader gets the validator, the value and the field's path (inside a list
+    too), in the file's order; null of an optional field never reaches it."""
+    assert read_typed(OwnReaders, {"size": 2, "sizes": [4], "maybe": None}, "f.yaml") == \
+        OwnReaders(size=2, sizes=[4], maybe=None)
+    with pytest.raises(ParamsError, match=r"^f.yaml: size: must be even, got 3$"):
+        read_typed(OwnReaders, {"size": 3, "sizes": [1]}, "f.yaml")        # the first field first
+    with pytest.raises(ParamsError, match=r"^f.yaml: sizes\[1\]: must be even, got 5$"):
+        read_typed(OwnReaders, {"size": 2, "sizes": [4, 5]}, "f.yaml")
+    with pytest.raises(ParamsError, match=r"^f.yaml: maybe: must be a whole number, got 'x'$"):
+        read_typed(OwnReaders, {"size": 2, "maybe": "x"}, "f.yaml")
+    with pytest.raises(ParamsError, match=r"^f.yaml: sizes: must be a list of 1 to 2 items, got 3$"):
+        read_typed(OwnReaders, {"size": 2, "sizes": [2, 2, 2]}, "f.yaml")
 
 
 def _keys(cls, at=""):

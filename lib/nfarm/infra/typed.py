@@ -24,7 +24,9 @@ Rules ride on ``typing.Annotated``: :class:`Range` bounds every number under it 
 on a list or a mapping bounds its items), :class:`Length` and :data:`JOINTS` (one item per
 joint of the robot the reader is given) the length of the list it annotates, :data:`ORDERED`
 a pair ``[lo, hi]`` (``lo < hi`` where both are given), :data:`TEXT` a string that may be empty.
-Rules that involve two fields or the robot's model are the caller's, after the read.
+:class:`ReadBy` hands a field to a reader of its own (a pose, an inertia: a value whose rule no
+annotation says), in its place in the file's order. Rules that involve two fields or the robot's
+model are the caller's, after the read.
 
 Example:
     >>> from dataclasses import dataclass
@@ -53,13 +55,13 @@ import dataclasses
 import functools
 import types
 import typing
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union
 
 from .reading import Validator
 
-__all__ = ["read_typed", "Range", "Length", "JOINTS", "ORDERED", "TEXT", "section_keys"]
+__all__ = ["read_typed", "Range", "Length", "JOINTS", "ORDERED", "TEXT", "ReadBy", "section_keys"]
 
 
 @dataclass(frozen=True)
@@ -80,6 +82,34 @@ class Length:
     lo: int = 0
     hi: int | None = None
     joints: bool = False
+
+
+@dataclass(frozen=True)
+class ReadBy:
+    """The annotated field is read by ``read(validator, value, at)`` instead of by its type:
+    ``value`` as parsed, ``at`` the field's path, ``validator`` the read's
+    :class:`~nfarm.infra.reading.Validator` (whatever was given to :func:`read_typed`, so a
+    subclass's own checks are at hand); it returns the field's value or fails one line through
+    the validator. ``null`` of an ``X | None`` field is ``None`` without the call. Give a named
+    function of the section's module (``typing.get_type_hints`` evaluates a class's annotations
+    with the class's namespace as their globals: a lambda there sees none of the module's names).
+
+    Example:
+        >>> from dataclasses import dataclass
+        >>> from typing import Annotated
+        >>> @dataclass(frozen=True)
+        ... class Pair:
+        ...     size: Annotated[int, ReadBy(lambda v, x, at: x if v.integer(x, at) % 2 == 0
+        ...                                 else v.fail(at, f"must be even, got {x}"))]
+        >>> read_typed(Pair, {"size": 4}, "p.yaml")
+        Pair(size=4)
+        >>> read_typed(Pair, {"size": 3}, "p.yaml")
+        Traceback (most recent call last):
+        ...
+        nfarm.infra.reading.ParamsError: p.yaml: size: must be even, got 3
+    """
+
+    read: Callable[[Validator, Any, str], Any]
 
 
 @dataclass(frozen=True)
@@ -157,6 +187,11 @@ class _Reader:
 
     def value(self, hint: Any, value: Any, at: str, bound: Range | None) -> Any:
         hint, rules = _split(hint)
+        by = next((r for r in rules if isinstance(r, ReadBy)), None)
+        if by is not None:
+            if value is None and _is_union(hint) and type(None) in typing.get_args(hint):
+                return None
+            return by.read(self.v, value, at)
         bound = next((r for r in rules if isinstance(r, Range)), bound)
         length = next((r for r in rules if isinstance(r, Length)), None)
         if _is_union(hint):

@@ -29,14 +29,16 @@ import math
 import re
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal, Optional, get_args
 
 import numpy as np
 
 from ..infra.paths import project_path, shown_path
 from ..infra.reading import ParamsError, ParamsWarning, Validator, load_yaml, show
 from ..infra.reading import read_bytes as _read_bytes
+from ..infra.typed import TEXT, Range, ReadBy, read_typed, section_keys
 
 __all__ = [
     "ParamsError",
@@ -55,12 +57,8 @@ __all__ = [
     "with_provenance",
 ]
 
-CONVENTIONS = ("standard", "modified")
-TOP_KEYS = {"name": True, "convention": True, "gravity": True, "joints": True,
-            "tool": False, "base": False, "description": False, "poses_deg": False}
-JOINT_KEYS = {"a": True, "alpha": True, "d": True, "offset": True, "qlim": True, "mass": True,
-              "com": True, "inertia": True, "name": False, "viscous": False, "coulomb": False,
-              "coulomb_velocity": False, "armature": False, "effort": False, "velocity": False}
+Convention = Literal["standard", "modified"]
+CONVENTIONS: tuple[str, ...] = get_args(Convention)
 #: Joint-drive terms (optional per joint; see :func:`nfarm.model.dynamics.joint_drive_torques`) and
 #: their defaults: viscous [N·m·s/rad], Coulomb [N·m], Coulomb smoothing speed [rad/s],
 #: armature (reflected rotor inertia) [kg·m²].
@@ -275,8 +273,97 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
     return with_provenance(robot, fields, _read_bytes(urdf))
 
 
+# --------------------------------------------------------------------------------------------
+# A DH robot file as written: the schema :func:`robot_from_dict` reads through the generic reader
+# (:func:`nfarm.infra.typed.read_typed`). A field whose rule no annotation says (a pose, an
+# inertia, a name that names directories) is read by the validator's own check (``ReadBy``; named
+# functions: an annotation's lambda would not see this module's names).
+
+
+def _name(v: Validator, value: Any, at: str) -> str:
+    return _robot_name(v, value)
+
+
+def _pose(v: _Validator, value: Any, at: str) -> np.ndarray:
+    return v.pose(value, at)
+
+
+def _inertia(v: _Validator, value: Any, at: str) -> np.ndarray:
+    return v.inertia(value, at)
+
+
+def _as_given(v: Validator, value: Any, at: str) -> Any:
+    """A field checked once the robot is built (the named poses: within its joint limits)."""
+    return value
+
+
+def _vector(length: int):
+    """A reader of a list of ``length`` finite numbers (one error: "must be a list of 3 numbers")."""
+    return lambda v, value, at: v.vector(value, at, length)
+
+
+def _limits(v: Validator, value: Any, at: str) -> tuple[float, float]:
+    """A joint's ``qlim`` [rad]: two numbers, ``lo < hi``, both within [-2π, 2π]."""
+    lo, hi = v.vector(value, at, 2)
+    if not lo < hi:
+        v.fail(at, f"must satisfy lo < hi, got [{lo!r}, {hi!r}]")
+    if max(abs(lo), abs(hi)) > 2 * math.pi:
+        v.fail(at, f"must lie within [-2π, 2π] rad, got [{lo!r}, {hi!r}] (degrees by mistake?)")
+    return lo, hi
+
+
+def _joints(v: Validator, value: Any, at: str) -> list[JointSection]:
+    """``joints``: a non-empty list, each item a :class:`JointSection`."""
+    if not isinstance(value, list) or not value:
+        v.fail(at, f"must be a non-empty list of joints, got {show(value)}")
+    return [read_typed(JointSection, joint, v, f"{at}[{i}]") for i, joint in enumerate(value)]
+
+
+@dataclass(frozen=True, kw_only=True)
+class JointSection:
+    """``joints[i]``: one revolute joint as written: DH parameters [m, rad], limits [rad], the
+    link's mass [kg], centre of mass [m] and inertia [kg·m², the 3×3 matrix read from ``[Ixx,
+    Iyy, Izz, Ixy, Iyz, Ixz]``] about it in DH frame i, the drive terms (:data:`DRIVE_DEFAULTS`)
+    and the effort [N·m] and speed [rad/s] limits (``inf``: none)."""
+
+    a: float
+    alpha: float
+    d: float
+    offset: float
+    qlim: Annotated[tuple[float, float], ReadBy(_limits)]
+    mass: Annotated[float, Range(lo=0.0)]
+    com: Annotated[list[float], ReadBy(_vector(3))]
+    inertia: Annotated[np.ndarray, ReadBy(_inertia)]
+    name: str = ""                  # left out: q1, q2, … by position
+    viscous: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["viscous"]
+    coulomb: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["coulomb"]
+    coulomb_velocity: Annotated[float, Range(lo=0.0, lo_open=True)] = DRIVE_DEFAULTS["coulomb_velocity"]
+    armature: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["armature"]
+    effort: Annotated[float, Range(lo=0.0, lo_open=True)] = math.inf
+    velocity: Annotated[float, Range(lo=0.0, lo_open=True)] = math.inf
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotFile:
+    """A DH robot file as written (``params/README.md``, "Robots"): typed and checked field by
+    field; ``tool`` and ``base`` 4×4 poses (``None``: identity), ``gravity`` [m/s²], and the
+    named poses ``poses_deg`` as given (checked against the joint limits once the robot is built)."""
+
+    name: Annotated[str, ReadBy(_name)]
+    convention: Convention
+    gravity: Annotated[list[float], ReadBy(_vector(3))]
+    joints: Annotated[list[JointSection], ReadBy(_joints)]
+    tool: Annotated[Optional[np.ndarray], ReadBy(_pose)] = None
+    base: Annotated[Optional[np.ndarray], ReadBy(_pose)] = None
+    description: Annotated[str, TEXT] = ""
+    poses_deg: Annotated[Optional[dict], ReadBy(_as_given)] = None
+
+
 def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
-    """Validate a parameter mapping (as read from YAML) and build a :class:`Robot`.
+    """Validate a parameter mapping (as read from YAML) and build a :class:`Robot`: the mapping
+    into a :class:`RobotFile` by the generic reader (every field's type and rule, unknown keys
+    refused), then the warnings about implausible values and the named poses, which need the
+    robot; the first broken rule is one :class:`ParamsError` line naming the file and the field.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -291,69 +378,36 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         nfarm.infra.reading.ParamsError: <dict>: convention: must be one of standard, modified, got 'craig'
     """
     v = _Validator(source)
-    v.mapping(data, "", TOP_KEYS)
-    name = _robot_name(v, data["name"])
-    convention = v.choice(data["convention"], "convention", CONVENTIONS)
-    gravity = np.array(v.vector(data["gravity"], "gravity", 3))
-    tool = v.pose(data["tool"], "tool") if data.get("tool") is not None else np.eye(4)
-    for k in range(3):
-        v.plausible(float(tool[k, 3]), f"tool[{k}][3]", "length")
-    base = v.pose(data["base"], "base") if data.get("base") is not None else np.eye(4)
-    for k in range(3):
-        v.plausible(float(base[k, 3]), f"base[{k}][3]", "length")
-    description = v.string(data["description"], "description", allow_empty=True) \
-        if "description" in data else ""
-
-    joints = data["joints"]
-    if not isinstance(joints, list) or not joints:
-        v.fail("joints", f"must be a non-empty list of joints, got {show(joints)}")
-    fields: dict[str, list] = {k: [] for k in JOINT_KEYS}
+    file = read_typed(RobotFile, data, v)
+    tool = np.eye(4) if file.tool is None else file.tool
+    base = np.eye(4) if file.base is None else file.base
+    for what, pose in (("tool", tool), ("base", base)):
+        for k in range(3):
+            v.plausible(float(pose[k, 3]), f"{what}[{k}][3]", "length")
+    joints = file.joints
     for i, joint in enumerate(joints):
         at = f"joints[{i}]"
-        v.mapping(joint, at, JOINT_KEYS)
-        for key, kind in (("a", "length"), ("alpha", "angle"), ("d", "length"),
-                          ("offset", "angle")):
-            fields[key].append(v.number(joint[key], f"{at}.{key}"))
-            v.plausible(fields[key][-1], f"{at}.{key}", kind)
-        lo, hi = v.vector(joint["qlim"], f"{at}.qlim", 2)
-        if not lo < hi:
-            v.fail(f"{at}.qlim", f"must satisfy lo < hi, got [{lo!r}, {hi!r}]")
-        if max(abs(lo), abs(hi)) > 2 * math.pi:
-            v.fail(f"{at}.qlim", f"must lie within [-2π, 2π] rad, got [{lo!r}, {hi!r}] "
-                                 f"(degrees by mistake?)")
-        fields["qlim"].append((lo, hi))
-        mass = v.number(joint["mass"], f"{at}.mass")
-        if mass < 0:
-            v.fail(f"{at}.mass", f"must be >= 0, got {mass!r}")
-        fields["mass"].append(mass)
-        fields["com"].append(v.vector(joint["com"], f"{at}.com", 3))
-        for k, c in enumerate(fields["com"][-1]):
+        for key, kind in (("a", "length"), ("alpha", "angle"), ("d", "length"), ("offset", "angle")):
+            v.plausible(getattr(joint, key), f"{at}.{key}", kind)
+        for k, c in enumerate(joint.com):
             v.plausible(c, f"{at}.com[{k}]", "length")
-        fields["inertia"].append(v.inertia(joint["inertia"], f"{at}.inertia"))
-        jname = joint.get("name", f"q{i + 1}")
-        fields["name"].append(v.string(jname, f"{at}.name"))
-        for key, default in DRIVE_DEFAULTS.items():
-            value = v.number(joint.get(key, default), f"{at}.{key}")
-            if value < 0 or (key == "coulomb_velocity" and value == 0):
-                v.fail(f"{at}.{key}", f"must be {'> 0' if key == 'coulomb_velocity' else '>= 0'}, "
-                                      f"got {value!r}")
-            fields.setdefault(key, []).append(value)
-        for key in ("effort", "velocity"):
-            fields.setdefault(key, []).append(
-                v.number(joint[key], f"{at}.{key}", lo=0.0, lo_open=True) if key in joint else math.inf)
+        v.triangle(joint.inertia, f"{at}.inertia")
+
+    def column(key: str) -> np.ndarray:
+        return np.array([getattr(joint, key) for joint in joints], dtype=float)
 
     robot = Robot(
-        name=name, convention=convention,
-        a=np.array(fields["a"]), alpha=np.array(fields["alpha"]), d=np.array(fields["d"]),
-        offset=np.array(fields["offset"]), qlim=np.array(fields["qlim"], dtype=float),
-        mass=np.array(fields["mass"]), com=np.array(fields["com"]),
-        inertia=np.array(fields["inertia"]), gravity=gravity, tool=tool, base=base,
-        joint_names=tuple(fields["name"]), source=source, description=description,
-        **{key: np.array(fields[key]) for key in DRIVE_DEFAULTS},
-        effort=np.array(fields["effort"], dtype=float), velocity=np.array(fields["velocity"], dtype=float),
+        name=file.name, convention=file.convention,
+        a=column("a"), alpha=column("alpha"), d=column("d"), offset=column("offset"),
+        qlim=np.array([joint.qlim for joint in joints], dtype=float), mass=column("mass"),
+        com=np.array([joint.com for joint in joints]), inertia=np.array([joint.inertia for joint in joints]),
+        gravity=np.array(file.gravity), tool=tool, base=base,
+        joint_names=tuple(joint.name or f"q{i + 1}" for i, joint in enumerate(joints)), source=source,
+        description=file.description, **{key: column(key) for key in DRIVE_DEFAULTS},
+        effort=column("effort"), velocity=column("velocity"),
     )
-    if data.get("poses_deg") is not None:
-        robot = dataclasses.replace(robot, poses=v.poses(data["poses_deg"], "poses_deg", robot))
+    if file.poses_deg is not None:
+        robot = dataclasses.replace(robot, poses=v.poses(file.poses_deg, "poses_deg", robot))
     return robot
 
 
@@ -597,12 +651,18 @@ class _Validator(Validator):
         if principal[0] < -tol:
             self.fail(at, f"must be positive semi-definite, got principal moments "
                           f"{[float(f'{p:.6g}') for p in principal]}")
+        return inertia
+
+    def triangle(self, inertia: np.ndarray, at: str) -> None:
+        """Warn about a ``(3, 3)`` inertia [kg·m²] whose principal moments break the triangle
+        inequality (not a physical rigid body; accepted as given)."""
+        principal = np.linalg.eigvalsh(inertia)
+        tol = INERTIA_RTOL * float(np.abs(principal).max())
         p1, p2, p3 = principal
         if p1 + p2 < p3 - tol:
             self.warn(at, f"principal moments {[float(f'{p:.6g}') for p in principal]} break "
                           f"the triangle inequality (I1 + I2 >= I3): not a physical rigid body; "
                           f"accepted as given")
-        return inertia
 
     def poses(self, value: Any, at: str, robot: Robot) -> dict[str, np.ndarray]:
         """Named configurations ``{name: [deg, ...]}``: one angle per joint, within its limits."""
