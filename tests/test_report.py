@@ -532,8 +532,11 @@ def test_the_index_links_each_arm_s_recordings(two_arms):
     assert build_report(**dirs) == 0
     index = (dirs["build_dir"] / "report" / "index.html").read_text()
     a, b = index.index("Chapters for a"), index.index("Chapters for b")
-    assert index.index("href='../recordings/03_motion.rrd'", a) < b
-    assert index.index("href='../recordings/b/03_motion.rrd'", b) > b
+    # copied into the report folder and linked relatively: the folder reads anywhere it is copied
+    assert index.index("href='recordings/03_motion.rrd'", a) < b
+    assert index.index("href='recordings/b/03_motion.rrd'", b) > b
+    report_dir = dirs["build_dir"] / "report"
+    assert (report_dir / "recordings" / "b" / "03_motion.rrd").read_bytes() == b"b"
 
 
 def test_markdown_section_returns_one_sections_text(tmp_path):

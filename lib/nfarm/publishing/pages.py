@@ -24,7 +24,7 @@ from .editions import Edition
 from .manifest import chapter_files
 
 __all__ = ["ReportPages", "write_pages", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
-           "MATHJAX"]
+           "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
 def chapter_title(notebook: Path) -> str:
@@ -41,6 +41,9 @@ def chapter_title(notebook: Path) -> str:
 COURSE_TAGS = ("exercise", "solution", "check")
 
 MATHJAX = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
+
+#: The whole study as one PDF in the report directory (:mod:`.paper` writes it; the index links it).
+PAPER_NAME = "nfarm-study.pdf"
 
 
 def install_mathjax(report_dir: Path) -> None:
@@ -115,13 +118,38 @@ def _name_the_arm(nb, arm: str) -> None:
                     return
 
 
+#: The pages' template: JupyterLab's, with no diagram library (nbconvert's lab template imports
+#: mermaid from a CDN on every page; no page draws a diagram) and, when the resources ask for it
+#: (``nfarm_fold_code``), each code cell's input folded in a ``<details>`` element ("show code"):
+#: plain HTML, no script.
+PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
+{%- block html_head_js_mermaidjs -%}{%- endblock html_head_js_mermaidjs -%}
+{%- block html_head_js_requirejs -%}{%- endblock html_head_js_requirejs -%}
+{% block input_group -%}
+{%- if resources.nfarm_fold_code and cell.cell_type == 'code' -%}
+<details class="nfarm-code"><summary>show code</summary>
+{{ super() }}
+</details>
+{%- else -%}
+{{ super() }}
+{%- endif -%}
+{% endblock input_group %}
+{% block extra_css %}
+<style>details.nfarm-code>summary{cursor:pointer;color:#666;font:0.85em sans-serif;margin:.2em 0 .2em 1em}</style>
+{% endblock extra_css %}
+"""
+
+
 def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
-                 title: str = "", arm: str = "") -> None:
+                 title: str = "", arm: str = "", fold_code: bool = False) -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters; one parameters cell with the run's values
-    (:func:`_merge_parameters`); the heading naming ``arm`` when given."""
+    (:func:`_merge_parameters`); the heading naming ``arm`` when given; with ``fold_code``,
+    every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`). Nothing is
+    loaded from elsewhere."""
     import nbformat
+    from jinja2 import DictLoader
     from nbconvert import HTMLExporter
     from nbconvert.preprocessors import TagRemovePreprocessor
     from traitlets.config import Config
@@ -131,7 +159,9 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     config.TagRemovePreprocessor.remove_cell_tags = {"remove-cell"}
     config.TagRemovePreprocessor.enabled = True
     exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=mathjax,
-                            require_js_url="", jquery_url="", widget_renderer_url="")
+                            require_js_url="", jquery_url="", widget_renderer_url="",
+                            extra_loaders=[DictLoader({"nfarm-page.html.j2": PAGE_TEMPLATE})],
+                            template_file="nfarm-page.html.j2")
     exporter.register_preprocessor(TagRemovePreprocessor(config=config), enabled=True)
     # Figures carry their captions as alternative text (nfarm.presentation.plotting.save_figure); an image
     # shown without one gets nbconvert's generic text and a warning, which the check of the
@@ -143,7 +173,8 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
         _merge_parameters(nb)
         if arm:
             _name_the_arm(nb, arm)
-        body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title or executed.stem}})
+        body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title or executed.stem},
+                                                                 "nfarm_fold_code": fold_code})
     finally:
         exporter.log.removeFilter(quiet)
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
@@ -183,7 +214,8 @@ table{border-collapse:collapse;margin:.5em 0 1.5em;font-size:.9em}
 td,th{border:1px solid #ccc;padding:.2em .6em;text-align:right}th{background:#f3f3f3}
 h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
 figure{margin:1em 0 2em}figcaption{color:#444;margin:.2em 0}.file{color:#888;font-size:.8em}
-dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1em}dt{font-weight:bold}"""
+dl{display:grid;grid-template-columns:max-content auto;gap:.2em 1em}dt{font-weight:bold}
+.reproduce{border:1px solid #ccc;background:#fafafa;padding:.5em 1em;margin:1em 0}.reproduce dd{word-break:break-all}"""
 
 
 def _git(*args: str) -> str:
@@ -206,13 +238,15 @@ def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> l
         rel = path.relative_to(figures_dir)
         caption = html.escape(_caption(path))
         label = f"<span class='file'>{html.escape(rel.as_posix())}</span>"
-        if path.suffix == ".png":
-            (shown / rel).parent.mkdir(parents=True, exist_ok=True)
+        (shown / rel).parent.mkdir(parents=True, exist_ok=True)
+        if not (shown / rel).is_file():
             shutil.copyfile(path, shown / rel)
+        if path.suffix == ".png":
             parts.append(f"<figure><img src='figures/{rel.as_posix()}' alt='{caption}'>"
                          f"<figcaption>{caption} {label}</figcaption></figure>")
         else:
-            parts.append(f"<figure><figcaption>{caption} {label}</figcaption>"
+            link = f"<a class='file' href='figures/{html.escape(rel.as_posix())}'>{html.escape(rel.as_posix())}</a>"
+            parts.append(f"<figure><figcaption>{caption} {link}</figcaption>"
                          f"{_csv_to_html(path)}</figure>")
     return parts
 
@@ -258,6 +292,55 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     return parts
 
 
+def _copy_published(figures_dir: Path, shown: Path) -> bool:
+    """Copy the published files ``MANIFEST.sha256`` lists, and the manifest, into ``shown`` (the
+    report's own ``figures/``): the report folder holds every figure and table it names, and
+    ``sha256sum -c MANIFEST.sha256`` checks them there. Whether there was a manifest."""
+    manifest = figures_dir / "MANIFEST.sha256"
+    if not manifest.is_file():
+        return False
+    for line in manifest.read_text(encoding="utf-8").splitlines():
+        _, sep, name = line.partition("  ")
+        source = figures_dir / name
+        if not sep or not source.is_file() or ".." in Path(name).parts:
+            continue
+        (shown / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(source, shown / name)
+    shutil.copyfile(manifest, shown / "MANIFEST.sha256")
+    return True
+
+
+def _cpu() -> str:
+    """The machine's CPU model and the cores this process may use."""
+    model = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text(encoding="utf-8", errors="replace").splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import platform
+
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return f"{model or platform.processor() or platform.machine() or 'unknown CPU'}, {cores} core{'s' if cores != 1 else ''}"
+
+
+def _reproduce_html(commit: str) -> str:
+    """The index's "reproduce" box: the commit, the command, the lock's SHA-256 and the machine."""
+    import hashlib
+
+    lock = ROOT / "environment.lock"
+    lock_hash = hashlib.sha256(lock.read_bytes()).hexdigest() if lock.is_file() else "no environment.lock"
+    rows = {"commit": commit, "command": "make setup && make report",
+            "environment.lock SHA-256": lock_hash, "machine": _cpu()}
+    return ("<div class='reproduce'><b>Reproduce</b><dl>"
+            + "".join(f"<dt>{html.escape(k)}</dt><dd><code>{html.escape(v)}</code></dd>" for k, v in rows.items())
+            + "</dl><p>Every chapter reads its inputs from this commit; <code>make report</code> reruns them "
+              "with the locked environment and writes this folder (<code>build/report/</code>). The machine "
+              "above built this folder; the timings a page quotes were measured where its chapter ran.</p></div>")
+
+
 def _write_index(report_dir: Path, figures_dir: Path,
                  pages: dict[str, list[tuple[str, str, str]]], arms: list[Edition],
                  compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool,
@@ -269,6 +352,8 @@ def _write_index(report_dir: Path, figures_dir: Path,
     shown = report_dir / "figures"
     if shown.exists():
         shutil.rmtree(shown)
+    if (report_dir / "recordings").exists():
+        shutil.rmtree(report_dir / "recordings")
     commit = _git("rev-parse", "--short=12", "HEAD") or "unknown"
     dirty = " (with uncommitted changes)" if _git("status", "--porcelain") else ""
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -283,7 +368,15 @@ def _write_index(report_dir: Path, figures_dir: Path,
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>nfarm — study report"
              f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
              "numerical methods and ANFIS</h1>"]
+    if (report_dir / PAPER_NAME).is_file():
+        parts.append(f"<p><a href='{PAPER_NAME}'>The whole study as one PDF</a> (every chapter of both "
+                     "editions, without code, with a references list)</p>")
     parts += _abstract_html(figures_dir, arms)
+    parts.append(_reproduce_html(commit + dirty))
+    has_manifest = _copy_published(figures_dir, shown)
+    if has_manifest:
+        facts["figures"] = (shown_path(figures_dir) + ", copied into this folder's figures/ "
+                            "(checked by figures/MANIFEST.sha256)")
     parts.append("<dl>")
     parts += [f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in facts.items()]
     parts.append("</dl>")
@@ -317,11 +410,17 @@ def _write_index(report_dir: Path, figures_dir: Path,
                       f"</li>" for e in entries]
             parts.append("</ol>")
             found = sorted((recordings_dir / edition.subdir).glob("*.rrd")) if recordings_dir else []
-            if found:
+            copied = []
+            for f in found:                          # inside the report folder, linked relatively
+                inside = report_dir / "recordings" / edition.subdir / f.name
+                inside.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(f, inside)
+                copied.append(inside)
+            if copied:
                 parts.append("<p>Rerun recordings: " + ", ".join(
-                    f"<a href='{html.escape(os.path.relpath(f, report_dir))}'>{html.escape(f.name)}</a>"
-                    for f in found) + f" (open one with <code>.venv/bin/rerun "
-                    f"{html.escape(shown_path(found[0]))}</code>)</p>")
+                    f"<a href='{html.escape(f.relative_to(report_dir).as_posix())}'>{html.escape(f.name)}</a>"
+                    for f in copied) + f" (open one with <code>.venv/bin/rerun "
+                    f"{html.escape(copied[0].relative_to(report_dir).as_posix())}</code> in this folder)</p>")
     for edition in arms:
         for entry in pages.get(edition.name, []):
             prefix, title, page = entry
@@ -419,7 +518,7 @@ def write_pages(report: ReportPages) -> None:
             executed = report.executed_dir / page.replace(".html", ".ipynb")
             page = here[k]
             same_for_all = prefix not in per_arm and (prefix, title, own[k][2]) not in compared and len(arms) > 1
-            export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX,
+            export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX, fold_code=True,
                         title=f"{title} · {arm.name}" if prefix in per_arm else
                         f"{title} · the same for every arm" if same_for_all else title,
                         arm=arm.name if prefix in per_arm else "")

@@ -6,7 +6,8 @@ staging directory under ``build/stage/``, once per arm (:class:`Edition`, one pe
 the primary arm's results go to ``figures/``, another's to ``figures/<study>/``
 (:mod:`.manifest` publishes them atomically). A chapter whose inputs (:func:`_chapter_key`) and
 published files are those of its last run is not run again, so a second ``make report`` with
-nothing changed only rewrites the pages (:mod:`.pages`).
+nothing changed only rewrites the pages (:mod:`.pages`) and the PDF of the whole study
+(:mod:`.paper`, ``build/report/nfarm-study.pdf``).
 
 **Explore freely, publish deliberately.** Only a run with the default parameters publishes
 into ``figures/``; a smoke run (``--smoke``) publishes into ``build/smoke/figures/`` and its
@@ -51,6 +52,7 @@ from ..presentation.tables import DOCUMENTS
 from .editions import PRIMARY_STUDY, RECORDINGS, Edition, editions
 from .manifest import chapter_files, publish_chapter, publishing_lock, recover_figures
 from .pages import COURSE_TAGS, ReportPages, install_mathjax, write_pages
+from .paper import write_paper
 
 __all__ = ["Edition", "editions", "build_report", "ReportRun", "ReportUsageError", "ReportInterrupted",
            "PRIMARY_STUDY", "RECORDINGS"]
@@ -278,11 +280,14 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         else:
             in_order([j for j in jobs if j[0].name not in comparing])
         in_order([j for j in jobs if j[0].name in comparing])
-        write_pages(ReportPages(
+        pages = ReportPages(
             chapters=tuple(everything), runs={nb.name: tuple(arm for arm, _ in runs(nb)) for nb in everything},
             comparing=frozenset(comparing), arms=tuple(arms), executed_dir=base / "notebooks",
             report_dir=report_dir, figures_dir=figures_dir, parameters=extra, smoke=smoke,
-            recordings_dir=None if smoke or extra else build_dir / "recordings"))
+            recordings_dir=None if smoke or extra else build_dir / "recordings")
+        say("the PDF of the whole study …")
+        write_paper(pages)                        # before the index, which links it
+        write_pages(pages)
     except KeyboardInterrupt:
         raise ReportInterrupted(f"interrupted; {shown_path(figures_dir)} holds the chapters published "
                                 f"before (its manifest matches)") from None

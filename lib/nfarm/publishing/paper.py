@@ -1,0 +1,304 @@
+"""The study as one PDF (``build/report/nfarm-study.pdf``): a title page naming the dissertation
+reproduced, the abstract, the chapters of every edition from the executed notebooks without
+their code (prose, figures, tables and printed results kept), figures and tables numbered per
+chapter with their captions, and a references list from ``docs/references.bib``.
+
+The chapters are written as one Markdown document (:func:`paper_markdown`); pandoc (the
+``pypandoc-binary`` wheel's binary, with citeproc) turns it into Typst with the references
+formatted, and Typst (the ``typst`` wheel's compiler and fonts) sets the PDF. Neither needs the
+network. Typst numbers the figures and tables: a chapter's label (``6`` for the primary
+edition's chapter 6, ``S6`` for the so101 edition's) followed by the figure's number within it
+("Figure 6.2", "Table S7.1").
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime
+import re
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..infra.notebook_runs import ReportError
+from ..infra.paths import ROOT, atomic_path
+from .editions import Edition
+from .pages import ABSTRACT_LIMITS, ABSTRACT_QUESTION, PAPER_NAME, ReportPages, _git, chapter_title
+
+__all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
+
+#: The works the study leans on (BibTeX); the PDF's references list is made from it.
+BIBLIOGRAPHY = ROOT / "docs" / "references.bib"
+#: The key of the dissertation reproduced in :data:`BIBLIOGRAPHY`.
+DISSERTATION = "tu_rain_2023"
+
+#: The dissertation as its title page names it (the Russian title as published; an English rendering).
+DISSERTATION_TITLE = ("Модели, алгоритмы и комплекс программ для моделирования манипуляторов на основе "
+                      "архитектуры адаптивной нейро-нечеткой системы вывода и обучающих алгоритмов")
+DISSERTATION_TITLE_EN = ("Models, algorithms and a software package for modelling manipulators based on "
+                         "the architecture of an adaptive neuro-fuzzy inference system and learning "
+                         "algorithms")
+
+#: What each part of the study rests on, cited (the front matter's "Sources").
+SOURCES = (
+    "The arm is described with Denavit–Hartenberg parameters [@denavit_hartenberg_1955], in the standard "
+    "or the modified convention [@craig_2005]. Its inverse kinematics is solved by damped least squares, "
+    "the Levenberg–Marquardt method [@levenberg_1944; @marquardt_1963] as used for manipulators "
+    "[@wampler_1986; @buss_2009; @sugihara_2011]. Its inverse dynamics is the recursive Newton–Euler "
+    "algorithm [@luh_walker_paul_1980], checked against Pinocchio [@carpentier_2019]; the dynamics linear "
+    "in the inertial parameters is that of @atkeson_an_hollerbach_1986. The learned models are ANFIS "
+    "[@jang_1993; @jang_sun_mizutani_1997], trained with Jang's hybrid rule, their rule bases from grid "
+    "partitions, fuzzy c-means [@bezdek_1981] or subtractive clustering [@chiu_1994]; the method is "
+    "checked on Jang's benchmarks, among them the Mackey–Glass series [@mackey_glass_1977]. Velocities "
+    "and accelerations of noisy recordings are estimated with Savitzky–Golay filters "
+    "[@savitzky_golay_1964].")
+
+_TYPST_PREAMBLE = r"""
+#set document(title: "nfarm — a 5-DOF arm modelled with numerical methods and ANFIS")
+#set page(paper: "a4", margin: (x: 2.2cm, y: 2.4cm), numbering: "1")
+#set text(size: 10pt, lang: "en")
+#set par(justify: true)
+#let chap = state("nfarm-chapter", "")
+#set figure(numbering: n => context (chap.get() + "." + str(n)))
+#show figure: set block(breakable: true)
+#show figure.caption: set text(size: 9pt)
+#show table: set text(size: 7pt)
+#show raw.where(block: true): set text(size: 7pt)
+#set image(width: 88%)
+#show heading.where(level: 1): it => { pagebreak(weak: true); it }
+#show heading.where(level: 2): it => { pagebreak(weak: true); it }
+"""
+
+
+@dataclass(frozen=True)
+class PaperChapter:
+    """One chapter of the PDF: its label (``"6"``, ``"S6"``), title, the edition it belongs to
+    and its executed notebook."""
+
+    label: str
+    title: str
+    edition: str
+    executed: Path
+
+
+def _escape(text: str) -> str:
+    """Plain text as Markdown that pandoc reads back as the same text."""
+    return re.sub(r"([\\`*_{}\[\]<>#$@|~^])", r"\\\1", text)
+
+
+def _raw(typst: str) -> str:
+    return f"\n```{{=typst}}\n{typst.strip()}\n```\n"
+
+
+_HEADING = re.compile(r"^(#{1,5})(\s)", re.M)
+_CITATION_LIKE = re.compile(r"(^|[\s\[(;-])@(?=[\w])")
+
+
+def _prose(markdown: str) -> str:
+    """A notebook's Markdown in the PDF: its headings one level down (a chapter is level 2 in
+    its part) and no ``@`` read as a citation (the notebooks cite nothing)."""
+    out, fenced = [], False
+    for line in markdown.split("\n"):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+        elif not fenced:
+            line = _HEADING.sub(lambda m: "#" + m.group(1) + m.group(2), line)
+            line = _CITATION_LIKE.sub(lambda m: m.group(1) + "\\@", line)
+        out.append(line)
+    return "\n".join(out)
+
+
+_TABLE = re.compile(r"\A\s*\*(?P<caption>[^\n]+)\*\s*\n\s*\n(?P<table>\|.*)\Z", re.S)
+
+
+def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
+    """The chapter's prose and outputs, without code: its first level-1 heading replaced by the
+    chapter's; tables (``*caption*`` over a pipe table, :class:`nfarm.presentation.tables.Table`)
+    and figures (a PNG whose plain text is ``Figure: caption``) captioned for numbering."""
+    import nbformat
+
+    nb = nbformat.read(chapter.executed, 4)
+    title = re.sub(r"^Chapter\s+\d+\s*[—–-]\s*", "", chapter.title)
+    parts = [f"## Chapter {chapter.label} — {_escape(title)}",
+             _raw(f'#chap.update("{chapter.label}")\n'
+                  "#counter(figure.where(kind: image)).update(0)\n"
+                  "#counter(figure.where(kind: table)).update(0)")]
+    titled = False
+    for k, cell in enumerate(nb.cells):
+        tags = set(cell.metadata.get("tags", []))
+        if "remove-cell" in tags:
+            continue
+        if cell.cell_type == "markdown":
+            text = cell.source
+            if not titled:
+                text, n = re.subn(r"^# [^\n]*\n?", "", text, count=1, flags=re.M)
+                titled = bool(n)
+            parts.append(_prose(text))
+            continue
+        if cell.cell_type != "code":
+            continue
+        for j, output in enumerate(cell.get("outputs", [])):
+            kind = output.get("output_type")
+            if kind == "stream" and output.get("name") == "stdout":
+                # Printed results (matrices, rule bases); lines naming build files are the run's, not the study's.
+                lines = [ln for ln in output.get("text", "").split("\n") if "build/" not in ln]
+                text = "\n".join(lines).strip("\n")
+                if text.strip():
+                    parts.append("~~~~\n" + text.replace("~~~~", "~ ~ ~ ~") + "\n~~~~")
+                continue
+            if kind not in ("display_data", "execute_result"):
+                continue
+            data = output.get("data", {})
+            if "image/png" in data:
+                name = f"{chapter.edition}-{chapter.label}-{k:03d}-{j}.png"
+                (assets / name).write_bytes(base64.b64decode(data["image/png"]))
+                plain = data.get("text/plain", "")
+                caption = plain[len("Figure: "):] if plain.startswith("Figure: ") else ""
+                if caption:
+                    parts.append(f"![{_escape(caption.strip())}](assets/{name})")
+                else:
+                    parts.append(f"![](assets/{name})\\")      # no caption: an image, not a numbered figure
+            elif "text/markdown" in data:
+                text = data["text/markdown"]
+                table = _TABLE.match(text)
+                if table:
+                    parts.append(table.group("table").rstrip() + "\n\n: " + table.group("caption").strip())
+                else:
+                    parts.append(_prose(text))
+    return "\n\n".join(parts) + "\n"
+
+
+def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
+    from ..study.summary import abstract_lines, read_long_table
+
+    answers = []
+    for edition in arms:
+        path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
+        if path.is_file():
+            try:
+                answers += abstract_lines(edition.name, read_long_table(path))
+            except (ValueError, KeyError):
+                pass
+    parts = ["# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
+    if answers:
+        parts.append("**Answers** (on held-out data, with 95 % bootstrap intervals):")
+        parts.append("\n".join(f"- {_escape(line)}" for line in answers))
+    parts.append(f"**Limits.** {_escape(ABSTRACT_LIMITS)}")
+    parts.append(f"**Sources.** {SOURCES}")
+    return "\n\n".join(parts)
+
+
+def paper_chapters(report: ReportPages) -> list[tuple[str, str, list[PaperChapter]]]:
+    """The PDF's parts in order: each edition's chapters (a chapter the same for every arm only
+    in the primary's), then the chapters comparing the editions; as (part title, a note, chapters)."""
+    parts = []
+    primary = [nb for nb in report.chapters if report.arms and report.arms[0] in report.runs.get(nb.name, ())]
+    for arm in report.arms:
+        letter = "" if arm.primary else arm.name[:1].upper()
+        chapters = []
+        for nb in report.chapters:
+            if nb.name in report.comparing or arm not in report.runs.get(nb.name, ()):
+                continue
+            executed = report.executed_dir / arm.subdir / nb.name
+            if executed.is_file():
+                chapters.append(PaperChapter(f"{letter}{int(nb.name[:2])}", chapter_title(nb), arm.name, executed))
+        if chapters:
+            what = "the dissertation's arm" if arm.primary else \
+                f"its chapters numbered {chapters[0].label}–{chapters[-1].label}"
+            shared = [str(int(nb.name[:2])) for nb in primary
+                      if nb.name not in report.comparing and arm not in report.runs.get(nb.name, ())]
+            note = "" if arm.primary or not shared else (
+                f"Chapter{'s' if len(shared) > 1 else ''} {', '.join(shared)}, the same for every arm, "
+                f"{'are' if len(shared) > 1 else 'is'} in the {report.arms[0].name} edition.")
+            parts.append((f"The {arm.name} edition ({what})", note, chapters))
+    compared = [PaperChapter(str(int(nb.name[:2])), chapter_title(nb), "compared", report.executed_dir / nb.name)
+                for nb in report.chapters if nb.name in report.comparing
+                and (report.executed_dir / nb.name).is_file()]
+    if compared:
+        parts.append(("The arms compared", "", compared))
+    return parts
+
+
+def paper_markdown(report: ReportPages, assets: Path, *, commit: str = "", built: str = "") -> str:
+    """The whole PDF as pandoc Markdown (raw Typst for the title page and the numbering); the
+    figures' PNGs are written into ``assets``."""
+    kind = "A smoke run (small parameters): not the published results." if report.smoke else \
+        "The published results (default parameters)." if not report.parameters else \
+        "A run with other parameters: " + ", ".join(f"{k} = {v!r}" for k, v in report.parameters.items()) + "."
+    title = _raw(f"""
+#align(center)[
+  #v(3cm)
+  #text(size: 22pt, weight: "bold")[nfarm — a 5-DOF arm modelled with numerical methods and ANFIS]
+  #v(1cm)
+  #text(size: 13pt)[A reproducible study reproducing the dissertation]
+  #v(0.4cm)
+  #text(size: 12pt)[Tu Rain (Ту Раин), _{DISSERTATION_TITLE}_]
+  #v(0.2cm)
+  #text(size: 11pt)[({DISSERTATION_TITLE_EN})]
+  #v(0.2cm)
+  #text(size: 11pt)[Candidate of Sciences dissertation, Belgorod State National Research University, 2023]
+  #v(2cm)
+  #text(size: 10pt)[{kind}]
+  #v(0.2cm)
+  #text(size: 10pt)[Commit {commit or "unknown"} · built {built}]
+]
+#pagebreak()
+#outline(depth: 2)
+""")
+    body = [title, f"This study reproduces the dissertation of @{DISSERTATION} and extends it with a second arm.",
+            _abstract(report.figures_dir, list(report.arms))]
+    for part, note, chapters in paper_chapters(report):
+        body.append(f"# {_escape(part)}")
+        if note:
+            body.append(_escape(note))
+        body += [_chapter_markdown(c, assets) for c in chapters]
+    body.append("# References {.unnumbered}\n\n::: {#refs}\n:::")
+    return "\n\n".join(body) + "\n"
+
+
+def _pandoc() -> str:
+    import pypandoc
+
+    return pypandoc.get_pandoc_path()
+
+
+def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = BIBLIOGRAPHY) -> Path:
+    """Write ``report.report_dir / PAPER_NAME`` (atomically) and return its path.
+
+    Raises:
+        ReportError: pandoc or Typst failed (one line with the tool's message).
+    """
+    import typst
+
+    target = report.report_dir / PAPER_NAME
+    report.report_dir.mkdir(parents=True, exist_ok=True)
+    if not commit:
+        commit = (_git("rev-parse", "--short=12", "HEAD") or "unknown") + \
+            (" (with uncommitted changes)" if _git("status", "--porcelain") else "")
+    built = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    with tempfile.TemporaryDirectory(prefix=".paper-", dir=report.report_dir) as tmp:
+        work = Path(tmp)
+        (work / "assets").mkdir()
+        markdown = paper_markdown(report, work / "assets", commit=commit, built=built)
+        (work / "paper.md").write_text(markdown, encoding="utf-8")
+        done = subprocess.run(
+            [_pandoc(), "paper.md", "--from", "markdown-auto_identifiers",
+             "--to", "typst", "--citeproc", "--bibliography", str(bibliography),
+             "--metadata", "link-citations=true", "--output", "body.typ"],
+            cwd=work, capture_output=True, text=True, timeout=600)
+        if done.returncode != 0:
+            raise ReportError(f"the PDF: pandoc failed: {' '.join(done.stderr.strip().splitlines()[-1:])}")
+        unresolved = re.findall(r"citation (\S+) not found", done.stderr)
+        if unresolved:                               # a citation the bibliography lacks: never "(key?)" in print
+            raise ReportError(f"the PDF cites what {BIBLIOGRAPHY.name} lacks: {', '.join(sorted(set(unresolved)))}")
+        (work / "paper.typ").write_text(_TYPST_PREAMBLE + (work / "body.typ").read_text(encoding="utf-8"),
+                                        encoding="utf-8")
+        try:
+            pdf = typst.compile(str(work / "paper.typ"), root=str(work))
+        except Exception as exc:                     # typst.TypstError: the compiler's diagnostics
+            first = str(exc).strip().splitlines()[:3]
+            raise ReportError(f"the PDF: Typst failed: {' '.join(first)}") from None
+        with atomic_path(target) as out:
+            out.write_bytes(pdf)
+    return target

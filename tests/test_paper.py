@@ -1,0 +1,177 @@
+"""The report as a paper: one PDF of the whole study (numbered figures and tables, a references
+list with the dissertation, no code, no unresolved reference), pages with their code folded and
+nothing loaded from the internet, and a report folder that holds everything it links."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import shutil
+from html.parser import HTMLParser
+from pathlib import Path
+from urllib.parse import unquote, urlsplit
+
+import nbformat
+import pytest
+from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
+
+from nfarm.infra.paths import ROOT
+from nfarm.publishing import paper, report
+from nfarm.publishing.manifest import verify_manifest
+from nfarm.__main__ import report_command as build_report
+
+pypdf = pytest.importorskip("pypdf")
+
+FIGURE_AND_TABLE = """import matplotlib.pyplot as plt
+from nfarm.infra.paths import project_path
+from nfarm.presentation.plotting import save_figure
+from nfarm.presentation.tables import Table
+out = project_path(out_dir)
+fig, ax = plt.subplots()
+ax.plot([0, 1], [0, 1])
+save_figure(fig, out, "{p}_line", caption="A line of chapter {p}")
+Table(["smoke", "value"], [[smoke, 1.5]], caption="Was chapter {p} a smoke run?").save(out, "{p}_params")"""
+
+PROSE = 'from IPython.display import Markdown, display\ndisplay(Markdown(f"The answer is {6 * 7}."))'
+
+
+def chapter(path: Path, parameters: str, *code: str, prose: str = "") -> None:
+    cells = [new_markdown_cell(f"# Chapter {int(path.name[:2])} — A chapter called {path.stem[3:]}\n\n{prose}"),
+             new_code_cell(parameters + '\nsmoke = False\nout_dir = "build/explore/x"',
+                           metadata={"tags": ["parameters"]})]
+    cells += [new_code_cell(c) for c in code]
+    cells.append(new_markdown_cell("## 1.1 A section\n\nWith $x^2 + \\tau_5$ and an address, me@example.org."))
+    cells.append(new_code_cell(PROSE, metadata={"tags": ["remove-input"]}))
+    nbformat.write(new_notebook(cells=cells), path)
+
+
+@pytest.fixture(scope="module")
+def smoke_report(tmp_path_factory):
+    """A smoke report of two arms (the primary "a", and "b" whose chapters are numbered "B1", …):
+    a chapter per arm, one the same for both, one comparing them; every one draws a figure and
+    writes a table."""
+    root = tmp_path_factory.mktemp("paper")
+    notebooks = root / "notebooks"
+    notebooks.mkdir()
+    chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"', FIGURE_AND_TABLE.format(p="01"),
+            prose="This chapter draws a line.")
+    chapter(notebooks / "02_shared.ipynb", "seed = 0", FIGURE_AND_TABLE.format(p="02"))
+    chapter(notebooks / "03_compare.ipynb", 'study_files = ["sa.yaml"]', FIGURE_AND_TABLE.format(p="03"))
+    arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
+    build = root / "build"
+    assert build_report(notebooks_dir=notebooks, figures_dir=root / "figures", build_dir=build, arms=arms,
+                        parallel=False, smoke=True) == 0
+    return build / "smoke" / "report"
+
+
+def pdf_text(path: Path) -> str:
+    reader = pypdf.PdfReader(path)
+    return "\n".join(page.extract_text() for page in reader.pages).replace("\xa0", " ")
+
+
+@pytest.mark.notebook
+def test_the_smoke_report_builds_one_pdf_of_the_whole_study(smoke_report):
+    pdf = smoke_report / paper.PAPER_NAME
+    assert pdf.is_file() and pdf.read_bytes()[:5] == b"%PDF-"
+    text = pdf_text(pdf)
+    flat = " ".join(text.split())
+    assert "Figure 1.1:" in flat and "A line of chapter 01" in flat, "figures numbered per chapter, captioned"
+    assert "Table 1.1:" in flat and "Table 2.1:" in flat and "Table 3.1:" in flat, "tables numbered per chapter"
+    assert "Figure B1.1:" in flat, "the other arm's chapters numbered apart"
+    assert "Was chapter 02 a smoke run?" in flat
+    assert "??" not in text and not re.search(r"\(\w+\?\)", text), "no unresolved reference"
+    assert "References" in text
+    refs = flat[flat.rindex("References"):]
+    assert "Tu Rain" in refs and "Belgorod State National Research University" in refs, "the dissertation cited"
+    assert "Jang" in refs and "Levenberg" in refs and "Pinocchio" in refs
+    assert "Tu Rain" in flat[:flat.index("Contents")], "the title page names the dissertation"
+    assert "The answer is 42." in flat and "me@example.org" in flat, "outputs and prose kept"
+    for code in ("save_figure(", "import matplotlib", "out_dir", "display(Markdown"):
+        assert code not in text, f"code left in the PDF: {code}"
+    assert "smoke run" in flat.lower()
+
+
+class _Refs(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.links: list[str] = []
+        self.scripts: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        for name in ("href", "src"):
+            if attrs.get(name):
+                self.links.append(attrs[name])
+        if tag == "script" and attrs.get("src"):
+            self.scripts.append(attrs["src"])
+
+
+def _pages(report_dir: Path) -> list[Path]:
+    return sorted(p for p in report_dir.rglob("*.html") if "mathjax" not in p.relative_to(report_dir).parts)
+
+
+@pytest.mark.notebook
+def test_pages_fold_their_code_and_load_nothing_from_the_internet(smoke_report):
+    pages = _pages(smoke_report)
+    assert len(pages) >= 5
+    for page in pages:
+        html = page.read_text(encoding="utf-8")
+        refs = _Refs()
+        refs.feed(html)
+        assert not [s for s in refs.scripts if re.match(r"(https?:)?//", s)], f"{page.name}: a script from the internet"
+        assert not re.search(r"cdn\.|cdnjs|jsdelivr|unpkg|mermaid", html, re.I), f"{page.name}: a CDN reference"
+        assert not re.search(r"import\(\s*['\"]https?:", html), f"{page.name}: a module from the internet"
+        if page.name != "index.html":
+            assert "<details class=\"nfarm-code\"><summary>show code</summary>" in html, page.name
+            assert "The answer is 42." in html and "display(Markdown" not in html, "remove-input still hidden"
+    first = (smoke_report / "01_robot.html").read_text(encoding="utf-8")
+    folded = re.findall(r"<details class=\"nfarm-code\">.*?</details>", first, re.S)
+    assert any("save_figure" in block for block in folded), "the code is there, folded"
+    assert "save_figure" not in re.sub(r"<details class=\"nfarm-code\">.*?</details>", "", first, flags=re.S)
+
+
+@pytest.mark.notebook
+def test_the_report_folder_holds_what_it_links_and_says_how_to_reproduce_it(smoke_report, tmp_path):
+    copy = tmp_path / "elsewhere"                 # the folder copied: its links still resolve
+    shutil.copytree(smoke_report, copy)
+    broken = []
+    for page in _pages(copy):
+        refs = _Refs()
+        refs.feed(page.read_text(encoding="utf-8"))
+        for link in refs.links:
+            parts = urlsplit(link)
+            if parts.scheme or link.startswith(("#", "//")):
+                assert parts.scheme in ("", "data", "mailto"), f"{page.name}: {link}"
+                continue
+            target = (page.parent / unquote(parts.path)).resolve()
+            if not target.exists() or copy.resolve() not in target.parents:
+                broken.append(f"{page.relative_to(copy)}: {link}")
+    assert not broken, broken
+    index = (copy / "index.html").read_text(encoding="utf-8")
+    assert f"href='{paper.PAPER_NAME}'" in index
+    assert "href='figures/tables/01_params.csv'" in index and "href='figures/b/tables/01_params.csv'" in index
+    assert verify_manifest(copy / "figures") == [], "figures/MANIFEST.sha256 checks the copies"
+    lock = hashlib.sha256((ROOT / "environment.lock").read_bytes()).hexdigest()
+    box = index[index.index("<div class='reproduce'>"):]
+    box = box[:box.index("</div>")]
+    assert lock in box and "make report" in box and re.search(r"\d+ cores?", box)
+    assert re.search(r"<dt>commit</dt><dd><code>([0-9a-f]{7,}|unknown)", box)
+
+
+def test_the_bibliography_has_every_work_the_pdf_cites():
+    bib = paper.BIBLIOGRAPHY.read_text(encoding="utf-8")
+    keys = re.findall(r"^@\w+\{([\w-]+),", bib, re.M)
+    assert len(keys) == len(set(keys)) >= 17
+    cited = set(re.findall(r"@([a-z][\w]+)", paper.SOURCES)) | {paper.DISSERTATION}
+    assert cited <= set(keys), sorted(cited - set(keys))
+    for entry in re.split(r"\n(?=@)", bib.strip())[1:]:
+        assert re.search(r"^\s*title\s*=", entry, re.M) and re.search(r"^\s*year\s*=\s*\{\d{4}\}", entry, re.M), entry
+        assert re.search(r"^\s*author\s*=", entry, re.M), entry
+    thesis = bib[bib.index("@phdthesis{" + paper.DISSERTATION):]
+    assert paper.DISSERTATION_TITLE in thesis and "Belgorod State National Research University" in thesis
+    assert not re.search(r"^\s*doi\s*=", bib, re.M | re.I), "no DOI written from memory"
+
+
+def test_a_notebook_s_prose_keeps_its_at_signs_and_its_headings_go_one_level_down():
+    assert paper._prose("# A\n\nmail me@x.org or @someone\n\n```\n# kept\n```") == \
+        "## A\n\nmail me@x.org or \\@someone\n\n```\n# kept\n```"
