@@ -93,6 +93,22 @@ def test_the_smoke_section_replaces_its_fields():
     assert len(sweep_from_dict(data, smoke=True).cells) == 1
 
 
+def test_a_sweep_file_is_read_whole_by_the_typed_reader():
+    """SweepFile (infra.typed) is the schema: the smoke section's fields are read with the
+    file's, and a field the smoke version replaces is still the file's, in smoke mode too."""
+    from nfarm.infra.typed import section_keys
+    from nfarm.study.sweep_files import SmokeSection, SweepFile
+    assert list(section_keys(SweepFile)) == ["name", "description", "job", "notebook", "fixed", "grid", "cells",
+                                             "seeds", "metrics", "smoke", "cell_timeout_s"]
+    assert list(section_keys(SmokeSection)) == ["fixed", "grid", "cells", "seeds"]
+    with pytest.raises(ParamsError, match=r"^f.yaml: smoke.seeds\[0\]: must be >= 0, got -1$"):
+        sweep_from_dict(small(smoke={"seeds": [-1]}), "f.yaml")
+    with pytest.raises(ParamsError, match=r"^f.yaml: grid: must be a mapping of parameters, got \[2\]$"):
+        sweep_from_dict(small(grid=[2], smoke={"grid": {"n_mfs": [2]}}), "f.yaml", smoke=True)
+    with pytest.raises(ParamsError, match=r"^f.yaml: smoke: must be a mapping of fields, got None$"):
+        sweep_from_dict(small(smoke=None), "f.yaml")
+
+
 @pytest.mark.parametrize("changes, message", [
     ({"colour": 1}, "colour: unknown field"),
     ({"notebook": NOTEBOOK}, "must name either a job or a notebook"),

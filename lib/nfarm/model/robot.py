@@ -38,7 +38,7 @@ import numpy as np
 from ..infra.paths import project_path, shown_path
 from ..infra.reading import ParamsError, ParamsWarning, Validator, load_yaml, show
 from ..infra.reading import read_bytes as _read_bytes
-from ..infra.typed import TEXT, Range, ReadBy, read_typed, section_keys
+from ..infra.typed import TEXT, Range, ReadBy, read_typed
 
 __all__ = [
     "ParamsError",

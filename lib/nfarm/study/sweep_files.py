@@ -16,6 +16,11 @@ papermill — and over which parameters::
     metrics: [check_rmse, rules]
     smoke: {fixed: {epochs: 2}}    # a smaller version (--smoke), replacing these fields
 
+A file is read as study files are: the generic reader (:func:`nfarm.infra.typed.read_typed`)
+reads it into a :class:`SweepFile` (every field's type and rule, unknown keys refused, the
+``smoke`` section's fields too), then :func:`sweep_from_dict` checks the rules between fields and
+against the job or notebook and expands the cells.
+
 A cell's parameters are ``fixed``, then the cell's own, then the grid's and the seed (a grid
 parameter may not be set anywhere else). A cell is identified by the SHA-256 of its job (or
 notebook) and its complete parameters (:meth:`nfarm.study.jobs.Job.complete`: the job's
@@ -30,22 +35,19 @@ import json
 import math
 import os
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import Annotated, Any, Optional
 
 from ..infra.paths import PARAMS, project_path, shown_path
 from ..infra.reading import ParamsError, Validator, json_ready, load_yaml, show
+from ..infra.typed import TEXT, Length, Range, ReadBy, read_typed, section_keys
 from .jobs import JOBS
 
-__all__ = ["Sweep", "Cell", "load_sweep", "sweep_from_dict", "SWEEPS", "MAX_CELLS"]
+__all__ = ["Sweep", "Cell", "SweepFile", "SmokeSection", "load_sweep", "sweep_from_dict", "SWEEPS", "MAX_CELLS"]
 
 SWEEPS = PARAMS / "sweeps"
 MAX_CELLS = 100_000
 
-_TOP = {"name": True, "description": False, "job": False, "notebook": False, "fixed": False,
-        "grid": False, "cells": False, "seeds": False, "metrics": True, "smoke": False,
-        "cell_timeout_s": False}
-_SMOKE = {"fixed": False, "grid": False, "cells": False, "seeds": False}
 _RUNNER_SET = ("out_dir",)      # a notebook's parameters the runner sets itself
 
 
@@ -198,56 +200,110 @@ def _check_sweep_name(v: Validator, name: Any) -> str:
     return name
 
 
+# --------------------------------------------------------------------------------------------
+# A sweep file as written: the schema :func:`sweep_from_dict` reads through the generic reader.
+# A field whose rule no annotation says (a parameter mapping, a name that names a directory, one
+# of the library's jobs) is read by a function of its own (``ReadBy``).
+
+
+def _name(v: Validator, value: Any, at: str) -> str:
+    return _check_sweep_name(v, value)
+
+
+def _job(v: Validator, value: Any, at: str) -> str:
+    """One of the library's jobs (:data:`nfarm.study.jobs.JOBS`)."""
+    return v.choice(value, at, sorted(JOBS))
+
+
+def _fixed(v: Validator, value: Any, at: str) -> dict[str, Any]:
+    """``fixed``: parameter names to plain values."""
+    return {k: _plain(v, x, f"{at}.{k}") for k, x in _parameters(v, value, at).items()}
+
+
+def _grid(v: Validator, value: Any, at: str) -> dict[str, list]:
+    """``grid``: parameter names to non-empty lists of plain values (the axes)."""
+    axes = {}
+    for key, values in _parameters(v, value, at).items():
+        values = v.sequence(values, f"{at}.{key}", min_len=1)
+        axes[key] = [_plain(v, x, f"{at}.{key}[{k}]") for k, x in enumerate(values)]
+    return axes
+
+
+def _cells(v: Validator, value: Any, at: str) -> list[dict[str, Any]]:
+    """``cells``: a non-empty list of parameter mappings."""
+    cells = v.sequence(value, at, min_len=1)
+    return [{key: _plain(v, x, f"{at}[{k}].{key}") for key, x in _parameters(v, cell, f"{at}[{k}]").items()}
+            for k, cell in enumerate(cells)]
+
+
+#: ``seeds``: whole numbers in [0, 2³² − 1], at least one (left out: no seed axis).
+Seeds = Annotated[list[Annotated[int, Range(lo=0, hi=2**32 - 1)]], Length(lo=1)]
+
+
+@dataclass(frozen=True, kw_only=True)
+class SmokeSection:
+    """``smoke``: the smaller version's fields, each replacing the file's own where given."""
+
+    fixed: Annotated[dict, ReadBy(_fixed)] = field(default_factory=dict)
+    grid: Annotated[dict, ReadBy(_grid)] = field(default_factory=dict)
+    cells: Annotated[list, ReadBy(_cells)] = field(default_factory=lambda: [{}])
+    seeds: Seeds = field(default_factory=list)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepFile:
+    """A sweep file as written (module docstring), typed and checked field by field; ``job``
+    or ``notebook`` is ``""`` when left out (the file names one of them), ``seeds`` ``[]``."""
+
+    name: Annotated[str, ReadBy(_name)]
+    description: Annotated[str, TEXT] = ""
+    job: Annotated[str, ReadBy(_job)] = ""
+    notebook: str = ""
+    fixed: Annotated[dict, ReadBy(_fixed)] = field(default_factory=dict)
+    grid: Annotated[dict, ReadBy(_grid)] = field(default_factory=dict)
+    cells: Annotated[list, ReadBy(_cells)] = field(default_factory=lambda: [{}])
+    seeds: Seeds = field(default_factory=list)
+    metrics: Annotated[list[str], Length(lo=1)]
+    smoke: SmokeSection = field(default_factory=SmokeSection)
+    cell_timeout_s: Optional[Annotated[float, Range(lo=0.0, lo_open=True, hi=7 * 24 * 3600.0)]] = None
+
+
 def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -> Sweep:
     """Validate a sweep mapping (as read from YAML) and expand its cells; ``smoke`` applies its
-    ``smoke`` section."""
+    ``smoke`` section. The mapping is read into a :class:`SweepFile` by the generic reader,
+    then the rules between fields, against the job or notebook and on the cells are checked;
+    the first broken rule is one :class:`ParamsError` line naming the file and the field."""
     v = Validator(source)
-    v.mapping(data, "", _TOP)
-    name = _check_sweep_name(v, data["name"])
-    description = v.string(data.get("description", ""), "description", allow_empty=True)
-    if ("job" in data) == ("notebook" in data):
+    v.mapping(data, "", section_keys(SweepFile))
+    if ("job" in data) == ("notebook" in data):       # which fields are given: before their values
         v.fail("", "must name either a job or a notebook")
-    job = notebook = None
-    if "job" in data:
-        job = v.choice(data["job"], "job", sorted(JOBS))
-    else:
-        path = project_path(v.string(data["notebook"], "notebook"))
+    file = read_typed(SweepFile, data, v)
+    name, description = file.name, file.description
+    job = file.job or None
+    notebook = None
+    if job is None:
+        path = project_path(file.notebook)
         if path.suffix != ".ipynb" or not path.is_file():
             v.fail("notebook", f"must be an existing .ipynb file, got {show(data['notebook'])}")
         notebook = shown_path(path)
-    metrics = v.sequence(data["metrics"], "metrics", min_len=1)
+    metrics = file.metrics
     for k, metric in enumerate(metrics):
-        v.string(metric, f"metrics[{k}]")
         if job and metric not in JOBS[job].metrics:
             v.fail(f"metrics[{k}]", f"job {job} returns no metric {metric!r} "
                                     f"(it returns {', '.join(JOBS[job].metrics)})")
     if len(set(metrics)) != len(metrics):
         v.fail("metrics", "lists a metric twice")
-    fields = dict(data)
-    if "smoke" in data:
-        v.mapping(data["smoke"], "smoke", _SMOKE)
-        if smoke:
-            fields.update(data["smoke"])
-        else:       # the smaller version must be valid too
-            sweep_from_dict(data, source, smoke=True)
-    at = lambda key: f"smoke.{key}" if smoke and key in data.get("smoke", {}) else key  # noqa: E731
-
-    fixed = {k: _plain(v, x, f"{at('fixed')}.{k}")
-             for k, x in _parameters(v, fields.get("fixed", {}), at("fixed")).items()}
-    axes = {}
-    for key, values in _parameters(v, fields.get("grid", {}), at("grid")).items():
-        values = v.sequence(values, f"{at('grid')}.{key}", min_len=1)
-        axes[key] = [_plain(v, x, f"{at('grid')}.{key}[{k}]") for k, x in enumerate(values)]
-    cells = v.sequence(fields.get("cells", [{}]), at("cells"), min_len=1)
-    own = [{key: _plain(v, x, f"{at('cells')}[{k}].{key}")
-            for key, x in _parameters(v, cell, f"{at('cells')}[{k}]").items()}
-           for k, cell in enumerate(cells)]
-    if "seeds" in fields:
-        seeds = v.sequence(fields["seeds"], at("seeds"), min_len=1)
-        axes_seed = [v.integer(s, f"{at('seeds')}[{k}]", lo=0, hi=2**32 - 1) for k, s in enumerate(seeds)]
+    replaced = set(data.get("smoke", {})) if smoke else set()       # the smoke section's fields given
+    if "smoke" in data and not smoke:       # the smaller version must be valid too
+        sweep_from_dict(data, source, smoke=True)
+    at = lambda key: f"smoke.{key}" if key in replaced else key  # noqa: E731
+    fixed, axes, own, seeds = (getattr(file.smoke if key in replaced else file, key)
+                               for key in ("fixed", "grid", "cells", "seeds"))
+    axes = dict(axes)
+    if seeds:
         if "seed" in axes:
             v.fail(at("seeds"), "the grid sets seed too: give the seeds in one place")
-        axes["seed"] = axes_seed
+        axes["seed"] = seeds
     for key in axes:
         if key in fixed:
             v.fail(f"{at('grid')}.{key}", "is also in fixed: a parameter is fixed or varied, not both")
@@ -257,15 +313,12 @@ def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -
     count = len(own) * math.prod(len(x) for x in axes.values())
     if count > MAX_CELLS:
         v.fail(at("grid"), f"makes {count:,} cells; at most {MAX_CELLS:,}")
-    timeout = None
-    if data.get("cell_timeout_s") is not None:
-        timeout = v.number(data["cell_timeout_s"], "cell_timeout_s", lo=0.0, lo_open=True, hi=7 * 24 * 3600.0)
-    sweep = Sweep(name, source, job, notebook, tuple(metrics), (), description, timeout)
+    sweep = Sweep(name, source, job, notebook, tuple(metrics), (), description, file.cell_timeout_s)
     allowed = _allowed(v, sweep)
     for where, names in [(at("fixed"), fixed), (at("grid"), axes),
                          *((f"{at('cells')}[{k}]", cell) for k, cell in enumerate(own))]:
         for key in names:
-            _check_name(v, sweep, allowed, key, where if key != "seed" or "seeds" not in fields
+            _check_name(v, sweep, allowed, key, where if key != "seed" or not seeds
                         else at("seeds"))
     points = [{**fixed, **cell, **dict(zip(axes, values))}
               for cell in own for values in itertools.product(*axes.values())]
@@ -274,14 +327,14 @@ def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -
     def origin(k: int, name: str) -> str:
         if name in fixed:
             return f"{at('fixed')}.{name}"
-        if name == "seed" and "seeds" in fields:
+        if name == "seed" and seeds:
             return at("seeds")
         if name in axes:
             return f"{at('grid')}.{name}"
         return f"{at('cells')}[{k // per_cell}].{name}"
 
-    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if "cells" in fields else at("grid"),
-                                            origin))
+    listed = "cells" in data or "cells" in replaced        # the cells are the file's own, or the grid's
+    return replace(sweep, cells=_make_cells(v, sweep, points, at("cells") if listed else at("grid"), origin))
 
 
 def load_sweep(path: str | os.PathLike, *, smoke: bool = False) -> Sweep:
