@@ -61,11 +61,10 @@ _TYPST_PREAMBLE = r"""
 #set par(justify: true)
 #let chap = state("nfarm-chapter", "")
 #set figure(numbering: n => context (chap.get() + "." + str(n)))
-#show figure: set block(breakable: true)
+#show figure.where(kind: table): set block(breakable: true)
 #show figure.caption: set text(size: 9pt)
 #show table: set text(size: 7pt)
 #show raw.where(block: true): set text(size: 7pt)
-#set image(width: 88%)
 #show heading.where(level: 1): it => { pagebreak(weak: true); it }
 #show heading.where(level: 2): it => { pagebreak(weak: true); it }
 """
@@ -107,6 +106,16 @@ def _prose(markdown: str) -> str:
             line = _CITATION_LIKE.sub(lambda m: m.group(1) + "\\@", line)
         out.append(line)
     return "\n".join(out)
+
+
+def _image_width(png: Path, *, widest: int = 90, tallest_cm: float = 11.5, text_cm: float = 16.6) -> int:
+    """The width (percent of the text's) that shows a figure whole: most of the text's width, or
+    less for a tall one, so that it is at most ``tallest_cm`` high and fits a page with its caption."""
+    from PIL import Image
+
+    with Image.open(png) as image:
+        width, height = image.size
+    return max(30, min(widest, int(100 * tallest_cm * width / height / text_cm)))
 
 
 _TABLE = re.compile(r"\A\s*\*(?P<caption>[^\n]+)\*\s*\n\s*\n(?P<table>\|.*)\Z", re.S)
@@ -155,10 +164,11 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
                 (assets / name).write_bytes(base64.b64decode(data["image/png"]))
                 plain = data.get("text/plain", "")
                 caption = plain[len("Figure: "):] if plain.startswith("Figure: ") else ""
+                width = _image_width(assets / name)
                 if caption:
-                    parts.append(f"![{_escape(caption.strip())}](assets/{name})")
-                else:
-                    parts.append(f"![](assets/{name})\\")      # no caption: an image, not a numbered figure
+                    parts.append(f"![{_escape(caption.strip())}](assets/{name}){{width={width}%}}")
+                else:                                   # no caption: an image, not a numbered figure
+                    parts.append(f"![](assets/{name}){{width={width}%}}\\")
             elif "text/markdown" in data:
                 text = data["text/markdown"]
                 table = _TABLE.match(text)
@@ -284,7 +294,8 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
         (work / "paper.md").write_text(markdown, encoding="utf-8")
         done = subprocess.run(
             [_pandoc(), "paper.md", "--from", "markdown-auto_identifiers",
-             "--to", "typst", "--citeproc", "--bibliography", str(bibliography),
+             # --columns: no pipe table is "wider than the page" to pandoc, so Typst sizes the columns to their cells
+             "--to", "typst", "--columns", "100000", "--citeproc", "--bibliography", str(bibliography),
              "--metadata", "link-citations=true", "--output", "body.typ"],
             cwd=work, capture_output=True, text=True, timeout=600)
         if done.returncode != 0:
