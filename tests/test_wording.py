@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import nfarm.presentation.wording
-from nfarm.presentation.wording import about, sig, span, times, times_range
+from nfarm.presentation.wording import about, range_text, sig, times, times_range
 
 
 def test_the_examples_hold():
@@ -39,8 +39,9 @@ def test_wall_clock_figures_have_two_significant_digits():
     assert about(10.4) == "about 10" and about(0.0123) == "about 0.012"
 
 
-def test_a_span_of_equal_values_is_one_value():
-    assert span(0.125, 0.125) == "0.125" and span(0.1, 0.25) == "0.1–0.25"
+def test_a_range_of_values_that_print_alike_is_one_value():
+    assert range_text(0.125, 0.125) == "0.125" and range_text(0.1, 0.25) == "0.1–0.25"
+    assert range_text(0.12501, 0.12504) == "0.125" and range_text(1.0, 2.0, ".2f") == "1.00–2.00"
 
 
 @settings(max_examples=200, deadline=None)

@@ -17,15 +17,15 @@ helpers choose the words and the precision from the value:
 'about 1,400,000'
 >>> sig(186704.3)
 '187,000'
->>> span(0.125, 0.125)
-'0.125'
+>>> range_text(0.125, 0.125), range_text(0.1, 0.25)
+('0.125', '0.1–0.25')
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["times", "times_range", "about", "listed", "sig", "span", "resolved_joints", "worst_of", "torque_columns"]
+__all__ = ["times", "times_range", "about", "listed", "sig", "range_text", "resolved_joints", "worst_of", "torque_columns"]
 
 #: Ratios within this of 1 read as "about the same": measured ratios of timings and errors
 #: move by several per cent between runs and seeds.
@@ -84,8 +84,10 @@ def about(x: float, digits: int = 2) -> str:
     return f"about {_ratio(x, digits)}"
 
 
-def span(lo: float, hi: float, fmt: str = ".3g") -> str:
-    """"lo–hi", or one value when both print alike."""
+def range_text(lo: float, hi: float, fmt: str = ".3g") -> str:
+    """The range from ``lo`` to ``hi`` as text, each written by ``fmt``: ``"lo–hi"``, or one
+    value when both print alike (a range of counts over seeds is
+    :func:`nfarm.study.configurations.span`)."""
     a, b = format(lo, fmt), format(hi, fmt)
     return a if a == b else f"{a}–{b}"
 
