@@ -228,24 +228,51 @@ def count_distinct(q: np.ndarray, ok: np.ndarray, distinct: float = 1e-6) -> np.
 def _solve_chunk(g: ArmConstants, T: np.ndarray):
     """``T (m, 4, 4)`` → the joint angles ``q1, q5 (2, m)`` (base branch, target) and
     ``q2, q3, q4 (2, 2, m)`` (base branch, elbow column, target), and per base branch the
-    errors ``(2, m)`` [m], [rad]."""
-    # Component layout: one transposed copy, then 3 × 3 products entry by entry (a batched
-    # (m, 3, 3) @ (3, 3) matmul costs five times as much).
+    errors ``(2, m)`` [m], [rad]: the steps of the module docstring, one function each."""
+    target = _target_in_base(g, T)
+    t1, c1, s1 = _base_angles(g, target)
+    wrist = _wrist_angles(g, target, c1, s1)
+    link = _two_link(g, target, c1, s1, wrist)
+    pos_error, rot_error = _errors(g, wrist, link)
+    return _joint_angles(g, t1, wrist, link), pos_error, rot_error
+
+
+@dataclass(frozen=True)
+class _Target:
+    """Step 1 on m targets, in the frame of the base joint (the base taken out): the roll
+    frame's rotation ``M = R Rx(−α5)`` (3 × 3 entries, each ``(m,)``; its column 2 the roll
+    axis z4) and the wrist point ``(px, py)`` and ``pz1`` (its height above d1) [m]."""
+
+    M: list
+    px: np.ndarray
+    py: np.ndarray
+    pz1: np.ndarray
+
+
+def _target_in_base(g: ArmConstants, T: np.ndarray) -> _Target:
+    """Step 1: the wrist point and the roll frame of targets ``T (m, 4, 4)``. Component layout:
+    one transposed copy, then 3 × 3 products entry by entry (a batched ``(m, 3, 3) @ (3, 3)``
+    matmul costs five times as much)."""
     flat = T.reshape(-1, 16).T.copy()                                      # (16, m)
     R = [[flat[4 * i + j] for j in range(3)] for i in range(3)]
     p = [flat[4 * i + 3] - g.pb[i] for i in range(3)]
     if g.RbT is None:
-        m = R
+        M = R
     else:
         RC = _product(R, g.C)
-        m = _product(g.RbT, RC)
+        M = _product(g.RbT, RC)
     Rc0 = [_dot(R[i], g.c0) for i in range(3)]
     p = [p[i] - Rc0[i] for i in range(3)]
     px, py, pz = p if g.RbT is None else [_dot(p, g.RbT[i]) for i in range(3)]
-    sa, ca = g.sa1, g.ca1
+    return _Target(M, px, py, pz - g.d1)
 
-    # 2. The base: both roots of the position condition; the orientation's where better.
-    pz1 = pz - g.d1
+
+def _base_angles(g: ArmConstants, target: _Target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Step 2: θ̄1 ``(2, m)`` [rad] of the front and back branches and its cos and sin: both
+    roots of the position condition, the orientation condition's where the position's is weak
+    (its square root small) or undetermined (the wrist point on the base axis)."""
+    sa, ca = g.sa1, g.ca1
+    px, py, pz1 = target.px, target.py, target.pz1
     Ap, Bp, Cp = sa * px, sa * py, g.w - ca * pz1
     hp = np.sqrt(np.maximum(Ap * Ap + Bp * Bp - Cp * Cp, 0.0))
     front = math.copysign(1.0, sa)
@@ -258,7 +285,7 @@ def _solve_chunk(g: ArmConstants, T: np.ndarray):
     bad = np.flatnonzero(~np.isfinite(inv))                 # ρ = 0: the wrist point on the axis
     if bad.size:
         t1[:, bad] = np.arctan2(Bp[bad], Ap[bad]) + np.arctan2(Cp[bad], root[:, bad])
-    z4x, z4y, z4z = m[0][2], m[1][2], m[2][2]
+    z4x, z4y, z4z = target.M[0][2], target.M[1][2], target.M[2][2]
     Ao, Bo, Co = sa * z4x, sa * z4y, g.cb - ca * z4z
     ho = np.sqrt(np.maximum(Ao * Ao + Bo * Bo - Co * Co, 0.0))
     # The position root's error grows as reach/hp, the orientation root's as 1/ho: switch only
@@ -277,29 +304,85 @@ def _solve_chunk(g: ArmConstants, T: np.ndarray):
     if weak.size or bad.size:
         redo = np.union1d(weak, bad)
         c1[:, redo], s1[:, redo] = np.cos(t1[:, redo]), np.sin(t1[:, redo])
+    return t1, c1, s1
 
-    # 3. The wrist: G = R_1ᵀ M (rows x1ᵀM, y1ᵀM, z1ᵀM; the entries used).
-    def G_entry(i, j):
-        mx, my, mz = m[0][j], m[1][j], m[2][j]
+
+class _WristRotation:
+    """``G = R_1ᵀ M`` of both base branches (rows x1ᵀM, y1ᵀM, z1ᵀM), entry ``(i, j)`` as
+    asked, ``(2, m)``, each computed once."""
+
+    def __init__(self, g: ArmConstants, M: list, c1: np.ndarray, s1: np.ndarray):
+        self.g, self.M, self.c1, self.s1 = g, M, c1, s1
+        self.entries: dict[tuple[int, int], np.ndarray] = {}
+
+    def __call__(self, i: int, j: int) -> np.ndarray:
+        if (i, j) not in self.entries:
+            self.entries[i, j] = self._entry(i, j)
+        return self.entries[i, j]
+
+    def _entry(self, i: int, j: int) -> np.ndarray:
+        c1, s1, sa, ca = self.c1, self.s1, self.g.sa1, self.g.ca1
+        mx, my, mz = self.M[0][j], self.M[1][j], self.M[2][j]
         if i == 0:
             return c1 * mx + s1 * my
         if i == 1:
             return ca * (c1 * my - s1 * mx) + sa * mz if ca else sa * mz
         return sa * (s1 * mx - c1 * my) + ca * mz if ca else sa * (s1 * mx - c1 * my)
 
-    G00, G10, G20, G21 = G_entry(0, 0), G_entry(1, 0), G_entry(2, 0), G_entry(2, 1)
-    G02, G12, G22 = G_entry(0, 2), G_entry(1, 2), G_entry(2, 2)
+
+@dataclass(frozen=True)
+class _Wrist:
+    """Step 3 per base branch ``(2, m)``: ``G = Rz(Φ) Rx(β) Rz(θ̄5)`` decomposed: ``Phi`` (Φ)
+    and ``t5`` (θ̄5) [rad] with their cos and sin, ``n = |(G02, G12)|`` (sin β' up to sign)."""
+
+    G: _WristRotation
+    Phi: np.ndarray
+    t5: np.ndarray
+    cP: np.ndarray
+    sP: np.ndarray
+    c5: np.ndarray
+    s5: np.ndarray
+    n: np.ndarray
+
+
+def _wrist_angles(g: ArmConstants, target: _Target, c1: np.ndarray, s1: np.ndarray) -> _Wrist:
+    """Step 3: the ZXZ decomposition of ``G = R_1ᵀ M`` whose middle angle is β."""
+    G = _WristRotation(g, target.M, c1, s1)
+    G02, G12, G20, G21 = G(0, 2), G(1, 2), G(2, 0), G(2, 1)
     s = g.s
     Phi = np.arctan2(s * G02, -s * G12)
     t5 = np.arctan2(s * G20, s * G21)
     cP, sP, n = _cos_sin(Phi, -s * G12, s * G02)
     c5, s5, _ = _cos_sin(t5, s * G21, s * G20)
+    return _Wrist(G, Phi, t5, cP, sP, c5, s5, n)
 
-    # 4. The planar two-link.
+
+@dataclass(frozen=True)
+class _TwoLink:
+    """Step 4 per base branch ``(2, m)``: the wrist-pitch point ``Q = (Qx, Qy)`` [m] in the
+    arm's plane (``r2 = |Q|²``) and ``Z`` across it, the elbow angle ``gamma`` (γ ≥ 0) [rad]
+    with its cos ``cg`` and sin ``sg``, the direction ``psi`` of Q and the shoulder's angle
+    ``delta`` from it [rad]."""
+
+    Qx: np.ndarray
+    Qy: np.ndarray
+    r2: np.ndarray
+    Z: np.ndarray
+    gamma: np.ndarray
+    cg: np.ndarray
+    sg: np.ndarray
+    psi: np.ndarray
+    delta: np.ndarray
+
+
+def _two_link(g: ArmConstants, target: _Target, c1: np.ndarray, s1: np.ndarray, wrist: _Wrist) -> _TwoLink:
+    """Step 4: the planar two-link, by the half-angle form of the elbow."""
+    sa, ca = g.sa1, g.ca1
+    px, py, pz1 = target.px, target.py, target.pz1
     X = c1 * px + s1 * py - g.a1
     Y = ca * (c1 * py - s1 * px) + sa * pz1
     Z = sa * (s1 * px - c1 * py) + ca * pz1
-    Qx, Qy = X - g.a4 * cP, Y - g.a4 * sP
+    Qx, Qy = X - g.a4 * wrist.cP, Y - g.a4 * wrist.sP
     r2 = Qx * Qx + Qy * Qy
     a2, a3 = g.a2, g.a3
     k = math.copysign(1.0, a2 * a3)
@@ -311,42 +394,52 @@ def _solve_chunk(g: ArmConstants, T: np.ndarray):
     cg, sg = (near * near - far * far) * inv, 2.0 * far * near * inv
     psi = np.arctan2(Qy, Qx)
     delta = np.arctan2(a3 * sg, a2 + a3 * cg)
+    return _TwoLink(Qx, Qy, r2, Z, gamma, cg, sg, psi, delta)
 
-    # Errors (module docstring): the points the links reach, and G' = Rz(Φ) Rx(β) Rz(θ̄5).
-    rQ = np.sqrt(r2)
-    reached = np.sqrt(np.maximum(a2 * a2 + a3 * a3 + 2 * a2 * a3 * cg, 0.0))
+
+def _errors(g: ArmConstants, wrist: _Wrist, link: _TwoLink) -> tuple[np.ndarray, np.ndarray]:
+    """The position [m] and orientation [rad] errors ``(2, m)`` of each base branch (module
+    docstring): from the point the links reach and ``G' = Rz(Φ) Rx(β) Rz(θ̄5)``."""
+    G, cP, sP, c5, s5, n = wrist.G, wrist.cP, wrist.sP, wrist.c5, wrist.s5, wrist.n
+    a2, a3 = g.a2, g.a3
+    rQ = np.sqrt(link.r2)
+    reached = np.sqrt(np.maximum(a2 * a2 + a3 * a3 + 2 * a2 * a3 * link.cg, 0.0))
     short = rQ - reached
-    ux, uy, _ = _cos_sin(psi, Qx, Qy)                      # the direction of Q (u(ψ) at Q = 0)
+    ux, uy, _ = _cos_sin(link.psi, link.Qx, link.Qy)        # the direction of Q (u(ψ) at Q = 0)
     sb, cb = g.sb, g.cb
-    ex, ey, ez = short * ux, short * uy, Z - g.w
+    ex, ey, ez = short * ux, short * uy, link.Z - g.w
     if g.v[0]:                                  # (G − G')[:, j] v_j, G' column by column
-        ex = ex + g.v[0] * (G00 - (cP * c5 - sP * cb * s5))
-        ey = ey + g.v[0] * (G10 - (sP * c5 + cP * cb * s5))
-        ez = ez + g.v[0] * (G20 - sb * s5)
+        ex = ex + g.v[0] * (G(0, 0) - (cP * c5 - sP * cb * s5))
+        ey = ey + g.v[0] * (G(1, 0) - (sP * c5 + cP * cb * s5))
+        ez = ez + g.v[0] * (G(2, 0) - sb * s5)
     if g.v[1]:
-        ex = ex + g.v[1] * (G_entry(0, 1) + cP * s5 + sP * cb * c5)
-        ey = ey + g.v[1] * (G_entry(1, 1) + sP * s5 - cP * cb * c5)
-        ez = ez + g.v[1] * (G21 - sb * c5)
+        ex = ex + g.v[1] * (G(0, 1) + cP * s5 + sP * cb * c5)
+        ey = ey + g.v[1] * (G(1, 1) + sP * s5 - cP * cb * c5)
+        ez = ez + g.v[1] * (G(2, 1) - sb * c5)
     if g.v[2]:
-        ex = ex + g.v[2] * (G02 - sb * sP)
-        ey = ey + g.v[2] * (G12 + sb * cP)
-        ez = ez + g.v[2] * (G22 - cb)
+        ex = ex + g.v[2] * (G(0, 2) - sb * sP)
+        ey = ey + g.v[2] * (G(1, 2) + sb * cP)
+        ez = ez + g.v[2] * (G(2, 2) - cb)
     pos_error = np.sqrt(ex * ex + ey * ey + ez * ez)
     # G = Rz(Φ) Rx(β') Rz(θ̄5) with cos β' = G22, sin β' = s·n: G'ᵀG = Rz(−θ̄5) Rx(β' − β) Rz(θ̄5),
     # an angle of |β' − β|.
+    G22 = G(2, 2)
     rot_error = np.abs(np.arcsin(np.clip(n * cb - G22 * abs(sb), -1.0, 1.0)))
     behind = G22 * cb + n * abs(sb) < 0                     # |β' − β| > π/2 (rare)
     if behind.any():
         rot_error[behind] = np.pi - rot_error[behind]
+    return pos_error, rot_error
 
-    # The angles, offsets taken out: elbow column 0 is "up" (module docstring), 1 "down".
+
+def _joint_angles(g: ArmConstants, t1: np.ndarray, wrist: _Wrist, link: _TwoLink) -> tuple:
+    """The joint angles [rad], offsets taken out: ``q1, q5 (2, m)`` and ``q2, q3, q4 (2, 2, m)``
+    with elbow column 0 "up" (module docstring), 1 "down"."""
     e_up = np.array([-g.elbow_up, g.elbow_up])[:, None, None] * np.array([1.0, -1.0])[:, None]
-    gam = e_up * gamma[:, None, :]
-    q2 = psi[:, None, :] - e_up * delta[:, None, :]
-    q4 = g.sigma * (Phi[:, None, :] - q2 - gam)
+    gam = e_up * link.gamma[:, None, :]
+    q2 = link.psi[:, None, :] - e_up * link.delta[:, None, :]
+    q4 = g.sigma * (wrist.Phi[:, None, :] - q2 - gam)
     o = g.offset
-    angles = (t1 - o[0], q2 - o[1], g.sigma2 * gam - o[2], q4 - o[3], t5 - o[4])
-    return angles, pos_error, rot_error
+    return (t1 - o[0], q2 - o[1], g.sigma2 * gam - o[2], q4 - o[3], wrist.t5 - o[4])
 
 
 def _dot(row: list, coefficients: np.ndarray):
