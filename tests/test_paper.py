@@ -124,6 +124,7 @@ def test_pages_fold_their_code_and_load_nothing_from_the_internet(smoke_report):
         if page.name != "index.html":
             assert "<details class=\"nfarm-code\"><summary>show code</summary>" in html, page.name
             assert "The answer is 42." in html and "display(Markdown" not in html, "remove-input still hidden"
+            assert not re.search(r"<div class=\"jp-(In|Out)putPrompt", html), f"{page.name}: In/Out prompts"
     first = (smoke_report / "01_robot.html").read_text(encoding="utf-8")
     folded = re.findall(r"<details class=\"nfarm-code\">.*?</details>", first, re.S)
     assert any("save_figure" in block for block in folded), "the code is there, folded"

@@ -161,7 +161,9 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     exporter = HTMLExporter(template_name="lab", config=config, mathjax_url=mathjax,
                             require_js_url="", jquery_url="", widget_renderer_url="",
                             extra_loaders=[DictLoader({"nfarm-page.html.j2": PAGE_TEMPLATE})],
-                            template_file="nfarm-page.html.j2")
+                            template_file="nfarm-page.html.j2",
+                            # the study edition reads as a text: no "In [5]:"/"Out[5]:" prompts
+                            exclude_input_prompt=fold_code, exclude_output_prompt=fold_code)
     exporter.register_preprocessor(TagRemovePreprocessor(config=config), enabled=True)
     # Figures carry their captions as alternative text (nfarm.presentation.plotting.save_figure); an image
     # shown without one gets nbconvert's generic text and a warning, which the check of the

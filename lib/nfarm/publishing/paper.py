@@ -16,6 +16,7 @@ from __future__ import annotations
 import base64
 import datetime
 import re
+import shutil
 import subprocess
 import tempfile
 from dataclasses import dataclass
@@ -283,6 +284,8 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
 
     target = report.report_dir / PAPER_NAME
     report.report_dir.mkdir(parents=True, exist_ok=True)
+    for stale in report.report_dir.glob(".paper-*"):    # a killed build's work directory
+        shutil.rmtree(stale, ignore_errors=True)
     if not commit:
         commit = (_git("rev-parse", "--short=12", "HEAD") or "unknown") + \
             (" (with uncommitted changes)" if _git("status", "--porcelain") else "")
