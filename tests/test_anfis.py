@@ -365,7 +365,11 @@ X3, Y3, *_ = jang.three_input_data()
     ((X3, Y3), dict(partition="fcm"), r"partition 'fcm' needs n_rules \(an integer\) >= 2"),
     ((X3, Y3), dict(memory_budget=1e4), r"would need about .* GB, over memory_budget"),
     ((X3, Y3), dict(solver="qr"), r"solver must be one of normal, lstsq"),
-    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_tolerance=0.0), r"fcm_tolerance must be a positive number"),
+    ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_tolerance=0.0), r"fcm_tolerance must be a finite number > 0, got 0.0"),
+    ((X3, Y3), dict(step_size=True), r"step_size must be a finite number > 0, got True"),
+    ((X3, Y3), dict(ridge="0"), r"ridge must be a finite number >= 0, got '0'"),
+    ((X3, Y3), dict(error_goal=float("nan")), r"error_goal must be a finite number >= 0, got nan"),
+    ((X3, Y3), dict(epochs=True), r"epochs must be an integer >= 1, got True"),
     ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_max_iter=0), r"fcm_max_iter must be an integer >= 1"),
     ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_samples=1), r"fcm_samples must be an integer >= 2 or None, got 1"),
     ((X3, Y3), dict(partition="fcm", n_rules=3, fcm_samples=True), r"fcm_samples must be an integer >= 2 or None"),
@@ -580,3 +584,11 @@ def test_fuzzy_c_means_stops_at_its_tolerance():
     one = ANFIS(partition="fcm", n_rules=4, mf="gauss", epochs=1, fcm_max_iter=1, random_state=0).fit(X, y)
     centres = lambda m: np.column_stack([p[:, 1] for p in m.mfs_initial_])   # noqa: E731 (gauss: sigma, centre)
     assert np.abs(centres(tight) - centres(loose)).max() < 1e-2 < np.abs(centres(tight) - centres(one)).max()
+
+
+def test_options_after_partition_are_keyword_only():
+    """Only ``n_mfs``, ``mf`` and ``partition`` are positional: a fourth value is refused rather
+    than read as whichever of the other eighteen options comes next."""
+    assert ANFIS(3, "gauss", "fcm", n_rules=4).get_params()["n_rules"] == 4
+    with pytest.raises(TypeError, match="positional"):
+        ANFIS(3, "gauss", "fcm", 4)

@@ -155,6 +155,26 @@ class LearnedID(PerJointModel):
     Learned attributes: ``models_``, ``robot_`` (the robot it was fitted or loaded with),
     ``robot_hash_``, ``robot_name_``, ``n_joints_``, ``input_lo_``, ``input_span_`` (per joint, the inputs' scaling to ``[0, 1]``),
     ``fit_seconds_`` (with shared premises, the joint training's time split evenly).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> rng = np.random.default_rng(0)
+        >>> def states(N):                        # random states within the joint limits
+        ...     q = rng.uniform(robot.qlim[:, 0], robot.qlim[:, 1], (N, robot.n))
+        ...     qd, qdd = rng.uniform(-1, 1, (2, N, robot.n))           # [rad/s], [rad/s²]
+        ...     return {"q": q, "qd": qd, "qdd": qdd, "tau": rnea(robot, q, qd, qdd)}
+        >>> train, test = states(400), states(100)
+        >>> model = LearnedID(inputs="regressor", n_mfs=1, epochs=1).fit(robot, train)
+        >>> tau = model.predict(test["q"], test["qd"], test["qdd"])
+        >>> tau.shape                                                 # (states, joints) [N·m]
+        (100, 5)
+        >>> model.predict(test["q"][0], test["qd"][0], test["qdd"][0]).shape      # one state
+        (5,)
+        >>> nrmse = np.sqrt(np.mean((tau - test["tau"]) ** 2, axis=0)) / test["tau"].std(axis=0)
+        >>> bool((nrmse < 1e-6).all())        # τ = Y π is linear in the regressor: one rule is exact
+        True
     """
 
     _passed_to = ANFIS

@@ -1,6 +1,6 @@
-"""Checks of the solvers' arguments: each refuses a bad value with one ``ValueError`` line naming
-the argument (and, for a batch of target poses, the first bad one by its index), before any
-work.
+"""Checks of the solvers' arguments (and, for numbers and integers, the learners' options):
+each refuses a bad value with one ``ValueError`` line naming the argument (and, for a batch of
+target poses, the first bad one by its index), before any work.
 """
 
 from __future__ import annotations
@@ -128,14 +128,23 @@ def check_number(name: str, value, lo: float, hi: float | None, open_lo: bool) -
         raise ValueError(f"{name} must be a finite number {bounds}, got {value!r}")
 
 
-def check_integer(name: str, value, lo: int) -> None:
-    """A ``ValueError`` naming ``name`` unless ``value`` is an integer ``>= lo``.
+def check_integer(name: str, value, lo: int, *, or_none: bool = False) -> None:
+    """A ``ValueError`` naming ``name`` unless ``value`` is an integer ``>= lo`` (or, with
+    ``or_none``, ``None``).
 
     Example:
         >>> check_integer("restarts", 2.0, 0)
         Traceback (most recent call last):
         ...
         ValueError: restarts must be an integer >= 0, got 2.0
+        >>> check_integer("patience", None, 1, or_none=True)    # accepted
+        >>> check_integer("patience", 0, 1, or_none=True)
+        Traceback (most recent call last):
+        ...
+        ValueError: patience must be an integer >= 1 or None, got 0
     """
+    if or_none and value is None:
+        return
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name} must be an integer >= {lo}, got {value!r}")
+        raise ValueError(f"{name} must be an integer >= {lo}{' or None' if or_none else ''}, "
+                         f"got {value!r}")
