@@ -22,7 +22,7 @@ export PYTHONHASHSEED := 0
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
-.PHONY: setup report test bench sweep course lock lab panel verify clean distclean worker
+.PHONY: setup arm report test bench sweep course lock lab panel verify clean distclean worker
 
 setup: $(STAMP)
 
@@ -46,6 +46,12 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 # cluster (its workers: this checkout and `make setup`); the published files are the same.
 report: $(STAMP)
 	$(REPORT_ENV) $(PY) -m nfarm report $(if $(SCHEDULER),--scheduler "$(SCHEDULER)")
+
+# make arm URDF=path/to/arm.urdf [NAME=n] [ARM_ARGS="--tip LINK --lock JOINT=VALUE"]: a new arm's
+# robot and study files in params/, with defaults derived from its URDF (README "A new arm").
+arm: $(STAMP)
+	@test -n "$(URDF)" || { echo "make arm: name a URDF, e.g. make arm URDF=path/to/arm.urdf [NAME=myarm]" >&2; exit 2; }
+	$(PY) -m nfarm add-arm "$(URDF)" $(if $(NAME),--name "$(NAME)") $(ARM_ARGS)
 
 # Checks the checkout's figures/ against figures/MANIFEST.sha256 without regenerating anything.
 verify: $(STAMP)

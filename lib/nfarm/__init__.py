@@ -32,6 +32,7 @@ modules a notebook's names come from (:data:`PUBLIC`).
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
@@ -65,6 +66,37 @@ PUBLIC: dict[str, str] = {
 }
 
 __all__ = sorted(PUBLIC)
+
+
+class _ModuleAliases:
+    """``import nfarm.ik`` (and ``from nfarm.ik import solve``): a public name that is a module
+    (``PUBLIC``'s ``ik``) imports as that module itself, loaded on first use; its own
+    ``__spec__`` is kept (the alias only names it)."""
+
+    @staticmethod
+    def _target(fullname: str) -> str | None:
+        prefix, _, short = fullname.rpartition(".")
+        where = PUBLIC.get(short)
+        if prefix == __name__ and where and where.rsplit(".", 1)[-1] == short and where != short:
+            return f"{__name__}.{where}"
+        return None
+
+    def find_spec(self, fullname: str, path=None, target=None):
+        import importlib.util
+
+        return importlib.util.spec_from_loader(fullname, self) if self._target(fullname) else None
+
+    def create_module(self, spec):
+        module = importlib.import_module(self._target(spec.name))
+        self._spec = module.__spec__           # the import system's bookkeeping overwrites it
+        return module
+
+    def exec_module(self, module) -> None:
+        module.__spec__ = self._spec
+
+
+if not any(isinstance(finder, _ModuleAliases) for finder in sys.meta_path):
+    sys.meta_path.append(_ModuleAliases())
 
 
 def __getattr__(name: str) -> Any:

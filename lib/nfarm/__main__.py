@@ -1,5 +1,5 @@
-"""Command line: ``python -m nfarm check-params FILE...``, ``report``, ``datasets``, ``sweep``,
-``course``, ``verify`` and ``panel``."""
+"""Command line: ``python -m nfarm check-params FILE...``, ``add-arm``, ``report``, ``datasets``,
+``sweep``, ``course``, ``verify`` and ``panel``."""
 
 from __future__ import annotations
 
@@ -70,6 +70,17 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser("check-params", help="validate robot, study and sweep parameter files")
     check.add_argument("files", nargs="+", metavar="FILE")
+    arm = sub.add_parser("add-arm", help="a new arm from its URDF: robot and study files with derived defaults")
+    arm.add_argument("urdf", metavar="PATH.urdf")
+    arm.add_argument("--name", default=None, metavar="N", help="the robot's name (default the file's)")
+    arm.add_argument("--tip", default=None, metavar="LINK",
+                     help="the chain's last link (default the URDF's only leaf)")
+    arm.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
+                     help="the position [rad or m] of a joint off the chain (repeatable; default 0 "
+                          "within its limits)")
+    arm.add_argument("--params", default=None, metavar="DIR",
+                     help="the parameter directory written to (default the project's params/)")
+    arm.add_argument("--force", action="store_true", help="replace an arm of the same name")
     report = sub.add_parser("report", help="run every chapter notebook and build the report")
     report.add_argument("--smoke", action="store_true", help="small parameter set (for tests)")
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
@@ -113,6 +124,8 @@ def main(argv: list[str] | None = None) -> int:
         return panel_command(args.port)
     if args.command == "check-params":
         return check_params(args.files)
+    if args.command == "add-arm":
+        return add_arm_command(args.urdf, args.name, args.tip, args.lock, args.params, args.force)
     if args.command == "verify":
         return verify_figures(args.figures)
     if args.command == "datasets":
@@ -124,6 +137,40 @@ def main(argv: list[str] | None = None) -> int:
     return report_command(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
                           force=args.force, parallel=False if args.serial else None,
                           scheduler=args.scheduler)
+
+
+def add_arm_command(urdf: str, name: str | None, tip: str | None, locks: list[str],
+                    params: str | None, force: bool) -> int:
+    """``python -m nfarm add-arm``: what it chose and why on standard output; 0, or 2 with one
+    line on standard error for a refused arm (nothing written)."""
+    from .infra.paths import PARAMS, project_path
+    from .infra.reading import ParamsError
+    from .study.add_arm import add_arm
+
+    lock = {}
+    for item in locks:
+        joint, sep, value = item.partition("=")
+        try:
+            if not sep or not joint:
+                raise ValueError
+            lock[joint] = float(value)
+        except ValueError:
+            print(f"{urdf}: --lock {item!r}: must be JOINT=VALUE, VALUE a number [rad or m]", file=sys.stderr)
+            return 2
+    problem = _output_directory("--params", params)
+    if problem:
+        print(problem, file=sys.stderr)
+        return 2
+    try:
+        add_arm(urdf, name=name, tip=tip, lock=lock, params=project_path(params) if params else PARAMS,
+                force=force, say=print)
+    except ParamsError as exc:
+        print(str(exc).splitlines()[0], file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"{exc.filename or urdf}: {exc.strerror or type(exc).__name__}", file=sys.stderr)
+        return 2
+    return 0
 
 
 def panel_command(port: int) -> int:

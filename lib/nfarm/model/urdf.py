@@ -37,7 +37,7 @@ from .kinematics import joint_placements
 from .robot import MAX_PLAUSIBLE_LENGTH, Robot, register_reader, robot_from_dict, with_provenance
 from .rotations import matrix_to_rpy
 
-__all__ = ["to_urdf", "from_urdf"]
+__all__ = ["to_urdf", "from_urdf", "urdf_outline"]
 
 
 def _f(x: float) -> str:
@@ -895,6 +895,96 @@ def _build_robot(source: str, name: str, description: str, frames: list[np.ndarr
     except ParamsError as exc:
         raise ParamsError(f"{exc} (converted from the URDF)") from None
 
+
+
+
+@dataclass(frozen=True)
+class URDFJoint:
+    """One joint of a URDF as :func:`urdf_outline` reads it (which has an example): its
+    ``type``, ``parent`` and ``child`` links, ``limits`` ``(lo, hi)`` [rad or m] (``None`` when
+    the file gives none: a continuous or fixed joint), ``mimic`` ``(driver, multiplier,
+    offset)`` or ``None``, and the drive values the file gives (0 where it gives none):
+    ``effort`` [N·m or N], ``velocity`` [rad/s or m/s] (``<limit>``), ``damping``
+    [N·m·s/rad] and ``friction`` [N·m] (``<dynamics>``)."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    limits: tuple[float, float] | None
+    mimic: tuple[str, float, float] | None
+    effort: float = 0.0
+    velocity: float = 0.0
+    damping: float = 0.0
+    friction: float = 0.0
+
+
+@dataclass(frozen=True)
+class URDFOutline:
+    """A URDF's tree, validated as :func:`from_urdf` validates it, before any chain is chosen
+    (made by :func:`urdf_outline`, which has an example): the robot's ``name``, the ``root``
+    link, the ``leaves`` (sorted), every joint by name and each child link's parent joint."""
+
+    source: str
+    name: str
+    root: str
+    leaves: tuple[str, ...]
+    joints: dict[str, URDFJoint]
+    parent_joint: dict[str, str]
+
+    def chain(self, tip: str) -> list[str]:
+        """The joints from the root link to link ``tip``, root first."""
+        out, link = [], tip
+        while link != self.root:
+            out.append(self.parent_joint[link])
+            link = self.joints[out[-1]].parent
+        return out[::-1]
+
+
+def urdf_outline(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> URDFOutline:
+    """The tree of a URDF, read and checked as :func:`from_urdf` reads it (one-line
+    :class:`ParamsError` naming the file and the element), with each joint's limits, mimic and
+    drive values: what a robot file's ``tip``, ``lock`` and ``drive`` are chosen from.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> outline = urdf_outline(PARAMS / "robots" / "so101" / "so101.urdf")
+        >>> outline.root, outline.leaves
+        ('base_link', ('gripper_frame_link', 'moving_jaw_so101_v1_link'))
+        >>> [j for j in outline.chain("gripper_frame_link") if outline.joints[j].type == "revolute"]
+        ['shoulder_pan', 'shoulder_lift', 'elbow_flex', 'wrist_flex', 'wrist_roll']
+        >>> outline.joints["gripper"].limits, outline.joints["gripper"].effort
+        ((-0.174533, 1.74533), 10.0)
+    """
+    path = Path(path)
+    raw = read_bytes(path, max_bytes=max_bytes, what="URDF")
+    root_element = _parse(path, raw)
+    r = _Reader(str(path), root_element)
+    tree = _tree(r)
+    elements = {el.get("name"): el for el in root_element.findall("joint")}
+    joints = {}
+    for jname, j in r.joints.items():
+        el, at = elements[jname], f"joint {jname!r}"
+        limits = j.get("limits")
+        limit = el.find("limit")
+        values = {}
+        if j["type"] == "prismatic" and limit is not None:
+            lo = r._numbers(limit.get("lower", "0"), f"{at} <limit lower>", 1)[0]
+            hi = r._numbers(limit.get("upper", "0"), f"{at} <limit upper>", 1)[0]
+            limits = (lo, hi) if lo < hi else None
+        if j["type"] in _MOVING and limit is not None:
+            for key in ("effort", "velocity"):
+                values[key] = float(r._numbers(limit.get(key, "0"), f"{at} <limit {key}>", 1)[0])
+        dynamics = el.find("dynamics")
+        if j["type"] in _MOVING and dynamics is not None:
+            for key in ("damping", "friction"):
+                values[key] = float(r._numbers(dynamics.get(key, "0"), f"{at} <dynamics {key}>", 1)[0])
+        values = {k: x if x > 0 else 0.0 for k, x in values.items()}
+        joints[jname] = URDFJoint(jname, j["type"], j["parent"], j["child"],
+                                  None if limits is None else (float(limits[0]), float(limits[1])),
+                                  j["mimic"], **values)
+    leaves = tuple(sorted(link for link in r.links if not tree.children[link]))
+    return URDFOutline(str(path), r.name, tree.root, leaves, joints, dict(tree.parent_joint))
 
 
 
