@@ -326,7 +326,7 @@ def test_a_scheduler_and_two_workers_started_apart_give_the_same_results(tmp_pat
 # Seeds: a configuration's spread
 
 
-@pytest.mark.parametrize("name", ["ik_comparison", "ik_sizes", "id_comparison", "id_comparison_large",
+@pytest.mark.parametrize("name", ["id_comparison", "id_comparison_large",
                                   "id_baselines", "id_baselines_large", "id_sizes"])
 def test_the_study_sweeps_run_five_seeds(name):
     """Each configuration of a comparison the chapters show has at least five seeds."""

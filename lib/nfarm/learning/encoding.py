@@ -31,9 +31,9 @@ pose ``T_0e`` (:func:`encode`):
 
 Angular inputs (the azimuth and the roll of ``"arm_plane"``) are unwrapped about the circular
 mean of the training data (stored with the model), so a region that straddles ±180° is not cut.
-Chapter 06 compares the three on validation poses (``figures/tables/06_ik_comparison``) and
-chooses by that comparison: a first-order rule's consequent is linear in its inputs, and the
-joint angles are far from linear in a quaternion's components.
+Chapter 06's contest (``figures/tables/06_ik_contest``) puts the dissertation's encoding against
+the arm's plane: a first-order rule's consequent is linear in its inputs, and the joint angles
+are far from linear in a quaternion's components.
 
 Inputs are scaled to ``[0, 1]`` by the training set's range (stored with the model,
 :func:`input_scaling`, which :class:`nfarm.learning.learned_id.LearnedID` uses for its state inputs

@@ -31,7 +31,7 @@ from ..model.kinematics import fk
 from ..model.robot import Robot, robot_hash
 from ..model.rotations import pose_error
 from ..solvers.ik import check_targets
-from .anfis import ANFIS
+from .anfis import ANFIS, fit_shared
 from .encoding import ANGULAR, ENCODINGS, PoseEncoder, arm_chart, encode, out_of_plane
 from .estimator import Estimator
 from .per_joint import (PerJointModel, CHUNK, FAR, OutsideTrainingWarning, beyond_range, check_far, check_joint_array,
@@ -72,23 +72,56 @@ class LearnedIK(PerJointModel):
         max_out_of_plane: for ``"arm_plane"``, the largest angle [rad] by which a training pose's
             approach axis may leave the arm's vertical plane (:func:`out_of_plane`); beyond it
             the encoding loses information and ``fit`` refuses the robot.
+        shared_joints: ``None`` or the indices (0-based, at least two) of joints trained as one
+            multiple-output ANFIS whose rules share their membership functions
+            (:func:`nfarm.learning.anfis.fit_shared`): e.g. ``[1, 2, 3]``, the pitch joints of an arm
+            whose planar sub-problem they solve together. Their options must be equal.
+        pitch_closure: for ``"arm_plane"``, predict the last pitch joint (``q[n-2]``) from the
+            target's pitch instead of its model: the pitch joints' angles sum to ``s·φ + c``
+            (``s = ±1``, a constant ``c``, fitted on the training poses; ``φ`` the approach
+            axis's pitch), so ``q[n-2] = s·φ + c − Σ`` of the other pitch joints' predictions,
+            wrapped to within half a turn of the joint's training mean. Its ANFIS is still
+            trained (it shapes shared premises and is shown by :meth:`describe`), but predictions
+            take the closure. ``fit`` refuses a robot whose training poses break the identity by
+            more than ``closure_tolerance`` [rad].
         **anfis_options: passed to every joint's :class:`nfarm.learning.anfis.ANFIS` (``n_mfs``,
             ``partition``, ``n_rules``, ``radius``, ``epochs``, …).
 
     Learned attributes: ``models_`` (one fitted ANFIS per joint), ``robot_hash_``,
     ``robot_name_``, ``n_joints_``, ``encoder_`` (the fitted :class:`nfarm.learning.encoding.PoseEncoder`:
     the chart, the unwrapping centres of the angular inputs and the scaling), ``fit_seconds_``
-    (per joint).
+    (per joint; a shared group's time split evenly), ``closure_`` (``None``, or the pitch
+    closure's ``joint``, ``sign``, ``offset`` [rad] and ``centre`` [rad]).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> from nfarm.model.kinematics import fk
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> rng = np.random.default_rng(0)
+        >>> q = rng.uniform([-1.2, -0.4, -1.2, -1.4, -1.4], [1.2, 0.9, 1.2, 1.4, 1.4], (3000, 5))
+        >>> model = LearnedIK("arm_plane", joint_options=[{"n_mfs": 1}, {}, {}, {}, {"n_mfs": 1}],
+        ...                   shared_joints=[1, 2, 3], pitch_closure=True, partition="fcm",
+        ...                   n_rules=8, mf="gauss", epochs=3, random_state=0)
+        >>> T = fk(robot, q)
+        >>> ahead = T[:, 0, 3] * np.cos(q[:, 0]) + T[:, 1, 3] * np.sin(q[:, 0]) > 0.08   # in front
+        >>> model = model.fit(robot, {"T": T[ahead], "q": q[ahead]})
+        >>> model.closure_["sign"], model.predict(T[ahead][:2]).shape
+        (1, (2, 5))
     """
 
     _passed_to = ANFIS
     file_name, file_format, what = FILE_NAME, FORMAT, "learned IK"
 
     def __init__(self, encoding: str = "quat_xyz", joint_options: Sequence[Mapping] | None = None,
-                 max_out_of_plane: float = 1e-6, **anfis_options):
+                 max_out_of_plane: float = 1e-6, shared_joints: Sequence[int] | None = None,
+                 pitch_closure: bool = False, closure_tolerance: float = 1e-4, **anfis_options):
         self.encoding = encoding
         self.joint_options = joint_options
         self.max_out_of_plane = max_out_of_plane
+        self.shared_joints = shared_joints
+        self.pitch_closure = pitch_closure
+        self.closure_tolerance = closure_tolerance
         self.anfis_options = anfis_options
 
     # -- fitting ------------------------------------------------------------------------------
@@ -109,21 +142,78 @@ class LearnedIK(PerJointModel):
                 encoding that cannot describe the robot's poses, before any training.
         """
         options = self._options(robot.n)
+        shared = self._shared(options, robot.n)
         T, q = ik_pairs(train, robot, "train")
         T_val, q_val = ik_pairs(val, robot, "val") if val is not None else (None, None)
         self.encoder_ = PoseEncoder(self.encoding, self.max_out_of_plane)
         Xs = self.encoder_.fit_transform(robot, T)
         Xv = self.encoder_.transform(T_val) if T_val is not None else None
         names = self.encoder_.feature_names_
-        self.models_, self.fit_seconds_ = [], []
-        for j in range(robot.n):
+        self.closure_ = self._closure(Xs, q) if self.pitch_closure else None
+        self.models_, self.fit_seconds_ = [None] * robot.n, [0.0] * robot.n
+        groups = ([shared] if shared else []) + [[j] for j in range(robot.n) if j not in shared]
+        for group in groups:
             start = time.perf_counter()
-            model = ANFIS(**{**options[j], "feature_names": names})
-            model.fit(Xs, q[:, j], Xv, None if q_val is None else q_val[:, j])
-            self.models_.append(model)
-            self.fit_seconds_.append(time.perf_counter() - start)
+            model = ANFIS(**{**options[group[0]], "feature_names": names})
+            y_val = None if q_val is None else q_val[:, group]
+            fitted = fit_shared(model, Xs, q[:, group], Xv, y_val) if len(group) > 1 else \
+                [model.fit(Xs, q[:, group[0]], Xv, None if y_val is None else y_val[:, 0])]
+            for j, m in zip(group, fitted):
+                self.models_[j] = m
+                self.fit_seconds_[j] = (time.perf_counter() - start) / len(group)
         self.robot_hash_, self.robot_name_, self.n_joints_ = robot_hash(robot), robot.name, robot.n
         return self
+
+    def _shared(self, options: list[dict], n: int) -> list[int]:
+        """The checked ``shared_joints`` (``[]`` for none)."""
+        if self.shared_joints is None:
+            return []
+        given = self.shared_joints
+        if isinstance(given, (str, bytes, Mapping)) or not isinstance(given, Sequence) or len(given) < 2 \
+                or not all(isinstance(j, (int, np.integer)) and not isinstance(j, bool) and 0 <= j < n
+                           for j in given) or len(set(given)) != len(given):
+            raise ValueError(f"shared_joints must be None or at least two distinct joint indices in "
+                             f"[0, {n}), got {show(given)}")
+        different = [j for j in given if options[j] != options[given[0]]]
+        if different:
+            raise ValueError(f"shared_joints: joint {different[0] + 1}'s options differ from joint "
+                             f"{given[0] + 1}'s; joints that share their premises share their options")
+        return [int(j) for j in given]
+
+    def _pitch(self, X: np.ndarray) -> np.ndarray:
+        """The approach axis's pitch ``φ`` [rad] of ``"arm_plane"`` inputs ``X`` (scaled)."""
+        lo, span = self.encoder_.input_lo_, self.encoder_.input_span_
+        return np.arctan2(X[:, 4] * span[4] + lo[4], X[:, 3] * span[3] + lo[3])
+
+    def _closure(self, X: np.ndarray, q: np.ndarray) -> dict:
+        """The pitch closure's sign, offset and centre, fitted on the training poses (class
+        docstring, ``pitch_closure``)."""
+        n = q.shape[1]
+        if self.encoding != "arm_plane" or n < 3:
+            raise ValueError("pitch_closure needs the 'arm_plane' encoding and at least 3 joints, got "
+                             f"{self.encoding!r} and {n}")
+        if not (isinstance(self.closure_tolerance, (int, float)) and 0 < self.closure_tolerance < math.pi):
+            raise ValueError(f"closure_tolerance must be in (0, pi) rad, got {show(self.closure_tolerance)}")
+        phi, total = self._pitch(X), q[:, 1:n - 1].sum(axis=1)
+        fits = []
+        for sign in (1, -1):
+            offset = float(np.angle(np.exp(1j * (total - sign * phi)).mean()))
+            fits.append((float(np.abs(_wrap(total - sign * phi - offset)).max()), sign, offset))
+        residual, sign, offset = min(fits)
+        if residual > self.closure_tolerance:
+            raise ValueError(f"pitch_closure: joints 2-{n - 1}'s angles do not sum to the tool's pitch "
+                             f"plus a constant on the training poses (largest residual "
+                             f"{math.degrees(residual):.3g} deg, tolerance "
+                             f"{math.degrees(self.closure_tolerance):.3g} deg); use pitch_closure=False")
+        centre = float(np.angle(np.exp(1j * q[:, n - 2]).mean()))
+        return {"joint": n - 2, "sign": sign, "offset": offset, "centre": centre}
+
+    def _close(self, X: np.ndarray, q: np.ndarray) -> None:
+        """Replace ``q``'s closure joint (in place) by the pitch closure of inputs ``X``."""
+        c = self.closure_
+        j = c["joint"]
+        others = q[:, 1:j].sum(axis=1)
+        q[:, j] = c["centre"] + _wrap(c["sign"] * self._pitch(X) + c["offset"] - others - c["centre"])
 
     # -- prediction ---------------------------------------------------------------------------
 
@@ -165,6 +255,8 @@ class LearnedIK(PerJointModel):
                 beyond[start:start + CHUNK] = beyond_range(X)
                 for j, model in enumerate(self.models_):
                     out[start:start + CHUNK, j] = model._predict_fast(X)[0]
+                if self.closure_ is not None:
+                    self._close(X, out[start:start + CHUNK])
 
             with np.errstate(over="ignore", invalid="ignore"):
                 for _ in map_chunks(chunk, range(0, len(flat), CHUNK)):
@@ -199,7 +291,9 @@ class LearnedIK(PerJointModel):
         self._check_fitted()
         return {"format": FORMAT, "nfarm_version": __version__,
                 "anfis_options": json_ready(self.anfis_options),
-                "joint_options": json_ready(self.joint_options), "robot": self.robot_name_,
+                "joint_options": json_ready(self.joint_options), "shared_joints": json_ready(self.shared_joints),
+                "pitch_closure": self.pitch_closure, "closure_tolerance": self.closure_tolerance,
+                "closure": json_ready(self.closure_), "robot": self.robot_name_,
                 "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
                 "fit_seconds": list(self.fit_seconds_),
                 "models": [m.to_dict() for m in self.models_], **self.encoder_.to_dict()}
@@ -207,7 +301,8 @@ class LearnedIK(PerJointModel):
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedIK":
         v = Validator(source)
-        v.mapping(data, "", {**dict.fromkeys(_KEYS, True), "chart": False})
+        v.mapping(data, "", {**dict.fromkeys(_KEYS, True), "chart": False,
+                             **dict.fromkeys(_CLOSURE_KEYS, False)})
         if data["format"] != FORMAT:
             v.fail("format", f"must be {FORMAT!r} (an nfarm learned IK model), got {show(data['format'])}")
         encoding = v.choice(data["encoding"], "encoding", tuple(ENCODINGS))
@@ -215,17 +310,41 @@ class LearnedIK(PerJointModel):
         n, options, joint_options, fitted, seconds = read_joint_models(
             v, data, robot, source, [d] * robot.n, f"encoding {encoding!r}")
         encoder = PoseEncoder.from_dict(data, source)
+        shared = data.get("shared_joints")
+        if shared is not None:
+            shared = [v.integer(j, f"shared_joints[{k}]", lo=0, hi=n - 1) for k, j in
+                      enumerate(v.sequence(shared, "shared_joints", min_len=2, max_len=n))]
+        closing = v.boolean(data.get("pitch_closure", False), "pitch_closure")
+        tolerance = v.number(data.get("closure_tolerance", 1e-4), "closure_tolerance", lo=0, hi=math.pi)
         model = cls(encoding=encoding, joint_options=joint_options,
-                    max_out_of_plane=encoder.max_out_of_plane, **options)
+                    max_out_of_plane=encoder.max_out_of_plane, shared_joints=shared,
+                    pitch_closure=closing, closure_tolerance=tolerance, **options)
         model.models_, model.fit_seconds_, model.encoder_ = fitted, seconds, encoder
+        model.closure_ = _read_closure(v, data.get("closure"), closing, n) if closing else None
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
         return model
 
 
+def _read_closure(v: Validator, data: Any, closing: bool, n: int) -> dict:
+    """A saved pitch closure (``closure``), checked."""
+    v.mapping(data, "closure", dict.fromkeys(("joint", "sign", "offset", "centre"), True))
+    if data["joint"] != n - 2 or data["sign"] not in (1, -1):
+        v.fail("closure", f"joint must be {n - 2} and sign 1 or -1, got {show(data['joint'])} and "
+                          f"{show(data['sign'])}")
+    return {"joint": n - 2, "sign": int(data["sign"]),
+            **{k: v.number(data[k], f"closure.{k}", lo=-math.pi, hi=math.pi) for k in ("offset", "centre")}}
+
+
+_CLOSURE_KEYS = ("shared_joints", "pitch_closure", "closure_tolerance", "closure")
 _KEYS = ("format", "nfarm_version", "encoding", "anfis_options", "joint_options",
          "max_out_of_plane", "robot", "robot_params_sha256", "n_joints", "angle_centre",
          "input_lo", "input_span", "fit_seconds", "models")
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """``angle`` [rad] wrapped into ``[-π, π)``."""
+    return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
 # --------------------------------------------------------------------------------------------

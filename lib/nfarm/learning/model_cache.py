@@ -18,6 +18,7 @@ from ..infra.paths import atomic_path
 from ..infra.provenance import code_digest
 from ..infra.reading import json_ready
 from ..model.robot import Robot, robot_hash
+from .ik_rivals import FILE_NAME as RIVAL_FILE_NAME, FORMAT as RIVAL_FORMAT, RivalIK
 from .learned import FILE_NAME, FORMAT, LearnedIK, ik_pairs
 from .learned_id import ID_FILE_NAME, ID_FORMAT, LearnedID, id_states
 from .per_joint import n_parameters
@@ -43,7 +44,8 @@ NUMERICS_ENV = ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE", "OPENBLAS_NUM_T
 
 def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
                directory: str | os.PathLike) -> tuple[Any, str]:
-    """Fit ``model`` (a :class:`LearnedIK` or :class:`LearnedID`), or load the one saved in
+    """Fit ``model`` (a :class:`LearnedIK`, :class:`LearnedID` or
+    :class:`~nfarm.learning.ik_rivals.RivalIK`), or load the one saved in
     ``directory`` if it was fitted with the same options on the same data for the same robot
     by the same code.
 
@@ -63,11 +65,14 @@ def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
     if isinstance(model, LearnedIK):
         cls, name, form = LearnedIK, FILE_NAME, FORMAT
         arrays = lambda data, what: ik_pairs(data, robot, what)          # noqa: E731
+    elif isinstance(model, RivalIK):
+        cls, name, form = RivalIK, RIVAL_FILE_NAME, RIVAL_FORMAT
+        arrays = lambda data, what: ik_pairs(data, robot, what)          # noqa: E731
     elif isinstance(model, LearnedID):
         cls, name, form = LearnedID, ID_FILE_NAME, ID_FORMAT
         arrays = lambda data, what: id_states(data, robot, what)         # noqa: E731
     else:
-        raise TypeError(f"model must be a LearnedIK or a LearnedID, got {type(model).__name__}")
+        raise TypeError(f"model must be a LearnedIK, a LearnedID or a RivalIK, got {type(model).__name__}")
     parts = [cls.__name__, json.dumps(json_ready(model.get_params()), sort_keys=True),
              fingerprint(*arrays(train, "train")), robot_hash(robot), form, code_digest("learning.model_cache"),
              json.dumps({k: os.environ.get(k) for k in NUMERICS_ENV})]

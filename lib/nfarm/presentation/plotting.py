@@ -25,7 +25,7 @@ __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
            "plot_motion", "plot_learning_curves", "plot_joint_curves", "plot_size_curve",
            "plot_predicted_vs_true", "plot_sweep", "plot_error_map", "plot_error_against",
-           "plot_planar_subproblem", "DPI"]
+           "plot_planar_subproblem", "plot_against", "DPI"]
 
 #: Resolution of every saved figure.
 DPI = 110
@@ -534,6 +534,30 @@ def plot_size_curve(sizes, errors: np.ndarray, joint_names, *, unit: str = "deg"
     ax.set_ylabel(f"{quantity} [{unit}]")
     sizes = [int(round(s)) for s in sizes]
     ax.set_xticks(sizes, [f"{s:,}" for s in sizes])
+    ax.xaxis.set_minor_locator(mticker.NullLocator())
+    _readable_log_axis(ax.yaxis)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_against(x, series: Mapping[str, Sequence[float]], *, xlabel: str, ylabel: str,
+                 references: Mapping[str, float] | None = None) -> Figure:
+    """Each named series of values against ``x`` (e.g. a validation error against the rule
+    count), log-log with ``x``'s values as the ticks; ``references``: named levels drawn as
+    dashed lines in the series' colours order (a rival's error, a target). ``xlabel`` and
+    ``ylabel`` name quantity and unit."""
+    fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
+    for k, (name, values) in enumerate(series.items()):
+        ax.plot(x, values, "o-", color=f"C{k}", label=name)
+    for k, (name, level) in enumerate((references or {}).items()):
+        ax.axhline(level, color=f"C{k}", ls="--", lw=1, alpha=0.8, label=name)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ticks = [int(round(v)) for v in x]
+    ax.set_xticks(ticks, [f"{t:,}" for t in ticks])
     ax.xaxis.set_minor_locator(mticker.NullLocator())
     _readable_log_axis(ax.yaxis)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))

@@ -17,6 +17,13 @@ and returns its metrics, a flat mapping of numbers, strings or lists of numbers.
   (:class:`nfarm.learning.baselines.BaselineID`, chapters 06 and 07): fitted on every ``stride``-th
   training state, judged on the ``split`` (``val`` to choose, ``test`` once for the chosen),
   each joint's NRMSE, the fit's seconds and the prediction's microseconds per state.
+* ``ik_contest`` — one contestant of the learned-IK contest (chapter 6): a ``learner``
+  (``"anfis"``: :class:`nfarm.learning.learned.LearnedIK` with ``options`` as its keyword
+  arguments; or a rival kind of :class:`nfarm.learning.ik_rivals.RivalIK` with its ``options``)
+  trained on all of the study's training poses (or the first ``fraction``), judged **at the
+  tool** on the ``split`` (``val`` to choose, ``test`` once for the frozen chosen models): the
+  median and 95th percentile of the position error [mm] and of the orientation error [deg],
+  each joint's RMSE [deg], the training's seconds and the epochs it ran.
 * ``idle`` — sleeps ``seconds`` and returns its parameters: the sweep machinery's own cost
   (``benchmarks/bench_sweep.py``).
 
@@ -60,13 +67,15 @@ from ..learning import jang
 from ..learning.anfis import ANFIS
 from ..learning.baselines import DEFAULTS as BASELINE_OPTIONS
 from ..learning.baselines import BaselineID
-from ..learning.learned import LearnedIK
+from ..learning.ik_rivals import KINDS as RIVAL_KINDS
+from ..learning.ik_rivals import RivalIK
+from ..learning.learned import LearnedIK, ik_errors
 from ..learning.learned_id import LearnedID
 from ..learning.model_cache import fit_cached, n_parameters
 from ..model.dynamics import rnea
 from .statistics import trajectory_maxima, trajectory_sums
 
-__all__ = ["Job", "JOBS", "REQUIRED", "id_model", "ik_model", "id_training_data"]
+__all__ = ["Job", "JOBS", "REQUIRED", "id_model", "ik_model", "contest_model", "id_training_data"]
 
 REQUIRED = object()
 """Default of a parameter every cell must give."""
@@ -335,6 +344,67 @@ def ik_model(params: Mapping[str, Any]) -> LearnedIK:
         return _fit_ik(JOBS["learned_ik"].complete(params))[0]
 
 
+def _fit_contestant(p: dict):
+    """An ``ik_contest`` cell's model, trained or reused (:func:`fit_cached`), its study, its
+    validation poses and the number of training poses it saw."""
+    study, directory, models = _study_data(p)
+    robot = study.robot
+    train = _first(datasets.load(directory / "ik_train.npz", robot, study), ("T", "q"), p["fraction"], None)
+    val = datasets.load(directory / "ik_val.npz", robot, study)
+    options = dict(p["options"] or {})
+    plane = {} if p["max_out_of_plane_deg"] is None else {"max_out_of_plane": math.radians(p["max_out_of_plane_deg"])}
+    try:
+        if p["learner"] == "anfis":
+            if {"encoding", "random_state", "max_out_of_plane"} & set(options):
+                raise ValueError("options: encoding, max_out_of_plane and random_state are the cell's own "
+                                 "parameters (encoding, max_out_of_plane_deg, seed)")
+            model = LearnedIK(p["encoding"], **plane, **options, random_state=p["seed"])
+            model._options(robot.n)
+        elif p["learner"] in RIVAL_KINDS:
+            model = RivalIK(p["learner"], p["encoding"], options, **plane, random_state=p["seed"])
+        else:
+            raise ValueError(f"learner must be anfis or one of {', '.join(RIVAL_KINDS)}, got {p['learner']!r}")
+    except (ValueError, TypeError) as exc:
+        raise ParamsError(f"ik_contest: {exc}") from None
+    where = _options_dir(models, "ik_contest", {"class": type(model).__name__, **json.loads(
+        json.dumps(model.get_params(), default=str)), "fraction": p["fraction"]})
+    return fit_cached(model, robot, train, val, where)[0], study, val, len(train["q"])
+
+
+def ik_contest(p: dict) -> dict:
+    if p["split"] not in ("val", "test"):
+        raise ParamsError(f"split must be 'val' or 'test', got {p['split']!r}")
+    model, study, judged, n_train = _fit_contestant(p)
+    robot = study.robot
+    if p["split"] == "test":
+        judged = _test_split(p, lambda p_, s, d, split: datasets.load(d / f"ik_{split}.npz", s.robot, s))
+    start = time.perf_counter()
+    q = model.predict(judged["T"])
+    seconds = time.perf_counter() - start
+    e = ik_errors(robot, q, judged["q"], judged["T"])
+    position, orientation = 1e3 * e["position"], np.degrees(e["orientation"])
+    if isinstance(model, LearnedIK):
+        fit_seconds = float(sum(model.fit_seconds_))
+        epochs = [len(m.loss_curve_) for m in model.models_]
+        best = [int(m.best_epoch_) for m in model.models_]
+    else:
+        fit_seconds, epochs, best = float(model.fit_seconds_), [model.epochs_], [model.best_epoch_]
+    return {"position_p50_mm": float(np.median(position)), "position_p95_mm": float(np.percentile(position, 95)),
+            "orientation_p50_deg": float(np.median(orientation)),
+            "orientation_p95_deg": float(np.percentile(orientation, 95)),
+            "joint_rmse_deg": np.degrees(np.sqrt((e["joint"] ** 2).mean(axis=0))).tolist(),
+            "fit_seconds": fit_seconds, "predict_us": 1e6 * seconds / len(q), "epochs": epochs,
+            "best_epoch": best, "train_samples": n_train}
+
+
+def contest_model(params: Mapping[str, Any]):
+    """The model an ``ik_contest`` cell trains (``params``: the cell's parameters), reused from
+    where the cell keeps it: a :class:`LearnedIK` or a :class:`RivalIK`, each loadable on its
+    own (``LearnedIK.load(directory, robot)``, ``RivalIK.load(directory, robot)``)."""
+    with cell_threads():
+        return _fit_contestant(JOBS["ik_contest"].complete(params))[0]
+
+
 def _fit_id(p: dict) -> tuple[LearnedID, dict]:
     """A ``learned_id`` cell's model, trained or reused (:func:`fit_cached`), and its data."""
     study, directory, models = _study_data(p)
@@ -485,6 +555,15 @@ JOBS: dict[str, Job] = {
         ("val_rmse_deg", "worst_deg", "rules", "parameters", "train_samples"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a study's learned IK, one ANFIS per joint",
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
+    "ik_contest": Job(
+        ik_contest,
+        {**_STUDY, "learner": "anfis", "encoding": "arm_plane", "options": None, "split": "val",
+         "max_out_of_plane_deg": None},
+        ("position_p50_mm", "position_p95_mm", "orientation_p50_deg", "orientation_p95_deg", "joint_rmse_deg",
+         "fit_seconds", "predict_us", "epochs", "best_epoch", "train_samples"),
+        paths=("study_file", "data_dir", "models_dir"),
+        doc="one contestant of the learned-IK contest, judged at the tool",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
     "learned_id": Job(
         learned_id,

@@ -1,0 +1,103 @@
+"""The learned-IK contest's rules (chapter 6, ``params/sweeps/ik_contest.yaml``): who competes,
+how each contestant's configuration is chosen, with what budget, and how they are ranked.
+
+* A **contestant** is a learner family (:func:`family`): the ANFIS in the arm's plane (fuzzy
+  c-means rules shared by the pitch joints, the pitch closure), the ANFIS of the dissertation's
+  recipe (seven inputs, a grid of two functions per input), and each rival kind of
+  :class:`nfarm.learning.ik_rivals.RivalIK`.
+* **Budget**: every contestant has the same number of configurations in the sweep file, each
+  trained once on all the training poses with seed 0; :func:`budgets` reports what each spent
+  (configurations and seconds of training), so a reader sees that no one got more.
+* **Choice**, on validation only (:func:`choose`): the configuration of least 95th-percentile
+  tool position error, ties broken by the 95th-percentile orientation error (:data:`RANKED_BY`).
+* **Spread**: each chosen configuration trained again on other draws of the data
+  (:func:`spread_params`, seeds 1-4: each draws the training and validation poses anew and
+  seeds the learner); :func:`standings` ranks the contestants by the mean over the seeds, and
+  :func:`paired_gap` compares two of them seed by seed (the same draw of data for both): a gap
+  whose range over the seeds contains 0 is no difference.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .sweep import CellResult, Replicates, by_configuration
+
+__all__ = ["RANKED_BY", "SPREAD_SEEDS", "LABELS", "family", "label", "choose", "budgets", "spread_params",
+           "standings", "paired_gap"]
+
+#: The tool metrics a contestant is ranked by, in order (validation, lower is better).
+RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
+#: The draws each chosen configuration is trained on besides seed 0.
+SPREAD_SEEDS = (1, 2, 3, 4)
+#: Each contestant in words a reader knows.
+LABELS = {"anfis:arm_plane": "ANFIS in the arm's plane", "anfis:quat_xyz": "ANFIS, the dissertation's 7 inputs",
+          "anfis:axes_xyz": "ANFIS on position and two tool axes", "rbf": "RBF interpolation",
+          "knn": "k nearest neighbours", "mlp": "multilayer perceptron", "kernel_ridge": "kernel ridge (Nyström)"}
+
+
+def family(params: Mapping[str, Any]) -> str:
+    """The contestant a cell's parameters belong to: ``"anfis:<encoding>"`` for an ANFIS, else
+    the rival's kind."""
+    return f"anfis:{params['encoding']}" if params["learner"] == "anfis" else params["learner"]
+
+
+def label(name: str) -> str:
+    """A contestant's name in words (:data:`LABELS`), or its key."""
+    return LABELS.get(name, name)
+
+
+def _key(r: CellResult | Replicates) -> tuple[float, ...]:
+    return tuple(float(r.metrics[m]) for m in RANKED_BY)
+
+
+def choose(results: Iterable[CellResult]) -> dict[str, CellResult]:
+    """Each contestant's chosen configuration among its seed-0 cells (:data:`RANKED_BY`, on
+    validation), in the order the contestants first appear."""
+    chosen: dict[str, CellResult] = {}
+    for r in results:
+        if r.cell.params.get("seed", 0) != 0 or r.cell.params.get("split", "val") != "val":
+            continue
+        name = family(r.cell.params)
+        if name not in chosen or _key(r) < _key(chosen[name]):
+            chosen[name] = r
+    return chosen
+
+
+def budgets(results: Iterable[CellResult]) -> dict[str, tuple[int, float]]:
+    """Each contestant's tuning budget spent: seed-0 configurations tried and the seconds their
+    training took (the models' own ``fit_seconds``, not counting a model reused from a cache)."""
+    spent: dict[str, list[float]] = {}
+    for r in results:
+        if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
+            spent.setdefault(family(r.cell.params), []).append(float(r.metrics["fit_seconds"]))
+    return {name: (len(s), float(sum(s))) for name, s in spent.items()}
+
+
+def spread_params(chosen: Mapping[str, CellResult], seeds: Sequence[int] = SPREAD_SEEDS) -> list[dict]:
+    """The cells that train each chosen configuration on the other draws."""
+    return [{**r.cell.params, "seed": int(s)} for r in chosen.values() for s in seeds]
+
+
+def standings(chosen: Mapping[str, CellResult], spread: Iterable[CellResult]) -> list[Replicates]:
+    """The chosen configurations over their seeds (seed 0 and ``spread``), best first by the mean
+    of :data:`RANKED_BY` over the seeds."""
+    groups = by_configuration([*chosen.values(), *spread])
+    wanted = {family(r.cell.params) for r in chosen.values()}
+    return sorted((g for g in groups if family(g.cell.params) in wanted), key=_key)
+
+
+def paired_gap(a: Replicates, b: Replicates, metric: str = RANKED_BY[0]) -> tuple[float, float, float]:
+    """The mean, least and largest of ``a``'s ``metric`` minus ``b``'s, seed by seed (each seed the
+    same draw of data for both).
+
+    Raises:
+        ValueError: the two were not trained on the same seeds.
+    """
+    if a.seeds != b.seeds:
+        raise ValueError(f"paired_gap needs the same seeds, got {a.seeds} and {b.seeds}")
+    gap = a.values(metric) - b.values(metric)
+    return float(np.mean(gap)), float(np.min(gap)), float(np.max(gap))
