@@ -231,8 +231,13 @@ def test_each_contestant_is_chosen_on_its_seed_0_validation_by_the_tool_metrics(
     assert list(chosen) == ["anfis:arm_plane", "anfis:quat_xyz", "rbf"]
     assert chosen["anfis:arm_plane"].cell.params["options"] == {"n_rules": 64}
     assert chosen["rbf"].cell.params["options"] == {"neighbors": 64}      # the orientation breaks the tie
-    assert contest.budgets(results) == {"anfis:arm_plane": (2, 2.0), "anfis:quat_xyz": (1, 1.0), "rbf": (2, 2.0)}
-    assert [p["seed"] for p in contest.spread_params(chosen, (1, 2))] == [1, 2, 1, 2, 1, 2]
+    assert contest.budgets(results) == {"anfis:arm_plane": (2, 2.0, 2.0), "anfis:quat_xyz": (1, 1.0, 1.0),
+                                        "rbf": (2, 2.0, 2.0)}
+    # In contention: the two best, and those within twice the best's p95 (the recipe's 9 mm is not)
+    assert contest.contending(chosen) == ["anfis:arm_plane", "rbf"]
+    assert contest.contending(chosen, keep_within=10) == ["anfis:arm_plane", "rbf", "anfis:quat_xyz"]
+    assert [(contest.family(p), p["seed"]) for p in contest.spread_params(chosen, (1, 2))] == \
+        [("anfis:arm_plane", 1), ("anfis:arm_plane", 2), ("rbf", 1), ("rbf", 2)]
 
 
 def test_standings_rank_by_the_mean_over_seeds_and_gaps_are_paired():
@@ -243,6 +248,9 @@ def test_standings_rank_by_the_mean_over_seeds_and_gaps_are_paired():
     chosen = contest.choose(a + b)
     ranked = contest.standings(chosen, a[1:] + b[1:])
     assert [contest.family(g.cell.params) for g in ranked] == ["anfis:arm_plane", "rbf"]   # 1.0 < 1.033
+    pruned = _result("knn", "arm_plane", 0, 0.9, neighbors=5)     # better on seed 0, but one draw only
+    assert [contest.family(g.cell.params) for g in contest.standings({**chosen, "knn": pruned}, a[1:] + b[1:])] == \
+        ["anfis:arm_plane", "rbf", "knn"]
     mean, low, high = contest.paired_gap(ranked[0], ranked[1])
     assert (low, high) == pytest.approx((-0.2, 0.2)) and mean == pytest.approx(-1 / 30)   # contains 0: no difference
     with pytest.raises(ValueError, match=r"paired_gap needs the same seeds, got \[0, 1, 2\] and \[0\]"):

@@ -10,11 +10,15 @@ how each contestant's configuration is chosen, with what budget, and how they ar
   (configurations and seconds of training), so a reader sees that no one got more.
 * **Choice**, on validation only (:func:`choose`): the configuration of least 95th-percentile
   tool position error, ties broken by the 95th-percentile orientation error (:data:`RANKED_BY`).
-* **Spread**: each chosen configuration trained again on other draws of the data
-  (:func:`spread_params`, seeds 1-4: each draws the training and validation poses anew and
-  seeds the learner); :func:`standings` ranks the contestants by the mean over the seeds, and
-  :func:`paired_gap` compares two of them seed by seed (the same draw of data for both): a gap
-  whose range over the seeds contains 0 is no difference.
+* **Spread**: each chosen configuration that is still in contention trained again on other
+  draws of the data (:func:`spread_params`, seeds 1-4: each draws the training and validation
+  poses anew and seeds the learner). In contention: the two best on seed 0 and every contestant
+  within ``keep_within`` (2×) of the best's 95th percentile; the others are **pruned** after seed
+  0 (successive halving's rule: their seed-0 error is further from the leader's than the seeds
+  move any contestant — measured in chapter 6 — so more draws cannot change the ranking).
+  :func:`standings` ranks the contestants in contention by the mean over the seeds, then the
+  pruned ones by seed 0; :func:`paired_gap` compares two of them seed by seed (the same draw of
+  data for both): a gap whose range over the seeds contains 0 is no difference.
 """
 
 from __future__ import annotations
@@ -26,13 +30,15 @@ import numpy as np
 
 from .sweep import CellResult, Replicates, by_configuration
 
-__all__ = ["RANKED_BY", "SPREAD_SEEDS", "LABELS", "family", "label", "choose", "budgets", "spread_params",
+__all__ = ["RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "family", "label", "choose", "budgets", "spread_params",
            "standings", "paired_gap"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
 RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
 #: The draws each chosen configuration is trained on besides seed 0.
 SPREAD_SEEDS = (1, 2, 3, 4)
+#: A contestant stays in contention within this factor of the best seed-0 95th percentile.
+KEEP_WITHIN = 2.0
 #: Each contestant in words a reader knows.
 LABELS = {"anfis:arm_plane": "ANFIS in the arm's plane", "anfis:quat_xyz": "ANFIS, the dissertation's 7 inputs",
           "anfis:axes_xyz": "ANFIS on position and two tool axes", "rbf": "RBF interpolation",
@@ -67,27 +73,41 @@ def choose(results: Iterable[CellResult]) -> dict[str, CellResult]:
     return chosen
 
 
-def budgets(results: Iterable[CellResult]) -> dict[str, tuple[int, float]]:
-    """Each contestant's tuning budget spent: seed-0 configurations tried and the seconds their
-    training took (the models' own ``fit_seconds``, not counting a model reused from a cache)."""
-    spent: dict[str, list[float]] = {}
+def budgets(results: Iterable[CellResult]) -> dict[str, tuple[int, float, float]]:
+    """Each contestant's tuning budget spent: seed-0 configurations tried, the seconds their
+    training took (the models' own ``fit_seconds``) and the seconds their cells took (training,
+    the validation's predictions and the data's loading, when they ran)."""
+    spent: dict[str, list[tuple[float, float]]] = {}
     for r in results:
         if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
-            spent.setdefault(family(r.cell.params), []).append(float(r.metrics["fit_seconds"]))
-    return {name: (len(s), float(sum(s))) for name, s in spent.items()}
+            spent.setdefault(family(r.cell.params), []).append((float(r.metrics["fit_seconds"]), float(r.seconds)))
+    return {name: (len(s), float(sum(a for a, _ in s)), float(sum(b for _, b in s))) for name, s in spent.items()}
 
 
-def spread_params(chosen: Mapping[str, CellResult], seeds: Sequence[int] = SPREAD_SEEDS) -> list[dict]:
-    """The cells that train each chosen configuration on the other draws."""
-    return [{**r.cell.params, "seed": int(s)} for r in chosen.values() for s in seeds]
+def contending(chosen: Mapping[str, CellResult], keep_within: float = KEEP_WITHIN) -> list[str]:
+    """The contestants still in contention after seed 0 (module docstring): the two best and every
+    one whose 95th percentile is within ``keep_within`` of the best's."""
+    order = sorted(chosen, key=lambda name: _key(chosen[name]))
+    if not order:
+        return []
+    best = chosen[order[0]].metrics[RANKED_BY[0]]
+    return [name for k, name in enumerate(order) if k < 2 or chosen[name].metrics[RANKED_BY[0]] <= keep_within * best]
+
+
+def spread_params(chosen: Mapping[str, CellResult], seeds: Sequence[int] = SPREAD_SEEDS, *,
+                  keep_within: float = KEEP_WITHIN) -> list[dict]:
+    """The cells that train each chosen configuration in contention on the other draws."""
+    return [{**chosen[name].cell.params, "seed": int(s)} for name in contending(chosen, keep_within) for s in seeds]
 
 
 def standings(chosen: Mapping[str, CellResult], spread: Iterable[CellResult]) -> list[Replicates]:
-    """The chosen configurations over their seeds (seed 0 and ``spread``), best first by the mean
-    of :data:`RANKED_BY` over the seeds."""
+    """The chosen configurations over their seeds (seed 0 and ``spread``): those trained on
+    several draws best first by the mean of :data:`RANKED_BY` over the seeds, then the pruned ones
+    (one seed) by their seed-0 values."""
     groups = by_configuration([*chosen.values(), *spread])
     wanted = {family(r.cell.params) for r in chosen.values()}
-    return sorted((g for g in groups if family(g.cell.params) in wanted), key=_key)
+    kept = [g for g in groups if family(g.cell.params) in wanted]
+    return sorted(kept, key=lambda g: (g.n == 1 and len(kept) > 1 and any(h.n > 1 for h in kept), _key(g)))
 
 
 def paired_gap(a: Replicates, b: Replicates, metric: str = RANKED_BY[0]) -> tuple[float, float, float]:
