@@ -201,9 +201,9 @@ def test_a_joint_below_the_noise_is_shown_without_an_interval():
 
 
 def test_the_roles_the_abstract_reads_are_the_roles_the_chapters_write(tmp_path):
-    """The abstract finds its rows by whole role labels (ROLES): chapter 7 writes each of them
-    (as the label or by the constant's name), its published summaries hold each, and a reworded
-    label is not read as the one it resembles."""
+    """The abstract finds its rows by whole role labels (ROLES): chapter 7 writes each of them by
+    the constant's name (never the label retyped, which a rewording would leave behind), its
+    published summaries hold each, and a reworded label is not read as the one it resembles."""
     import json
     from nfarm.infra.paths import ROOT
     from nfarm.study import summary
@@ -213,7 +213,8 @@ def test_the_roles_the_abstract_reads_are_the_roles_the_chapters_write(tmp_path)
     chapter = json.loads((ROOT / "notebooks" / "07_testing_error_analysis.ipynb").read_text(encoding="utf-8"))
     source = "".join(line for cell in chapter["cells"] if cell["cell_type"] == "code" for line in cell["source"])
     for role in ROLES:
-        assert f'"{role}"' in source or names[role] in source, f"chapter 7 writes no row of role {role!r}"
+        assert names[role] in source, f"chapter 7 writes no row of role {role!r}"
+        assert f'"{role}"' not in source, f"chapter 7 retypes the role {role!r} instead of {names[role]}"
     for table in (ROOT / "figures" / "tables" / "07_summary.csv", ROOT / "figures" / "so101" / "tables" / "07_summary.csv"):
         assert set(ROLES) <= {r["role"] for r in read_long_table(table)}, table
     rows = ik_rows("ANFIS, chosen", ROLE_CHOSEN, ik_errors(9), draws=300) + \
