@@ -256,3 +256,19 @@ def test_standings_rank_by_the_mean_over_seeds_and_gaps_are_paired():
     with pytest.raises(ValueError, match=r"paired_gap needs the same seeds, got \[0, 1, 2\] and \[0\]"):
         contest.paired_gap(ranked[0], contest.standings(contest.choose(b), [])[0])
     assert contest.label("rbf") == "RBF interpolation"
+
+
+def test_the_saved_rivals_are_ranked_as_the_contest_ranks(data, tmp_path):
+    """Chapters 7 and 8 pick the best frozen rival by the contest's rule on validation poses."""
+    from nfarm.study import contest
+
+    knn = RivalIK("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])
+    rbf = RivalIK("rbf", "arm_plane", {"neighbors": 16}).fit(ROBOT, data["train"])
+    knn.save(tmp_path / "ik_contest" / "knn")
+    rbf.save(tmp_path / "ik_contest" / "rbf")
+    rivals = contest.saved_rivals(ROBOT, tmp_path)
+    assert sorted(rivals) == ["knn", "rbf"]
+    p95 = {kind: np.percentile(ik_errors(ROBOT, m.predict(data["val"]["T"]), data["val"]["q"], data["val"]["T"])["position"], 95)
+           for kind, m in rivals.items()}
+    assert contest.rival_ranking(ROBOT, rivals, data["val"]) == sorted(p95, key=p95.get)
+    assert contest.saved_rivals(ROBOT, tmp_path / "none") == {}

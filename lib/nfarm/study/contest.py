@@ -23,14 +23,20 @@ how each contestant's configuration is chosen, with what budget, and how they ar
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..learning.ik_rivals import KINDS as RIVAL_KINDS
+from ..learning.ik_rivals import RivalIK
+from ..learning.learned import ik_errors
+from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration
 
-__all__ = ["RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "family", "label", "choose", "budgets", "spread_params",
+__all__ = ["RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
            "standings", "paired_gap"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -121,3 +127,22 @@ def paired_gap(a: Replicates, b: Replicates, metric: str = RANKED_BY[0]) -> tupl
         raise ValueError(f"paired_gap needs the same seeds, got {a.seeds} and {b.seeds}")
     gap = a.values(metric) - b.values(metric)
     return float(np.mean(gap)), float(np.min(gap)), float(np.max(gap))
+
+
+def saved_rivals(robot: Robot, models_dir: str | os.PathLike) -> dict[str, RivalIK]:
+    """The contest's chosen rivals chapter 6 saved for ``robot`` under
+    ``models_dir/ik_contest/<kind>/``, by kind (those present)."""
+    where = Path(models_dir) / "ik_contest"
+    return {kind: RivalIK.load(where / kind, robot) for kind in RIVAL_KINDS if (where / kind).is_dir()}
+
+
+def rival_ranking(robot: Robot, rivals: Mapping[str, RivalIK], val: Mapping) -> list[str]:
+    """The rivals' kinds, best first, as the contest ranks (:data:`RANKED_BY`: the 95th
+    percentile of the tool position error, then of the orientation error) on the validation
+    poses ``val`` (``T (N, 4, 4)``, ``q (N, n)``): how chapters 7 and 8 pick the best rival of a
+    frozen set."""
+    def key(kind: str) -> tuple[float, float]:
+        e = ik_errors(robot, rivals[kind].predict(val["T"]), val["q"], val["T"])
+        return float(np.percentile(e["position"], 95)), float(np.percentile(e["orientation"], 95))
+    keys = {kind: key(kind) for kind in rivals}
+    return sorted(rivals, key=keys.get)

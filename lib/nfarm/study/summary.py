@@ -31,7 +31,6 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from ..learning.baselines import label as baseline_label
-from ..learning.learned import Baseline
 from ..model.robot import Robot
 from ..presentation.tables import Table, shown
 from ..presentation.wording import resolved_joints, times
@@ -39,7 +38,7 @@ from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
-           "long_table", "wide_table", "interval_text", "ik_baselines", "best_id_baseline",
+           "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE"]
@@ -72,7 +71,6 @@ ROLE_RESIDUAL_BASELINE = "baseline (learner as residual, on validation)"
 ROLES = (ROLE_CHOSEN, ROLE_RECIPE, ROLE_BEST_BASELINE, ROLE_EXACT, ROLE_DESIGN, ROLE_PHYSICS, ROLE_NUMERICAL,
          ROLE_FRICTION_ID, ROLE_RESIDUAL_BASELINE)
 
-IK_BASELINES = {"nearest": "nearest neighbour", "rbf": "RBF interpolation", "linear": "linear least squares"}
 
 # (metric, unit) of the IK rows, in order; the first is left out for a method whose joint angles
 # are another branch's (LM: its "errors" reach the same pose).
@@ -320,20 +318,6 @@ def wide_table(rows: Sequence[Row], task: str, *, floors: Mapping[str, float] | 
                  [([a] if arm else []) + [m, role, *(interval_text(cell[a, m, metric], floors) if (a, m, metric) in cell
                                                      else "—" for metric, _ in metrics)]
                   for a, m, role in methods], caption=caption)
-
-
-def ik_baselines(robot: Robot, train: Mapping, val: Mapping, *, encoding: str = "arm_plane",
-                 neighbors: int = 32) -> dict[str, tuple[Baseline, float]]:
-    """The learned-IK baselines (:class:`nfarm.learning.learned.Baseline`: nearest neighbour, RBF
-    interpolation, linear least squares) fitted on ``train`` and each one's worst joint RMSE
-    [deg] on ``val``, by which a chapter chooses the best before it reads the test set. Keys
-    name the baseline and its inputs, e.g. ``"RBF interpolation (arm_plane)"``."""
-    out = {}
-    for kind, name in IK_BASELINES.items():
-        model = Baseline(kind, encoding, neighbors).fit(robot, train)
-        rmse = np.sqrt(((model.predict(val["T"]) - np.asarray(val["q"], float)) ** 2).mean(axis=0))
-        out[f"{name} ({encoding})"] = (model, float(np.degrees(rmse).max()))
-    return out
 
 
 def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None,
