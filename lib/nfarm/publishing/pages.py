@@ -23,7 +23,7 @@ from ..infra.paths import ROOT, atomic_path, shown_path
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ReportPages", "write_pages", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ReportPages", "write_pages", "abstract_answers", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -268,21 +268,28 @@ ABSTRACT_LIMITS = (
     "validation data and bootstrap intervals over the held-out poses or trajectories for the results.")
 
 
-def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
-    """The abstract: the study's question, each arm's answers read from its published
-    ``07_summary.csv`` (every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`),
-    and the study's limits."""
+def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
+    """Each arm's answers, read from its published ``07_summary.csv`` (every number computed by
+    chapter 07; :func:`nfarm.study.summary.abstract_lines`): what the HTML index and the PDF both
+    print. A table an older chapter 07 wrote gives one line saying so, not a failure."""
     from ..study.summary import abstract_lines, read_long_table
 
-    parts = ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
     answers = []
     for edition in arms:
         path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
         if path.is_file():
             try:
                 answers += abstract_lines(edition.name, read_long_table(path))
-            except (ValueError, KeyError) as exc:      # an older chapter 07's table: say so, not fail
+            except (ValueError, KeyError) as exc:
                 answers.append(f"{edition.name}: no answers ({exc}); rerun chapter 07.")
+    return answers
+
+
+def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
+    """The abstract: the study's question, each arm's answers (:func:`abstract_answers`) and the
+    study's limits."""
+    parts = ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
+    answers = abstract_answers(figures_dir, arms)
     if answers:
         parts.append("<p><b>Answers</b> (on held-out data, with 95 % bootstrap intervals; from each arm's "
                      "<code>tables/07_summary.csv</code>):</p><ul>")

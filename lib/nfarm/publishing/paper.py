@@ -25,7 +25,7 @@ from pathlib import Path
 from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from .editions import Edition
-from .pages import ABSTRACT_LIMITS, ABSTRACT_QUESTION, PAPER_NAME, ReportPages, _git, chapter_title
+from .pages import ABSTRACT_LIMITS, ABSTRACT_QUESTION, PAPER_NAME, ReportPages, _git, abstract_answers, chapter_title
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
@@ -181,16 +181,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
 
 
 def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
-    from ..study.summary import abstract_lines, read_long_table
-
-    answers = []
-    for edition in arms:
-        path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
-        if path.is_file():
-            try:
-                answers += abstract_lines(edition.name, read_long_table(path))
-            except (ValueError, KeyError):
-                pass
+    answers = abstract_answers(figures_dir, arms)
     parts = ["# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
         parts.append("**Answers** (on held-out data, with 95 % bootstrap intervals):")
