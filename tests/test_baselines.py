@@ -8,13 +8,15 @@ import numpy as np
 import pytest
 
 from nfarm.learning.baselines import DEFAULTS, LEARNERS, BaselineID
+from nfarm.model.dynamics import rnea
 from test_bases import ROBOT, nrmse, random_states, trajectories  # noqa: F401 — the shared data fixtures
 
 
 # -- scikit-learn baselines --------------------------------------------------------------------
 
 SMALL = {"linear": {}, "ridge": {"basis": "generic"}, "kernel": {"n_components": 50},
-         "boosting": {"max_iter": 5}, "mlp": {"hidden": [8], "max_iter": 5}, "friction": {}}
+         "boosting": {"max_iter": 5}, "mlp": {"hidden": [8], "max_iter": 5}, "friction": {},
+         "identification": {}}
 
 
 @pytest.mark.parametrize("learner", LEARNERS)
@@ -53,8 +55,32 @@ def test_residual_baseline_adds_newton_euler(trajectories):
     np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
 
 
+def test_the_identification_refits_a_built_arm_that_the_friction_identification_cannot(trajectories):
+    """Torques of a built arm (masses, centres and inertias off the model's) plus a drive law of
+    the identified form: the full identification reproduces them to rounding on other
+    trajectories; Newton–Euler with the nominal masses plus the friction identification does
+    not, by far more than rounding."""
+    from nfarm.study.id_trajectories import TrueArm, true_arm
+
+    built = true_arm(ROBOT, TrueArm(mass_sd=0.1, com_sd=0.005, inertia_sd=0.2), np.random.default_rng(5))
+    law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
+
+    def measured(d):
+        drive = np.einsum("njk,jk->nj", np.stack([d["qdd"], d["qd"], np.sign(d["qd"])], axis=-1), law)
+        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + drive}
+
+    train, val = measured(trajectories["train"]), measured(trajectories["val"])
+    X = (val["q"], val["qd"], val["qdd"])
+    full = BaselineID("identification").fit(ROBOT, train)
+    nominal = BaselineID("friction", residual=True).fit(ROBOT, train)
+    assert np.abs(full.predict(*X) - val["tau"]).max() < 1e-8 * np.abs(val["tau"]).max()
+    assert np.abs(nominal.predict(*X) - val["tau"]).max() > 1e-3 * np.abs(val["tau"]).max()
+    with pytest.raises(ValueError, match="learner 'identification' fits the whole torque"):
+        BaselineID("identification", residual=True).fit(ROBOT, train)
+
+
 @pytest.mark.parametrize("learner, options, message", [
-    ("forest", None, "learner must be one of linear, ridge, kernel, boosting, mlp, friction, got 'forest'"),
+    ("forest", None, "learner must be one of linear, ridge, kernel, boosting, mlp, friction, identification, got 'forest'"),
     ("friction", None, "learner 'friction' identifies the drives beside Newton–Euler: give residual=True"),
     ("ridge", {"degree": 2}, "unknown option 'degree' for learner 'ridge'; valid: basis, alpha"),
     ("ridge", {"alpha": -1}, "ridge: alpha must be a positive number, got -1"),
@@ -106,3 +132,22 @@ def test_a_time_limit_stops_an_iterative_baseline_within_an_iteration(learner, o
     small = {k: v[:200] for k, v in trajectories["train"].items()}
     with pytest.raises(TimeLimitError, match=f"{what}: over the time limit of 0.2 s"), time_limit(0.2):
         BaselineID(learner, options).fit(ROBOT, small)
+
+
+@pytest.mark.parametrize("patience", [2, 5])
+def test_the_mlp_stops_early_on_the_validation_states_and_keeps_its_best_epoch(patience, trajectories):
+    """Given validation states, the MLP keeps the epoch of least validation error and stops
+    `patience` epochs after it: the same run cut right after that epoch predicts the same bits."""
+    train, val = trajectories["train"], trajectories["val"]
+    options = {"hidden": [16], "max_iter": 300, "patience": patience, "alpha": 1e-4}
+    model = BaselineID("mlp", options, random_state=1).fit(ROBOT, train, val)
+    assert model.epochs_ == 300 or model.epochs_ - model.best_epoch_ - 1 == patience
+    assert model.epochs_ > model.best_epoch_ + 1 or model.epochs_ == 300
+    X = (val["q"], val["qd"], val["qdd"])
+    cut = BaselineID("mlp", {**options, "max_iter": model.best_epoch_ + 1}, random_state=1).fit(ROBOT, train, val)
+    assert cut.best_epoch_ == model.best_epoch_
+    np.testing.assert_array_equal(cut.predict(*X), model.predict(*X))
+    without = BaselineID("mlp", {**options, "max_iter": 5}, random_state=1).fit(ROBOT, train)
+    assert without.epochs_ is None and without.model_[-1].n_iter_ == 5       # no validation: the fixed budget
+    with pytest.raises(ValueError, match="mlp: patience must be an integer from 2"):
+        BaselineID("mlp", {"patience": 0}).fit(ROBOT, train, val)

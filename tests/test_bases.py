@@ -121,3 +121,21 @@ def test_rules_over_the_configuration_add_what_one_rule_lacks(random_states, tmp
     model.save(tmp_path)
     loaded = LearnedID.load(tmp_path, ROBOT)
     np.testing.assert_array_equal(loaded.predict(v["q"], v["qd"], v["qdd"]), model.predict(v["q"], v["qd"], v["qdd"]))
+
+
+def test_every_learned_inverse_dynamics_of_the_sweeps_has_its_tier():
+    """The tiers of prior knowledge: a cell's tier follows from what it assumes of the arm."""
+    from nfarm.learning.bases import TIERS, tier_of
+    from nfarm.study.sweep import load_sweep
+
+    seen = {}
+    for name in ("id_comparison", "id_baselines"):
+        for cell in load_sweep(f"params/sweeps/{name}.yaml").cells:
+            seen.setdefault(tier_of(cell.params), set()).add(cell.params.get("inputs") or cell.params["learner"])
+    assert seen[TIERS["structure"]] >= {"affine", "ridge"} and "affine_generic" in seen[TIERS["generic"]]
+    assert seen[TIERS["identification"]] == {"regressor"}
+    assert tier_of({"learner": "friction", "residual": True}) == TIERS["nominal"]
+    assert tier_of({"learner": "identification", "residual": False}) == TIERS["identification"]
+    assert tier_of({"inputs": "affine", "residual": True}) == TIERS["nominal"]
+    with pytest.raises(ValueError, match="needs inputs or a learner"):
+        tier_of({"basis": "chain"})

@@ -98,17 +98,29 @@ def test_stored_data_obey_the_models(built):
         assert ((idd["q"] >= study.robot.qlim[:, 0]) & (idd["q"] <= study.robot.qlim[:, 1])).all()
         assert (np.abs(idd["qd"]) <= study.id.max_velocity).all()
         assert (np.abs(idd["qdd"]) <= study.id.max_acceleration).all()
-        # The "measured" torques: rigid body + the study's drives + noise of the stated size.
-        noise = idd["tau_measured"] - idd["tau"] - stribeck_drive_torques(
-            study.id.measured, idd["qd"], idd["qdd"], idd["tau"], **study.id.friction)
+        # The "measured" torques: the built arm's rigid body (not the model's) + its drives + its
+        # zero offsets + noise of the stated size, read in counts of the motor current.
+        arm, offset = datasets.built_arm(study)
+        rigid = rnea(arm, idd["q"], idd["qd"], idd["qdd"])
+        assert np.abs(rigid - idd["tau"]).max() > 2 * study.id.noise.max(), "the built arm is not the model"
+        counts = idd["tau_measured"] / study.id.torque_per_count
+        np.testing.assert_allclose(counts, np.round(counts), rtol=0, atol=1e-6)
+        noise = idd["tau_measured"] - rigid - offset - stribeck_drive_torques(
+            arm, idd["qd"], idd["qdd"], rigid, **study.id.friction)
+        count = study.id.torque_per_count
+        noise_sd = np.sqrt(study.id.noise ** 2 + count ** 2 / 12)     # the reading's counts add a uniform error
+        assert ("tau_payload" in idd) == (split == "test")
+        if split == "test":        # the payload case: more torque where the payload hangs off the tool
+            loaded = idd["tau_payload"] - idd["tau_measured"]
+            assert np.sqrt(np.mean(loaded[:, 1] ** 2)) > 10 * noise_sd[1]
         # ... on states the arm knows: encoder angles on its counts, filtered derivatives near the truth
         step = 2 * np.pi / study.id.encoder_counts
         np.testing.assert_allclose(idd["q_measured"] / step, np.round(idd["q_measured"] / step), atol=1e-9)
         assert np.abs(idd["q_measured"] - idd["q"]).max() <= step / 2 + 1e-12
         assert np.sqrt(np.mean((idd["qd_measured"] - idd["qd"]) ** 2)) < 0.05 * idd["qd"].std()
         assert noise.shape == idd["tau"].shape
-        np.testing.assert_allclose(noise.std(axis=0), study.id.noise, rtol=0.2)
-        assert np.abs(noise.mean(axis=0)).max() < 4 * study.id.noise.max() / np.sqrt(len(noise))
+        np.testing.assert_allclose(noise.std(axis=0), noise_sd, rtol=0.2)
+        assert np.abs(noise.mean(axis=0)).max() < 4 * noise_sd.max() / np.sqrt(len(noise))
         full = load(out / f"ik_full_{split}.npz", study.robot, study)
         assert not study.ik_region.contains(full["q"]).all(), "the full range is wider"
 

@@ -223,3 +223,27 @@ def test_the_roles_the_abstract_reads_are_the_roles_the_chapters_write(tmp_path)
     table = read_long_table(tmp_path / "tables" / "07_summary.csv")
     (line,) = abstract_lines("arm", table)
     assert "RBF" not in line and "best baseline" not in line
+
+
+def test_the_abstract_says_what_the_measured_arm_gives_each_tier(tmp_path):
+    """On the measured arm the abstract names the identification of the built arm against the
+    ANFIS residual, and the ANFIS alone against Newton–Euler alone — worse, where it is."""
+    from nfarm.study.summary import ROLE_FRICTION_ID, ROLE_LEARNED_ALONE, ROLE_NUMERICAL, ROLE_PHYSICS
+    rng = np.random.default_rng(6)
+    label = np.repeat(np.arange(12), 25)
+    tau = rng.normal(size=(300, 2))
+    task = "ID, measured arm"
+
+    def rows_of(method, role, error):
+        predicted = tau + rng.normal(0, error, size=tau.shape)
+        return id_rows(method, role, trajectory_sums(predicted, tau, label), trajectory_maxima(predicted, tau, label),
+                       ["a", "b"], normalised=False, task=task, draws=300)
+
+    rows = (rows_of("Newton–Euler alone", ROLE_NUMERICAL, 0.1) + rows_of("NE + friction LS", ROLE_FRICTION_ID, 0.05)
+            + rows_of("identification of the built arm", ROLE_PHYSICS, 0.01)
+            + rows_of("ANFIS alone", ROLE_LEARNED_ALONE, 0.4) + rows_of("NE + ANFIS residual", ROLE_CHOSEN, 0.03))
+    long_table(rows).save(tmp_path, "07_summary")
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
+    assert "identifying the built arm's masses and drives on the known geometry leaves" in line
+    assert line.split("identifying the built arm")[1].split(";")[0].endswith("better than the ANFIS residual")
+    assert "the ANFIS alone, without the rigid-body model, leaves" in line and line.endswith("worse than Newton–Euler alone.")

@@ -11,15 +11,24 @@ the arm's masses or lengths (:data:`LEARNERS`):
   method (``n_components`` landmarks, ``gamma``) on standardised ``sin q, cos q, q̇, q̈``;
 * ``"boosting"`` — gradient-boosted trees per joint (``HistGradientBoostingRegressor``:
   ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the same inputs;
-* ``"mlp"`` — a multilayer perceptron (``hidden`` layer widths, ``alpha``, ``max_iter`` epochs of
-  Adam) on the same inputs;
+* ``"mlp"`` — a multilayer perceptron (``hidden`` layer widths, ``alpha``, at most ``max_iter``
+  epochs of Adam) on the same inputs; given validation states, it keeps the epoch of least
+  validation error and stops ``patience`` epochs after it — the early stopping the ANFIS gets, on
+  the same validation trajectories;
 * ``"friction"`` — not a learner but the identification any engineer tries first on a real
   arm: with ``residual=True``, per joint, least squares of ``τ − rnea`` on that joint's
-  ``[q̈_j, q̇_j, sign q̇_j]`` — armature, viscous and Coulomb friction (chapter 06.8).
+  ``[q̈_j, q̇_j, sign q̇_j]`` — armature, viscous and Coulomb friction (chapter 06.8);
+* ``"identification"`` — the full identification of a built arm whose geometry is known
+  (Atkeson, An & Hollerbach 1986; the *identification* tier): one least squares of ``τ`` over
+  every joint on the rigid-body regressor ``Y(q, q̇, q̈)`` (:func:`nfarm.model.dynamics.regressor`,
+  the inertial parameters shared by all joints' rows) and each joint's ``[q̈_j, q̇_j, sign q̇_j]``
+  (armature, viscous and Coulomb friction) — it refits the masses, centres of mass and
+  inertias where the built arm differs from the model. Columns are scaled to unit norm and
+  the minimum-norm solution is kept (the regressor's columns are not all identifiable).
 
 Targets are standardised per joint (each joint's error then counts alike, as in the NRMSE the
 chapters report), inputs too where the learner is not scale-free. Every random draw comes from
-``random_state``; early stopping is off, so a fit is a function of its options, data and seed.
+``random_state``; a fit is a function of its options, data (and the MLP's validation states) and seed.
 With ``residual=True`` a baseline learns ``τ − rnea`` and predicts ``rnea + learned``.
 
 Fitted baselines are not saved: they are comparison rows, refitted from their options and seed
@@ -58,8 +67,9 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "ridge": {"basis": "generic", "alpha": 1e-6},
     "kernel": {"n_components": 1000, "gamma": 0.1, "alpha": 1e-6},
     "boosting": {"max_iter": 300, "learning_rate": 0.1, "max_leaf_nodes": 31},
-    "mlp": {"hidden": [128, 128], "alpha": 1e-4, "max_iter": 200},
+    "mlp": {"hidden": [128, 128], "alpha": 1e-4, "max_iter": 200, "patience": 10},
     "friction": {},
+    "identification": {},
 }
 LEARNERS = tuple(DEFAULTS)
 #: Every learner's option names, in the order of :data:`DEFAULTS`.
@@ -67,7 +77,7 @@ OPTION_NAMES = tuple(dict.fromkeys(k for options in DEFAULTS.values() for k in o
 #: The largest value of each integer option: a Nyström kernel of ``n_components`` landmarks
 #: holds an ``(N, n_components)`` matrix and cannot be stopped once started; boosting's trees
 #: and the MLP's widths bound the work of one iteration, which the time limit cannot split.
-MAXIMA = {"n_components": 10_000, "max_iter": 100_000, "max_leaf_nodes": 4_096, "hidden": 4_096}
+MAXIMA = {"n_components": 10_000, "max_iter": 100_000, "max_leaf_nodes": 4_096, "hidden": 4_096, "patience": 100_000}
 
 
 def label(params: Mapping) -> str:
@@ -91,7 +101,8 @@ class BaselineID(Estimator):
         random_state: seed of every random draw.
 
     Learned attributes: ``model_``, ``robot_``, ``y_mean_``, ``y_scale_``, ``fit_seconds_``,
-    ``n_features_`` (inputs the learner sees).
+    ``n_features_`` (inputs the learner sees), ``epochs_`` and ``best_epoch_`` (the MLP stopped
+    early on validation states; ``None`` otherwise).
     """
 
     _fitted = "model_"
@@ -116,7 +127,7 @@ class BaselineID(Estimator):
             if key in options and not (isinstance(options[key], (int, float)) and options[key] > 0
                                        and np.isfinite(options[key])):
                 raise ValueError(f"{self.learner}: {key} must be a positive number, got {options[key]!r}")
-        for key in ("n_components", "max_iter", "max_leaf_nodes"):
+        for key in ("n_components", "max_iter", "max_leaf_nodes", "patience"):
             if key in options and not (isinstance(options[key], (int, np.integer))
                                        and not isinstance(options[key], bool) and 2 <= options[key] <= MAXIMA[key]):
                 raise ValueError(f"{self.learner}: {key} must be an integer from 2 to {MAXIMA[key]:,}, "
@@ -137,6 +148,13 @@ class BaselineID(Estimator):
             return np.concatenate([q, qd, qdd], axis=1)
         if self.learner == "friction":
             return np.stack([qdd, qd, np.sign(qd)], axis=-1)                 # (N, n, 3)
+        if self.learner == "identification":                                 # (N, n, 10 n + 3 n)
+            from ..model.dynamics import regressor
+            n = q.shape[1]
+            drives = np.zeros((len(q), n, 3 * n))
+            for j in range(n):
+                drives[:, j, 3 * j:3 * j + 3] = np.stack([qdd[:, j], qd[:, j], np.sign(qd[:, j])], axis=-1)
+            return np.concatenate([regressor(self.robot_, q, qd, qdd), drives], axis=-1)
         if self.learner == "ridge":
             return basis(self.robot_, q, qd, qdd, self.options_["basis"])[:, 1:]
         return _smooth_inputs(q, qd, qdd)
@@ -153,6 +171,8 @@ class BaselineID(Estimator):
         seed = self.random_state
         if self.learner == "friction":
             return _PerJointLeastSquares()
+        if self.learner == "identification":
+            return _StackedLeastSquares()
         if self.learner == "linear":
             return LinearRegression()
         if self.learner == "ridge":
@@ -171,8 +191,9 @@ class BaselineID(Estimator):
             max_iter=options["max_iter"], early_stopping=False, random_state=seed, tol=0.0,
             n_iter_no_change=options["max_iter"] + 1))
 
-    def fit(self, robot: Robot, train: Mapping) -> "BaselineID":
-        """Fit on ``train`` (arrays ``q, qd, qdd, tau (N, n)``).
+    def fit(self, robot: Robot, train: Mapping, val: Mapping | None = None) -> "BaselineID":
+        """Fit on ``train`` (arrays ``q, qd, qdd, tau (N, n)``); the MLP stops early on ``val``
+        (the same arrays) when it is given, and trains ``max_iter`` epochs when not.
 
         Raises:
             ValueError: an unknown learner or option, or bad data, before any work.
@@ -187,10 +208,12 @@ class BaselineID(Estimator):
             raise ValueError(f"residual must be True or False, got {self.residual!r}")
         if self.learner == "friction" and not self.residual:
             raise ValueError("learner 'friction' identifies the drives beside Newton–Euler: give residual=True")
+        if self.learner == "identification" and self.residual:
+            raise ValueError("learner 'identification' fits the whole torque, the masses included: give residual=False")
         q, qd, qdd, tau = id_states(train, robot, "train")
         self.robot_, self.options_ = robot, options
         target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
-        if self.learner == "friction":      # a physical law: no offset, no scaling
+        if self.learner in ("friction", "identification"):      # a physical law: no offset, no scaling
             self.y_mean_, self.y_scale_ = np.zeros(robot.n), np.ones(robot.n)
         else:
             self.y_mean_ = target.mean(axis=0)
@@ -198,12 +221,48 @@ class BaselineID(Estimator):
         X = self._features(q, qd, qdd)
         self.n_features_ = X.shape[-1]
         start = time.perf_counter()
+        Z = (target - self.y_mean_) / self.y_scale_
+        self.epochs_ = self.best_epoch_ = None
         with warnings.catch_warnings():
-            # A fixed budget of epochs is the design (no early stopping): not a failure.
+            # A budget of epochs is the design: reaching it is not a failure.
             warnings.simplefilter("ignore", ConvergenceWarning)
-            self.model_ = self._estimator(options).fit(X, (target - self.y_mean_) / self.y_scale_)
+            if self.learner == "mlp" and val is not None:
+                vq, vqd, vqdd, vtau = id_states(val, robot, "val")
+                v_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
+                self.model_ = self._early_stopped_mlp(options, X, Z, self._features(vq, vqd, vqdd),
+                                                      (v_target - self.y_mean_) / self.y_scale_)
+            else:
+                self.model_ = self._estimator(options).fit(X, Z)
         self.fit_seconds_ = time.perf_counter() - start
         return self
+
+    def _early_stopped_mlp(self, options: dict, X, Z, X_val, Z_val):
+        """The MLP trained epoch by epoch (``partial_fit``: one pass of Adam over shuffled
+        batches, as ``fit`` makes), its weights those of the epoch of least validation RMSE,
+        stopped ``patience`` epochs after it or at ``max_iter``; sets ``epochs_`` and
+        ``best_epoch_`` (0-based)."""
+        from sklearn.pipeline import make_pipeline
+        from sklearn.preprocessing import StandardScaler
+
+        _, MLPRegressor = _timed_learners()
+        scaler = StandardScaler().fit(X)
+        net = MLPRegressor(hidden_layer_sizes=tuple(options["hidden"]), alpha=options["alpha"],
+                           random_state=self.random_state, shuffle=True)
+        Xs, Xv = scaler.transform(X), scaler.transform(X_val)
+        best, since, weights = np.inf, 0, None
+        for epoch in range(options["max_iter"]):
+            net.partial_fit(Xs, Z)
+            self.epochs_ = epoch + 1
+            error = float(np.sqrt(np.mean((net.predict(Xv).reshape(Z_val.shape) - Z_val) ** 2)))
+            if error < best:
+                best, since, self.best_epoch_ = error, 0, epoch
+                weights = ([w.copy() for w in net.coefs_], [b.copy() for b in net.intercepts_])
+            else:
+                since += 1
+                if since >= options["patience"]:
+                    break
+        net.coefs_, net.intercepts_ = weights
+        return make_pipeline(scaler, net)
 
     def predict(self, q, qd, qdd) -> np.ndarray:
         """Torques ``(N, n)`` [N·m] for states ``(N, n)``."""
@@ -253,6 +312,21 @@ def _timed_learners():
             return super()._update_no_improvement_count(*args, **kwargs)
 
     return TimedHistGradientBoostingRegressor, TimedMLPRegressor
+
+
+class _StackedLeastSquares:
+    """``y ≈ X θ`` with one ``θ`` for every joint's rows (``X (N, n, k)``, ``y (N, n)``): the
+    least squares of the rows stacked, columns scaled to unit norm, minimum-norm solution."""
+
+    def fit(self, X, y):
+        A = X.reshape(-1, X.shape[-1])
+        norms = np.linalg.norm(A, axis=0)
+        norms = np.where(norms > 0, norms, 1.0)
+        self.coef_ = np.linalg.lstsq(A / norms, y.reshape(-1), rcond=None)[0] / norms
+        return self
+
+    def predict(self, X):
+        return X @ self.coef_
 
 
 class _PerJointLeastSquares:

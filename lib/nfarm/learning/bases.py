@@ -31,6 +31,14 @@ Bases (:func:`basis`; each is ``dynamic_terms ⊗ configuration terms``):
 
 All functions are pure and batched over the sample axis: ``q, qd, qdd (N, n)`` [rad, rad/s,
 rad/s²] → ``(N, F)``.
+
+**Tiers of prior knowledge** (:data:`TIERS`, :func:`tier_of`): every learned inverse dynamics of
+the study is named by what it assumes of the arm — *generic* (what holds for every rigid arm:
+functions of ``q``, affine in ``q̈``, quadratic in ``q̇``; nothing about this arm),
+*structure-informed* (which axes are parallel: the ``chain`` basis, the ``affine`` input set; no
+length or mass), *identification* (the geometry known, the inertial parameters fitted: the
+rigid-body regressor), or *nominal model + learned* (Newton–Euler with the nominal masses, and a
+learned or identified correction of what it misses).
 """
 
 from __future__ import annotations
@@ -42,10 +50,41 @@ import numpy as np
 from ..model.kinematics import jacobian
 from ..model.robot import Robot
 
-__all__ = ["BASES", "parallel_runs", "angle_sums", "dynamic_terms", "configuration_terms",
+__all__ = ["BASES", "TIERS", "tier_of", "parallel_runs", "angle_sums", "dynamic_terms", "configuration_terms",
            "basis", "basis_width"]
 
 BASES = ("generic", "chain", "generic_linear", "chain_linear")
+
+#: The tiers of prior knowledge, by key, as tables name them (module docstring).
+TIERS = {"generic": "generic", "structure": "structure-informed", "identification": "identification",
+         "nominal": "nominal model + learned"}
+_STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine",), ("regressor",)
+_STRUCTURE_BASES = ("chain", "chain_linear")
+
+
+def tier_of(params) -> str:
+    """The tier (a :data:`TIERS` label) of a learned inverse dynamics described by ``params``, a
+    sweep cell's flat parameters: ``residual`` (true: Newton–Euler's nominal model is used), the
+    ANFIS's ``inputs`` (``learned_id`` cells) or a baseline's ``learner`` and ``basis`` (the
+    ``identification`` learner fits the inertial parameters on the known geometry).
+
+    Example:
+        >>> tier_of({"inputs": "affine"}), tier_of({"learner": "ridge", "basis": "generic"})
+        ('structure-informed', 'generic')
+        >>> tier_of({"inputs": "regressor"}), tier_of({"learner": "boosting", "residual": True})
+        ('identification', 'nominal model + learned')
+    """
+    if params.get("residual"):
+        return TIERS["nominal"]
+    if params.get("inputs") is not None and params.get("learner") is None:
+        inputs = params["inputs"]
+        return TIERS["structure" if inputs in _STRUCTURE_INPUTS else
+                     "identification" if inputs in _IDENTIFICATION_INPUTS else "generic"]
+    if params.get("learner") is None:
+        raise ValueError(f"a learned inverse dynamics needs inputs or a learner, got {dict(params)!r}")
+    if params["learner"] == "identification":
+        return TIERS["identification"]
+    return TIERS["structure" if params.get("basis") in _STRUCTURE_BASES else "generic"]
 
 
 @functools.lru_cache(maxsize=32)

@@ -43,11 +43,11 @@ from ..infra.provenance import code_digest
 from ..infra.reading import ParamsError, Validator, load_json, show
 from ..model.dynamics import rnea, stribeck_drive_torques
 from ..model.robot import Robot, robot_hash
-from .id_trajectories import measured_states, random_trajectories
+from .id_trajectories import current_sensed, measured_states, random_trajectories, true_arm, with_payload
 from .regions import STREAMS, IKRegion, ik_samples
 from .study_files import SPLITS, Study
 
-__all__ = ["Dataset", "build_datasets", "load", "dataset_dir", "inputs_hash", "DATA_VERSION", "SPLITS"]
+__all__ = ["Dataset", "build_datasets", "built_arm", "load", "dataset_dir", "inputs_hash", "DATA_VERSION", "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
 DATA_VERSION = 3
@@ -187,6 +187,46 @@ def _up_to_date(path: Path, digest: str) -> bool:
         return False
 
 
+def built_arm(study: Study) -> tuple[Robot, np.ndarray]:
+    """The arm a study's ``id.measured`` section describes, as built: the robot with its
+    drives and, with a ``true_arm``, its links drawn once (:func:`nfarm.study.id_trajectories.true_arm`)
+    from the study's own seed — the same arm for every redrawn data set (``draw``) — and the
+    ``(n,)`` zero offsets of its torque readings [N·m] (zero without a ``sensor``), drawn after
+    the links from the same stream.
+
+    Raises:
+        ValueError: the study has no measured arm.
+    """
+    settings = study.id
+    if settings.measured is None:
+        raise ValueError(f"{study.source}: id.measured: the study declares no measured arm")
+    rng = np.random.default_rng(np.random.SeedSequence([study.seed - study.draw, STREAMS["true_arm"]]))
+    arm = settings.measured if settings.true_arm is None else true_arm(settings.measured, settings.true_arm, rng)
+    offset = np.zeros(arm.n) if settings.offset_sd is None else \
+        settings.offset_sd * np.clip(rng.standard_normal(arm.n), -3.0, 3.0)
+    return arm, offset
+
+
+def _measured_torques(study: Study, data: dict, split: str) -> dict[str, np.ndarray]:
+    """``tau_measured``: the torques the built arm (:func:`built_arm`) reports on the states of
+    ``data`` — its rigid body, its drives (Stribeck and load terms from the study) and its
+    sensors (:func:`nfarm.study.id_trajectories.current_sensed`); on the test split with a
+    payload, also ``tau_payload``, the same arm carrying it (its own noise draws)."""
+    settings = study.id
+    arm, offset = built_arm(study)
+    cases = {"tau_measured": arm}
+    if split == "test" and settings.true_arm is not None and settings.true_arm.payload > 0:
+        cases["tau_payload"] = with_payload(arm, settings.true_arm.payload)
+    out = {}
+    for k, (key, built) in enumerate(cases.items()):
+        stream = [study.seed, STREAMS["id_noise"], _SPLIT_STREAM[split]] + ([k] if k else [])
+        rigid = data["tau"] if built is settings.measured else rnea(built, data["q"], data["qd"], data["qdd"])
+        drive = stribeck_drive_torques(built, data["qd"], data["qdd"], rigid, **settings.friction)
+        out[key] = current_sensed(rigid + drive, np.random.default_rng(np.random.SeedSequence(stream)),
+                                  noise=settings.noise, torque_per_count=settings.torque_per_count, offset=offset)
+    return out
+
+
 def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force: bool = False,
                    progress: bool = False, command: str | None = None) -> list[tuple[Path, str]]:
     """Write every data set of ``study`` (module docstring); returns ``(path, "made" |
@@ -219,12 +259,7 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
                                            np.random.SeedSequence(seed))
                 data["tau"] = rnea(study.robot, data["q"], data["qd"], data["qdd"])
                 if study.id.measured is not None:
-                    noise = np.random.default_rng(np.random.SeedSequence(
-                        [study.seed, STREAMS["id_noise"], _SPLIT_STREAM[split]]))
-                    drive = stribeck_drive_torques(study.id.measured, data["qd"], data["qdd"], data["tau"],
-                                                   **study.id.friction)
-                    data["tau_measured"] = data["tau"] + drive + \
-                        study.id.noise * noise.standard_normal(data["tau"].shape)
+                    data.update(_measured_torques(study, data, split))
                     if study.id.encoder_counts is not None:
                         data["q_measured"], data["qd_measured"], data["qdd_measured"] = measured_states(
                             data["q"], data["trajectory"], study.id.dt, study.id.encoder_counts,

@@ -18,10 +18,18 @@ Stribeck breakaway and friction that grows with the load) plus Gaussian sensor n
 ``qdd_measured`` (its first and second derivatives by a Savitzky–Golay filter of
 ``filter_window`` samples along each trajectory, as a drive controller estimates them). Splits
 are by whole trajectories.
+
+**The measured arm is not the model.** With a ``true_arm`` in the measured arm, its links differ
+from the nominal model as a built arm's do (:func:`true_arm`: each link's mass, centre of mass
+and rotational inertia drawn once from the study's seed), and ``tau_measured`` is that arm's
+torque; the test split also holds ``tau_payload``, the same trajectories with a payload at the
+tool (:func:`with_payload`). With a ``sensor``, the torque is read as a servo reads it, from its
+motor current (:func:`current_sensed`: a zero offset per joint, noise, and the current's counts).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -30,7 +38,8 @@ import numpy as np
 from ..model.robot import Robot
 from ..solvers.trajectory import cubic, quintic_segments
 
-__all__ = ["IDSettings", "measured_states", "random_trajectories", "seed_like_trajectories"]
+__all__ = ["IDSettings", "TrueArm", "current_sensed", "measured_states", "random_trajectories",
+           "seed_like_trajectories", "true_arm", "with_payload"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +57,11 @@ class IDSettings:
             (the learners see the exact states).
         filter_window: samples of the Savitzky–Golay filter that estimates ``q̇, q̈`` from the
             encoder angles.
+        true_arm: how the measured arm's links differ from the model (:class:`TrueArm`), or
+            ``None`` (they are the model's).
+        torque_per_count: ``(n,)`` torque of one count of the joints' current reading [N·m], or
+            ``None`` (a torque sensor, no quantisation).
+        offset_sd: ``(n,)`` standard deviation of each joint's zero offset [N·m], drawn once.
         via_points: via points per trajectory (the first is the start).
         segment_time: ``(lo, hi)`` nominal duration of each segment [s], drawn uniformly.
         dt: sampling step [s].
@@ -67,6 +81,85 @@ class IDSettings:
     friction: dict = field(default_factory=dict)
     encoder_counts: int | None = None
     filter_window: int = 7
+    true_arm: "TrueArm | None" = None
+    torque_per_count: np.ndarray | None = None
+    offset_sd: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class TrueArm:
+    """How a built arm's links differ from its model: relative standard deviations of each
+    link's mass (``mass_sd``) and of its rotational inertia about its centre of mass
+    (``inertia_sd``), the standard deviation of each coordinate of its centre of mass
+    (``com_sd`` [m]), and the payload of the payload case (``payload`` [kg], a point mass at the
+    tool point; 0: none). Every draw is clipped to ±3 standard deviations, so a factor
+    ``1 + sd·z`` stays positive for ``sd < 1/3``."""
+
+    mass_sd: float = 0.0
+    com_sd: float = 0.0
+    inertia_sd: float = 0.0
+    payload: float = 0.0
+
+
+def true_arm(robot: Robot, spec: TrueArm, rng: np.random.Generator) -> Robot:
+    """The built arm: ``robot`` with each link's mass scaled by ``1 + mass_sd·z``, its centre of
+    mass moved by ``com_sd·z`` along each link axis [m] and its inertia tensor about the centre
+    of mass scaled by ``1 + inertia_sd·z`` (z standard normal, clipped to ±3; a positive scale
+    keeps every tensor physically valid: positive definite, its triangle inequalities kept).
+    Geometry and drives are the model's. Draws, in this order: ``n`` masses, ``(n, 3)``
+    centres, ``n`` inertias.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> built = true_arm(robot, TrueArm(mass_sd=0.05, com_sd=0.002, inertia_sd=0.1),
+        ...                  np.random.default_rng(0))
+        >>> bool(np.all(np.abs(built.mass / robot.mass - 1) <= 0.15)), built.a.tolist() == robot.a.tolist()
+        (True, True)
+    """
+    draw = lambda shape: np.clip(rng.standard_normal(shape), -3.0, 3.0)   # noqa: E731
+    n = robot.n
+    mass = robot.mass * (1 + spec.mass_sd * draw(n))
+    com = robot.com + spec.com_sd * draw((n, 3))
+    inertia = robot.inertia * (1 + spec.inertia_sd * draw(n))[:, None, None]
+    return dataclasses.replace(robot, mass=mass, com=com, inertia=inertia)
+
+
+def with_payload(robot: Robot, mass: float) -> Robot:
+    """``robot`` carrying a point mass ``mass`` [kg] at its tool point: the last link's mass,
+    centre of mass and inertia about it combined with the point's (parallel-axis theorem,
+    ``I = I_c + m (|d|² 1 − d dᵀ)`` for each part's offset ``d`` from the joint centre).
+    Statically it adds ``Jᵀ f`` with ``f = −mass·g`` at the tool point (``tests/test_datasets.py``).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> round(float(with_payload(robot, 0.1).mass[-1] - robot.mass[-1]), 12)
+        0.1
+    """
+    if mass == 0:
+        return robot
+    m1, c1, p = robot.mass[-1], robot.com[-1], robot.tool[:3, 3]
+    total = m1 + mass
+    c = (m1 * c1 + mass * p) / total
+    shift = lambda m, d: m * (d @ d * np.eye(3) - np.outer(d, d))   # noqa: E731
+    inertia_n = robot.inertia[-1] + shift(m1, c1 - c) + shift(mass, p - c)
+    return dataclasses.replace(robot, mass=np.append(robot.mass[:-1], total), com=np.vstack([robot.com[:-1], c]),
+                               inertia=np.concatenate([robot.inertia[:-1], inertia_n[None]]))
+
+
+def current_sensed(tau: np.ndarray, rng: np.random.Generator, *, noise: np.ndarray,
+                   torque_per_count: np.ndarray | None = None, offset: np.ndarray | None = None) -> np.ndarray:
+    """The torque ``tau (N, n)`` [N·m] a joint reports: plus its zero ``offset (n,)`` [N·m] and
+    Gaussian noise of ``noise (n,)`` [N·m], then, for a servo that senses its motor current,
+    rounded to the torque of one count of the current reading, ``torque_per_count (n,)``
+    [N·m] (``None``: a torque sensor, not quantised). Draws ``(N, n)`` normals."""
+    sensed = tau + (0.0 if offset is None else offset) + noise * rng.standard_normal(tau.shape)
+    if torque_per_count is not None:
+        sensed = np.round(sensed / torque_per_count) * torque_per_count
+    return sensed
 
 
 def measured_states(q: np.ndarray, trajectory: np.ndarray, dt: float, counts: int, window: int

@@ -501,8 +501,11 @@ def _id_split(p: dict, study, directory: Path, split: str) -> dict:
         return {**{k: loaded[k] for k in ("q", "qd", "qdd", "trajectory")}, "tau": loaded["tau"]}
     if "tau_measured" not in loaded:
         raise ParamsError(f"{p['study_file']}: torques: the study has no measured torques (id.measured)")
-    return {**{k: loaded.get(f"{k}_measured", loaded[k]) for k in ("q", "qd", "qdd")},
-            "trajectory": loaded["trajectory"], "tau": loaded["tau_measured"]}
+    out = {**{k: loaded.get(f"{k}_measured", loaded[k]) for k in ("q", "qd", "qdd")},
+           "trajectory": loaded["trajectory"], "tau": loaded["tau_measured"]}
+    if "tau_payload" in loaded:             # the test split's payload case (chapter 7)
+        out["tau_payload"] = loaded["tau_payload"]
+    return out
 
 
 def id_baseline(p: dict) -> dict:
@@ -512,12 +515,14 @@ def id_baseline(p: dict) -> dict:
     robot = study.robot
     train = _first(_id_split(p, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"],
                    None, p["stride"])
-    judged = _id_split(p, study, directory, "val") if p["split"] == "val" else _test_split(p, _id_split)
+    val = _id_split(p, study, directory, "val")
+    judged = val if p["split"] == "val" else _test_split(p, _id_split)
     learner = p["learner"]
     if learner not in BASELINE_OPTIONS:
         raise ParamsError(f"learner must be one of {', '.join(BASELINE_OPTIONS)}, got {learner!r}")
     options = {k: p[k] for k in BASELINE_OPTIONS[learner] if p[k] is not None}
-    model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"]).fit(robot, train)
+    # The validation trajectories stop the MLP early, as they stop the ANFIS (the other learners ignore them).
+    model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"]).fit(robot, train, val)
     start = time.perf_counter()
     predicted = model.predict(judged["q"], judged["qd"], judged["qdd"])
     seconds = time.perf_counter() - start
@@ -525,10 +530,15 @@ def id_baseline(p: dict) -> dict:
     nrmse = rmse / judged["tau"].std(axis=0)
     sums = trajectory_sums(predicted, judged["tau"], judged["trajectory"])
     maxima = trajectory_maxima(predicted, judged["tau"], judged["trajectory"])
+    # The same predictions against the torques of the arm carrying the payload (the test split of a measured arm)
+    loaded = judged.get("tau_payload")
+    payload_sums = [] if loaded is None else trajectory_sums(predicted, loaded, judged["trajectory"]).ravel().tolist()
+    payload_maxima = [] if loaded is None else trajectory_maxima(predicted, loaded, judged["trajectory"]).ravel().tolist()
     return {"rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
             "fit_seconds": float(model.fit_seconds_), "predict_us": 1e6 * seconds / len(predicted),
             "features": int(model.n_features_), "train_samples": int(len(train["q"])),
-            "trajectory_sums": sums.ravel().tolist(), "trajectory_maxima": maxima.ravel().tolist()}
+            "epochs": int(model.epochs_ or 0), "trajectory_sums": sums.ravel().tolist(), "trajectory_maxima": maxima.ravel().tolist(),
+            "payload_trajectory_sums": payload_sums, "payload_trajectory_maxima": payload_maxima}
 
 
 def idle(p: dict) -> dict:
@@ -577,8 +587,8 @@ JOBS: dict[str, Job] = {
         id_baseline,
         {**_STUDY, "stride": 1, "torques": "rigid", "residual": False, "split": "val", "learner": "linear",
          **{k: None for k in sorted({k for o in BASELINE_OPTIONS.values() for k in o})}},
-        ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples",
-         "trajectory_sums", "trajectory_maxima"),
+        ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples", "epochs",
+         "trajectory_sums", "trajectory_maxima", "payload_trajectory_sums", "payload_trajectory_maxima"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a model-free scikit-learn baseline of a study's ID",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),

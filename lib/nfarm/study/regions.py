@@ -35,7 +35,7 @@ __all__ = ["IKRegion", "SingleValuedness", "check_single_valued", "workspace_fra
            "STREAMS", "stream_rng"]
 
 #: The random streams of a study's draws, one per use (the data sets' and the solution check's).
-STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5, "id_noise": 6}
+STREAMS = {"ik": 1, "ik_full": 2, "id": 3, "check": 4, "check_starts": 5, "id_noise": 6, "true_arm": 7}
 
 
 def stream_rng(seed: int, *stream: int) -> np.random.Generator:

@@ -33,7 +33,7 @@ from ..infra.typed import JOINTS, ORDERED, TEXT, Length, Range, read_typed, sect
 from ..model.kinematics import fk
 from ..model.robot import Robot, load_robot
 from ..solvers.ik import in_class
-from .id_trajectories import IDSettings
+from .id_trajectories import IDSettings, TrueArm
 from .regions import IKRegion
 
 __all__ = ["Study", "StudyFile", "SPLITS", "load_study", "study_from_dict", "smoke_study", "redrawn",
@@ -126,6 +126,27 @@ class IKSection:
 
 
 @dataclass(frozen=True, kw_only=True)
+class TrueArmSection:
+    """``id.measured.true_arm``: how the built arm's links differ from the model (standard
+    deviations of the draws, made once from the study's seed) and the payload case."""
+
+    mass_sd: Annotated[float, Range(lo=0.0, hi=1 / 3, hi_open=True)] = 0.0      # relative
+    com_sd_m: Annotated[float, Range(lo=0.0, hi=0.1)] = 0.0                     # m, per coordinate
+    inertia_sd: Annotated[float, Range(lo=0.0, hi=1 / 3, hi_open=True)] = 0.0   # relative
+    payload_kg: Annotated[float, Range(lo=0.0, hi=PER_JOINT_MAX)] = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorSection:
+    """``id.measured.sensor``: the torque read from the motor current — its count, the torque
+    per ampere at the joint, each joint's zero offset (drawn once from the study's seed)."""
+
+    current_per_count_a: Annotated[PerJoint, _RATE]             # A per count of the reading
+    torque_constant_nm_a: Annotated[PerJoint, _RATE]            # N·m at the joint per A
+    offset_sd_nm: Annotated[PerJoint, _DRIVE] = 0.0             # N·m
+
+
+@dataclass(frozen=True, kw_only=True)
 class MeasuredSection:
     """``id.measured``: the "real" arm's drives, friction, sensor noise and encoders."""
 
@@ -139,6 +160,8 @@ class MeasuredSection:
     load_coefficient: Optional[Annotated[PerJoint, Range(lo=0.0, hi=1.0, hi_open=True)]] = None
     encoder_counts: Optional[Annotated[int, Range(lo=16, hi=2 ** 31)]] = None
     filter_window: Annotated[int, Range(lo=5, hi=101)] = 7
+    true_arm: Optional[TrueArmSection] = None
+    sensor: Optional[SensorSection] = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -397,6 +420,13 @@ def _measured(v: Validator, section: MeasuredSection, robot: Robot) -> dict[str,
                            "filter_window": section.filter_window}
     if section.encoder_counts is not None:
         out["encoder_counts"] = section.encoder_counts
+    if section.true_arm is not None:
+        t = section.true_arm
+        out["true_arm"] = TrueArm(mass_sd=t.mass_sd, com_sd=t.com_sd_m, inertia_sd=t.inertia_sd, payload=t.payload_kg)
+    if section.sensor is not None:
+        out["torque_per_count"] = _per_joint(section.sensor.current_per_count_a, n) * \
+            _per_joint(section.sensor.torque_constant_nm_a, n)
+        out["offset_sd"] = _per_joint(section.sensor.offset_sd_nm, n)
     return out
 
 

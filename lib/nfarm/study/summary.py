@@ -40,7 +40,7 @@ from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
-           "target_verdict", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT",
+           "target_verdict", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
@@ -67,9 +67,11 @@ ROLE_NUMERICAL = "numerical reference"
 ROLE_FRICTION_ID = "baseline (friction identification)"
 #: The best learner as a residual on the measured arm, chosen on validation data.
 ROLE_RESIDUAL_BASELINE = "baseline (learner as residual, on validation)"
+#: The chosen ANFIS trained on the measured torques alone, without Newton–Euler.
+ROLE_LEARNED_ALONE = "learned alone (no rigid-body model)"
 #: Every role :func:`abstract_lines` reads.
 ROLES = (ROLE_CHOSEN, ROLE_RECIPE, ROLE_BEST_BASELINE, ROLE_EXACT, ROLE_DESIGN, ROLE_PHYSICS, ROLE_NUMERICAL,
-         ROLE_FRICTION_ID, ROLE_RESIDUAL_BASELINE)
+         ROLE_FRICTION_ID, ROLE_RESIDUAL_BASELINE, ROLE_LEARNED_ALONE)
 
 
 # (metric, unit) of the IK rows, in order; the first is left out for a method whose joint angles
@@ -472,11 +474,22 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
         alone = find(task, ROLE_NUMERICAL, "worst joint RMSE")
         ls = find(task, ROLE_FRICTION_ID, "worst joint RMSE")
         learner = find(task, ROLE_RESIDUAL_BASELINE, "worst joint RMSE")
-        text = (f"{arm}, an arm with friction (measured torques): Newton–Euler alone leaves {_with_interval(alone)} "
-                f"on the worst joint, Newton–Euler with an ANFIS residual {_with_interval(residual)}")
+        text = (f"{arm}, the measured arm (built, not the model; friction; torques from the motor current): "
+                f"Newton–Euler alone leaves {_with_interval(alone)} on the worst joint, Newton–Euler with an ANFIS "
+                f"residual {_with_interval(residual)}")
         if ls:
             verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(residual, ls)]
             text += f", {verdict} the least-squares friction identification ({_with_interval(ls)})"
+        built = find(task, ROLE_PHYSICS, "worst joint RMSE")
+        if built:
+            verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(built, residual)]
+            text += (f"; identifying the built arm's masses and drives on the known geometry leaves "
+                     f"{_with_interval(built)}, {verdict} the ANFIS residual")
+        alone_learned = find(task, ROLE_LEARNED_ALONE, "worst joint RMSE")
+        if alone_learned and alone:
+            verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(alone_learned, alone)]
+            text += (f"; the ANFIS alone, without the rigid-body model, leaves {_with_interval(alone_learned)}, "
+                     f"{verdict} Newton–Euler alone")
         if learner:
             verdict = {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(learner, residual)]
             text += (f"; the best learner as a residual, {learner['method']}: {_with_interval(learner)}, "
