@@ -509,6 +509,26 @@ def test_chapters_whose_inputs_are_unchanged_are_not_run_again(two_arms, capsys)
     assert build_report(only=["01"], smoke=True, **dirs) == 0 and len(runs) == 9  # other inputs
     assert verify_manifest(figures) == []
 
+def test_a_changed_chapter_runs_every_chapter_that_reads_its_results_again(two_arms, capsys):
+    """Chapter 7 loads the models chapter 6 chose: a chapter whose own inputs are unchanged runs
+    again when a chapter before it did — its edition's, one run for every edition, and for the
+    comparing chapter every edition's; the other edition's earlier chapters stay as they are."""
+    runs, dirs = two_arms
+    assert build_report(**dirs) == 0 and len(runs) == 6
+    nb = dirs["notebooks_dir"] / "02_shared.ipynb"
+    nb.write_text(nb.read_text().replace("seed = 0", "seed = 1"))          # the chapter run once for both
+    assert build_report(**dirs) == 0
+    assert [name for name, _ in runs[6:]] == ["02_shared.ipynb", "03_study.ipynb", "03_study.ipynb", "04_compare.ipynb"]
+    capsys.readouterr()
+    edited = dirs["notebooks_dir"] / "03_study.ipynb"
+    edited.write_text(edited.read_text().replace("# Chapter", "# The chapter"))   # both editions' 03
+    assert build_report(**dirs) == 0
+    assert [name for name, _ in runs[10:]] == ["03_study.ipynb", "03_study.ipynb", "04_compare.ipynb"]
+    assert capsys.readouterr().err.count("up to date") == 3              # 01 (a, b) and 02: upstream only
+    assert build_report(**dirs) == 0 and len(runs) == 13                  # and then nothing
+    assert verify_manifest(dirs["figures_dir"]) == []
+
+
 def test_editions_come_from_the_study_files():
     arms = report.editions()
     assert [a.name for a in arms][:1] == ["intelbot5"] and arms[0].primary

@@ -112,6 +112,24 @@ def _chapter_key(notebook: Path, parameters: dict, smoke: bool) -> str:
     return h.hexdigest()
 
 
+def _chained_keys(jobs: Sequence[tuple[Path, "Edition", dict]], comparing: set[str], smoke: bool,
+                  extra: dict) -> dict[tuple[str, str], str]:
+    """Each chapter run's key (by notebook and edition name): its own inputs
+    (:func:`_chapter_key`) and the keys of the chapter runs before it whose results it may read
+    — its edition's earlier chapters and the ones run once for every edition (chapter 7 loads
+    the models chapter 6 chose; a comparing chapter reads every edition's). A change upstream
+    runs every chapter after it again. ``jobs``: every chapter run, in chapter order."""
+    once = {name for name in {nb.name for nb, _, _ in jobs}
+            if sum(nb.name == name for nb, _, _ in jobs) == 1}
+    keys: dict[tuple[str, str], str] = {}
+    for nb, arm, own in jobs:
+        own_key = _chapter_key(nb, {"smoke": smoke, **own, **extra}, smoke)
+        before = sorted(key for (name, edition), key in keys.items()
+                        if name < nb.name and (nb.name in comparing or edition == arm.name or name in once))
+        keys[nb.name, arm.name] = hashlib.sha256("\n".join([own_key, *before]).encode()).hexdigest()
+    return keys
+
+
 def _published_digests(figures_dir: Path, subdir: str, prefix: str) -> dict[str, str]:
     return {p.relative_to(figures_dir).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
             for p in chapter_files(figures_dir / subdir, prefix)}
@@ -179,8 +197,9 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     Only a run with the default parameters (not ``smoke``, no ``extra_parameters``)
     publishes into ``figures_dir``; others publish into ``build_dir/<variant>/figures``. A run
     with ``extra_parameters`` is one edition (the primary's, with those parameters). A chapter
-    whose inputs (:func:`_chapter_key`) are those of its last run, and whose published files
-    are still that run's, is not run again unless ``force``.
+    whose inputs (:func:`_chapter_key`, and those of the chapters before it whose results it
+    reads: :func:`_chained_keys`) are those of its last run, and whose published files are still
+    that run's, is not run again unless ``force``.
 
     ``parallel`` (default: when this process may use two CPUs or more): the editions' chapters
     run side by side, one process per edition, each in chapter order (module docstring); the
@@ -229,6 +248,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
 
     comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
     jobs = [(nb, arm, own) for nb in notebooks for arm, own in runs(nb)]
+    keys = _chained_keys([(nb, arm, own) for nb in everything for arm, own in runs(nb)], comparing, smoke, extra)
     sequences = [[j for j in jobs if j[1] is arm and j[0].name not in comparing] for arm in arms]
     sequences = [seq for seq in sequences if seq]
     if parallel is None:
@@ -243,7 +263,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         executed = base / "notebooks" / arm.subdir / nb.name
         stamp = base / "stamps" / arm.name / f"{nb.stem}.json"
         parameters = {"smoke": smoke, **own, **extra}
-        key = _chapter_key(nb, parameters, smoke)
+        key = keys[nb.name, arm.name]
         if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
             say(f"{label}: up to date (its inputs are unchanged)")
             return
