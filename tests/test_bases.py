@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 from nfarm.learning import bases
 from nfarm.study.study_files import load_study
@@ -78,7 +79,8 @@ def test_chain_basis_spans_the_rigid_body_model_the_generic_one_does_not(robot, 
     errors = {}
     for kind in ("chain", "generic"):
         A = bases.basis(robot, train["q"], train["qd"], train["qdd"], kind)
-        theta = np.linalg.lstsq(A, train["tau"], rcond=None)[0]
+        # QR with column pivoting (rank-revealing, as the SVD; several times faster on these 3 213 columns)
+        theta = scipy.linalg.lstsq(A, train["tau"], lapack_driver="gelsy")[0]
         errors[kind] = nrmse(bases.basis(robot, test["q"], test["qd"], test["qdd"], kind) @ theta, test["tau"])
     assert errors["chain"].max() < chain, errors
     assert errors["generic"].max() > 0.01, errors
