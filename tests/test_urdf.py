@@ -21,6 +21,7 @@ from nfarm.infra.paths import PARAMS
 from nfarm.model.pinocchio_ref import pinocchio_from_urdf, pinocchio_model
 from nfarm.infra.reading import ParamsError, ParamsWarning
 from nfarm.model.rotations import quat_to_matrix, matrix_to_rpy
+from nfarm.model.robot import load_robot
 from nfarm.model.urdf import from_urdf, to_urdf
 
 TOL = 1e-12
@@ -348,3 +349,31 @@ def test_a_urdf_robot_is_hashed_by_its_sources(tmp_path):
     (tmp_path / "two.urdf").write_text(GOOD.replace('<mass value="0.5"/>', '<mass value="0.6"/>'))
     assert robot_hash(from_urdf(tmp_path / "two.urdf")) != first
     assert robot_hash(from_urdf(tmp_path / "two.urdf", name="renamed")) != robot_hash(from_urdf(tmp_path / "two.urdf"))
+
+
+def test_the_chapters_reference_for_a_urdf_arm_is_pinocchios_own_parse_and_catches_a_wrong_conversion():
+    """Chapters 01 and 03 cross-check a URDF arm against Pinocchio's parse of the URDF itself
+    (nfarm.model.pinocchio_ref.pinocchio_source): it agrees with the converted robot, and it
+    sees a conversion error that a Pinocchio model built from nfarm's own DH table cannot."""
+    import dataclasses
+
+    from nfarm.model.pinocchio_ref import pinocchio_model, pinocchio_source
+
+    robot_file = PARAMS / "robots" / "so101.yaml"
+    robot = load_robot(robot_file)
+    reference, what = pinocchio_source(robot_file, robot)
+    assert what.startswith("Pinocchio's own parse of the robot's URDF")
+    rng = np.random.default_rng(3)
+    q = rng.uniform(robot.qlim[:, 0], robot.qlim[:, 1], size=(20, robot.n))
+    qd, qdd = rng.normal(size=(2, 20, robot.n))
+    m, d = reference.model, reference.data
+    np.testing.assert_allclose(fk(robot, q), [reference.fk(x) for x in q], rtol=0, atol=AGREE)
+    np.testing.assert_allclose(jacobian(robot, q), [reference.jacobian(x) for x in q], rtol=0, atol=AGREE)
+    np.testing.assert_allclose(rnea(robot, q, qd, qdd), [pin.rnea(m, d, *x) for x in zip(q, qd, qdd)],
+                               rtol=0, atol=AGREE)
+    wrong = dataclasses.replace(robot, a=robot.a + np.array([0, 1e-3, 0, 0, 0]))     # a 1 mm slip
+    own = pinocchio_model(wrong)
+    assert np.abs(fk(wrong, q) - np.array([own.fk(x) for x in q])).max() < AGREE, "its own DH: blind"
+    assert np.abs(fk(wrong, q) - np.array([reference.fk(x) for x in q])).max() > 1e-4, "the source sees it"
+    dh_only, what = pinocchio_source(PARAMS / "robots" / "intelbot5.yaml", load_robot(PARAMS / "robots" / "intelbot5.yaml"))
+    assert what == "the robot built joint by joint in Pinocchio from nfarm's DH table"
