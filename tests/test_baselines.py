@@ -151,3 +151,95 @@ def test_the_mlp_stops_early_on_the_validation_states_and_keeps_its_best_epoch(p
     assert without.epochs_ is None and without.model_[-1].n_iter_ == 5       # no validation: the fixed budget
     with pytest.raises(ValueError, match="mlp: patience must be an integer from 2"):
         BaselineID("mlp", {"patience": 0}).fit(ROBOT, train, val)
+
+
+# -- saving: JSON, the same bits as scikit-learn's predict ---------------------------------------
+
+
+@pytest.mark.parametrize("learner, residual", [(learner, residual) for learner in LEARNERS for residual in (False, True)
+                                               if (learner, residual) not in (("friction", False), ("identification", True))])
+def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, residual, trajectories, tmp_path):
+    """The arrays read out of the fitted estimator predict what the estimator itself predicts, bit
+    for bit, and the saved JSON loads back to the same bits (no pickle). (Friction is a residual
+    only, the identification never one.)"""
+    from nfarm.learning.baselines import load_id_model
+
+    train, val = trajectories["train"], trajectories["val"]
+    model = BaselineID(learner, SMALL[learner], residual=residual, random_state=2).fit(ROBOT, train, val)
+    X = (val["q"], val["qd"], val["qdd"])
+    features = model._features(*X)
+    scaled = model.model_.predict(features).reshape(len(val["q"]), -1)           # scikit-learn's own arithmetic
+    expected = scaled * model.y_scale_ + model.y_mean_ + (rnea(ROBOT, *X) if residual else 0.0)
+    np.testing.assert_array_equal(model.predict(*X), expected)
+    model.save(tmp_path)
+    loaded = load_id_model(tmp_path, ROBOT)
+    assert isinstance(loaded, BaselineID) and (loaded.learner, loaded.residual, loaded.random_state, loaded.options_) == \
+        (model.learner, model.residual, model.random_state, model.options_)
+    np.testing.assert_array_equal(loaded.predict(*X), model.predict(*X))
+    assert (tmp_path / "baseline_id.json").read_bytes().startswith(b"{")
+
+
+def test_an_edited_or_foreign_baseline_file_is_refused_in_one_line(trajectories, tmp_path):
+    import json
+
+    from nfarm.infra.reading import ParamsError, with_content_digest
+    from nfarm.learning.baselines import load_id_model
+    from nfarm.model.robot import load_robot
+    from nfarm.infra.paths import PARAMS
+
+    model = BaselineID("boosting", {"max_iter": 3}).fit(ROBOT, trajectories["train"])
+    path = model.save(tmp_path / "m")
+    data = json.loads(path.read_text())
+    data["state"]["joints"][0]["trees"][0]["value"][0] += 1.0          # an edit without its content hash
+    path.write_text(json.dumps(data))
+    with pytest.raises(ParamsError, match="does not match the file's content"):
+        BaselineID.load(tmp_path / "m", ROBOT)
+    # A tree whose child points back to its parent (a loop) is refused even with a valid hash
+    data = json.loads(model.save(tmp_path / "n").read_text())
+    tree = data["state"]["joints"][0]["trees"][0]
+    inner = tree["leaf"].index(0)
+    tree["left"][inner] = inner
+    (tmp_path / "n" / "baseline_id.json").write_text(json.dumps(with_content_digest(data)))
+    with pytest.raises(ParamsError, match=r"baseline_id.json: state.joints\[0\].trees\[0\].left: must name a later node"):
+        BaselineID.load(tmp_path / "n", ROBOT)
+    with pytest.raises(ParamsError, match="robot_params_sha256: trained for robot"):
+        BaselineID.load(model.save(tmp_path / "o"), load_robot(PARAMS / "robots" / "so101.yaml"))
+    with pytest.raises(ParamsError, match="holds no saved learned-ID model"):
+        load_id_model(tmp_path / "empty", ROBOT)
+
+
+def test_load_id_model_reads_an_anfis_too(trajectories, tmp_path):
+    from nfarm.learning.baselines import load_id_model
+    from nfarm.learning.learned_id import LearnedID
+
+    anfis = LearnedID(inputs="own", n_mfs=1, epochs=1).fit(ROBOT, trajectories["train"])
+    anfis.save(tmp_path)
+    v = trajectories["val"]
+    loaded = load_id_model(tmp_path, ROBOT)
+    assert isinstance(loaded, LearnedID)
+    np.testing.assert_array_equal(loaded.predict(v["q"], v["qd"], v["qdd"]), anfis.predict(v["q"], v["qd"], v["qdd"]))
+
+
+def test_the_identification_tier_anfis_sees_the_identifications_columns(trajectories):
+    """``regressor_drives``: each joint's regressor row and its drive terms. One rule is a per-joint
+    least squares on them, so a built arm with a drive law of that form is reproduced to rounding —
+    the inputs the identification learner has, given to the ANFIS of its tier."""
+    from nfarm.learning.learned_id import LearnedID, id_features
+    from nfarm.study.id_trajectories import TrueArm, true_arm
+
+    built = true_arm(ROBOT, TrueArm(mass_sd=0.1, com_sd=0.005, inertia_sd=0.2), np.random.default_rng(5))
+    law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
+
+    def measured(d):
+        drive = np.einsum("njk,jk->nj", np.stack([d["qdd"], d["qd"], np.sign(d["qd"])], axis=-1), law)
+        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + drive}
+
+    train, val = measured(trajectories["train"]), measured(trajectories["val"])
+    X = (val["q"], val["qd"], val["qdd"])
+    with_drives = LearnedID(inputs="regressor_drives", n_mfs=1, epochs=1).fit(ROBOT, train)
+    without = LearnedID(inputs="regressor", n_mfs=1, epochs=1).fit(ROBOT, train)
+    scale = np.abs(val["tau"]).max()
+    assert np.abs(with_drives.predict(*X) - val["tau"]).max() < 1e-6 * scale
+    assert np.abs(without.predict(*X) - val["tau"]).max() > 1e-3 * scale
+    widths = [f.shape[1] for f in id_features(ROBOT, *X, "regressor_drives")]
+    assert widths == [f.shape[1] + 3 for f in id_features(ROBOT, *X, "regressor")]

@@ -468,7 +468,7 @@ def test_fit_cached_reuses_only_what_was_fitted_on_the_same_inputs(kind, data, i
     (tmp_path / "inputs.sha256").write_text("0" * 64 + "\n")
     assert fit_cached(make(mf="gauss"), ROBOT, other, val, tmp_path)[1] == "made"
     assert fit_cached(make(mf="gauss"), ROBOT, other, val, tmp_path)[1] == "reused"
-    with pytest.raises(TypeError, match="must be a LearnedIK, a LearnedID or a RivalIK"):
+    with pytest.raises(TypeError, match="must be a LearnedIK, a LearnedID, a RivalIK or a BaselineID"):
         fit_cached(object(), ROBOT, train, val, tmp_path)
 
 

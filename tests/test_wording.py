@@ -93,6 +93,7 @@ def test_names_in_a_sentence_end_with_and(items, words):
     ([0.005, 0.1], [0.005, 0.005], [True, True], "worst"),             # at the noise: resolved
 ])
 def test_the_worst_joint_is_over_the_joints_a_sensor_resolves(spread, noise, resolved, words):
-    from nfarm.presentation.wording import resolved_joints, worst_of
+    from nfarm.presentation.wording import worst_of
+    from nfarm.study.statistics import resolved_joints
     assert resolved_joints(spread, noise).tolist() == resolved
     assert worst_of(resolved) == words

@@ -31,9 +31,14 @@ chapters report), inputs too where the learner is not scale-free. Every random d
 ``random_state``; a fit is a function of its options, data (and the MLP's validation states) and seed.
 With ``residual=True`` a baseline learns ``τ − rnea`` and predicts ``rnea + learned``.
 
-Fitted baselines are not saved: they are comparison rows, refitted from their options and seed
-wherever a chapter needs them (the sweeps cache their metrics), and a scikit-learn model could
-only be stored as a pickle, which this project never hands to a user.
+**Saving.** A fitted baseline is saved as JSON (:meth:`BaselineID.save`, no pickle): once fitted,
+each learner's arithmetic is read out of the scikit-learn estimator into arrays — the scaler's
+means and scales, the linear and ridge weights, the Nyström landmarks and normalisation, every
+boosted tree's splits and leaf values, the perceptron's layers — and :meth:`BaselineID.predict`
+computes from those arrays with the operations scikit-learn's ``predict`` performs, in its order,
+so a fitted and a loaded model predict the same bits (``tests/test_baselines.py`` checks both
+against scikit-learn's own ``predict``). :func:`load_id_model` reads any saved learned-ID model of
+this package (a :class:`BaselineID` or a :class:`~nfarm.learning.learned_id.LearnedID`).
 
 **Time limits.** A sweep cell runs in a worker's thread, where nothing can stop a fit from
 outside; the iterative learners check the caller's deadline (:func:`nfarm.infra.limits.time_limit`)
@@ -46,20 +51,28 @@ ridge, kernel ridge) are bounded by their sizes instead: the options' upper limi
 from __future__ import annotations
 
 import functools
+import os
 import time
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import __version__
 from ..infra.limits import check_time
-from ..model.dynamics import rnea
-from ..model.robot import Robot
+from ..infra.reading import ParamsError, Validator, json_ready, load_json, show
+from ..model.dynamics import regressor, rnea
+from ..model.robot import Robot, robot_hash
 from .bases import BASES, basis
-from .estimator import Estimator
-from .learned_id import id_states
+from .estimator import Estimator, model_file, write_model
+from .learned_id import ID_FILE_NAME, ID_FORMAT, LearnedID, id_states
+from .per_joint import checked_file
 
-__all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label"]
+__all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label", "load_id_model", "FILE_NAME", "FORMAT"]
+
+FILE_NAME = "baseline_id.json"
+FORMAT = "nfarm-baseline-id-1"
 
 #: Each learner's options and their defaults.
 DEFAULTS: dict[str, dict[str, Any]] = {
@@ -100,12 +113,25 @@ class BaselineID(Estimator):
         residual: learn ``τ − rnea(q, q̇, q̈)`` instead of ``τ``.
         random_state: seed of every random draw.
 
-    Learned attributes: ``model_``, ``robot_``, ``y_mean_``, ``y_scale_``, ``fit_seconds_``,
-    ``n_features_`` (inputs the learner sees), ``epochs_`` and ``best_epoch_`` (the MLP stopped
-    early on validation states; ``None`` otherwise).
+    Learned attributes: ``state_`` (the fitted arithmetic as arrays, what :meth:`predict` uses
+    and :meth:`save` writes), ``model_`` (the scikit-learn estimator, after :meth:`fit` only),
+    ``robot_``, ``y_mean_``, ``y_scale_``, ``fit_seconds_``, ``n_features_`` (inputs the learner
+    sees), ``epochs_`` and ``best_epoch_`` (the MLP stopped early on validation states; ``None``
+    otherwise).
+
+    Example:
+        >>> from nfarm.model.robot import load_robot
+        >>> from nfarm.infra.paths import PARAMS
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> rng = np.random.default_rng(0)
+        >>> q, qd, qdd = (rng.uniform(-1, 1, (400, robot.n)) for _ in range(3))
+        >>> train = {"q": q, "qd": qd, "qdd": qdd, "tau": rnea(robot, q, qd, qdd)}
+        >>> model = BaselineID("ridge", {"basis": "chain"}).fit(robot, train)
+        >>> float(np.abs(model.predict(q, qd, qdd) - train["tau"]).max()) < 1e-6
+        True
     """
 
-    _fitted = "model_"
+    _fitted = "state_"
 
     def __init__(self, learner: str = "ridge", options: Mapping | None = None, residual: bool = False,
                  random_state: int = 0):
@@ -149,11 +175,9 @@ class BaselineID(Estimator):
         if self.learner == "friction":
             return np.stack([qdd, qd, np.sign(qd)], axis=-1)                 # (N, n, 3)
         if self.learner == "identification":                                 # (N, n, 10 n + 3 n)
-            from ..model.dynamics import regressor
             n = q.shape[1]
-            drives = np.zeros((len(q), n, 3 * n))
-            for j in range(n):
-                drives[:, j, 3 * j:3 * j + 3] = np.stack([qdd[:, j], qd[:, j], np.sign(qd[:, j])], axis=-1)
+            own = np.stack([qdd, qd, np.sign(qd)], axis=-1)                  # (N, n, 3): joint j's drive terms
+            drives = (np.eye(n)[None, :, :, None] * own[:, :, None, :]).reshape(len(q), n, 3 * n)
             return np.concatenate([regressor(self.robot_, q, qd, qdd), drives], axis=-1)
         if self.learner == "ridge":
             return basis(self.robot_, q, qd, qdd, self.options_["basis"])[:, 1:]
@@ -234,6 +258,7 @@ class BaselineID(Estimator):
             else:
                 self.model_ = self._estimator(options).fit(X, Z)
         self.fit_seconds_ = time.perf_counter() - start
+        self.state_ = _state_of(self.learner, self.model_)
         return self
 
     def _early_stopped_mlp(self, options: dict, X, Z, X_val, Z_val):
@@ -269,11 +294,247 @@ class BaselineID(Estimator):
         self._check_fitted()
 
         q, qd, qdd = id_states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)
-        y = self.model_.predict(self._features(q, qd, qdd)).reshape(len(q), -1)
+        y = _predict_state(self.learner, self.state_, self._features(q, qd, qdd)).reshape(len(q), -1)
         tau = y * self.y_scale_ + self.y_mean_
         if self.residual:
             tau = tau + rnea(self.robot_, q, qd, qdd)
         return tau
+
+    # -- persistence --------------------------------------------------------------------------
+
+    def to_dict(self) -> dict:
+        """The model as JSON-ready fields: its options, the robot's name and hash, the targets'
+        scaling and the learner's arrays (``state``)."""
+        self._check_fitted()
+        return {"format": FORMAT, "nfarm_version": __version__, "learner": self.learner,
+                "options": json_ready(self.options_), "residual": self.residual, "random_state": self.random_state,
+                "robot": self.robot_.name, "robot_params_sha256": robot_hash(self.robot_), "n_joints": self.robot_.n,
+                "n_features": int(self.n_features_), "y_mean": json_ready(self.y_mean_),
+                "y_scale": json_ready(self.y_scale_), "fit_seconds": float(self.fit_seconds_),
+                "epochs": self.epochs_, "best_epoch": self.best_epoch_, "state": json_ready(self.state_)}
+
+    def save(self, directory: str | os.PathLike) -> Path:
+        """Write the model as ``directory/baseline_id.json`` (atomically); :meth:`load` predicts
+        the same bits."""
+        return write_model(directory, FILE_NAME, self.to_dict())
+
+    @classmethod
+    def load(cls, directory: str | os.PathLike, robot: Robot) -> "BaselineID":
+        """Read a model saved by :meth:`save` for ``robot`` (its directory or the file).
+
+        Raises:
+            ParamsError: a missing, damaged or edited file (named, with the field), or a model
+                of another robot.
+        """
+        path = model_file(directory, FILE_NAME)
+        data = checked_file(load_json(path, what="baseline ID model"), str(path), FORMAT, "baseline ID")
+        return cls.from_dict(data, robot, str(path))
+
+    @classmethod
+    def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "BaselineID":
+        v = Validator(source)
+        keys = ("format", "nfarm_version", "learner", "options", "residual", "random_state", "robot",
+                "robot_params_sha256", "n_joints", "n_features", "y_mean", "y_scale", "fit_seconds", "epochs",
+                "best_epoch", "state")
+        v.mapping(data, "", dict.fromkeys(keys, True))
+        learner = v.choice(data["learner"], "learner", LEARNERS)
+        if data["robot_params_sha256"] != robot_hash(robot):
+            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other parameters than "
+                                          f"{robot.name!r} ({robot.source}): retrain it for this robot")
+        n = v.integer(data["n_joints"], "n_joints", lo=robot.n, hi=robot.n)
+        model = cls(learner, v.mapping(data["options"], "options", dict.fromkeys(DEFAULTS[learner], True)),
+                    residual=v.boolean(data["residual"], "residual"),
+                    random_state=v.integer(data["random_state"], "random_state", lo=0))
+        try:
+            options = model._options()
+        except ValueError as exc:
+            v.fail("options", str(exc))
+        if learner == "friction" and not model.residual or learner == "identification" and model.residual:
+            v.fail("residual", f"learner {learner!r} {'needs' if learner == 'friction' else 'refuses'} residual=true")
+        model.robot_, model.options_ = robot, options
+        model.n_features_ = v.integer(data["n_features"], "n_features", lo=1, hi=10_000_000)
+        model.y_mean_ = v.array(data["y_mean"], "y_mean", (n,))
+        model.y_scale_ = v.array(data["y_scale"], "y_scale", (n,))
+        if not (model.y_scale_ > 0).all():
+            v.fail("y_scale", "must hold positive numbers")
+        model.fit_seconds_ = v.number(data["fit_seconds"], "fit_seconds", lo=0)
+        model.epochs_ = None if data["epochs"] is None else v.integer(data["epochs"], "epochs", lo=1)
+        model.best_epoch_ = None if data["best_epoch"] is None else v.integer(data["best_epoch"], "best_epoch", lo=0)
+        q = np.zeros((1, n))
+        expected = model._features(q, q, q).shape[-1]      # the features this learner computes for the robot
+        if model.n_features_ != expected:
+            v.fail("n_features", f"must be {expected} for learner {learner!r} on {robot.name}, got {model.n_features_}")
+        model.state_ = _read_state(v, learner, data["state"], expected, n, options)
+        return model
+
+
+def load_id_model(directory: str | os.PathLike, robot: Robot) -> "BaselineID | LearnedID":
+    """The learned-ID model saved in ``directory`` for ``robot``: a :class:`BaselineID`
+    (``baseline_id.json``) or a :class:`~nfarm.learning.learned_id.LearnedID` (``learned_id.json``),
+    whichever the directory holds (or the file named). Either predicts torques ``(N, n)`` [N·m]
+    with ``predict(q, qd, qdd)``.
+
+    Raises:
+        ParamsError: neither file is there, or the file is damaged, edited or of another robot.
+    """
+    path = Path(directory)
+    for cls, name in ((BaselineID, FILE_NAME), (LearnedID, ID_FILE_NAME)):
+        if path.name == name or (path / name).is_file():
+            return cls.load(path, robot)
+    raise ParamsError(f"{path}: holds no saved learned-ID model ({FILE_NAME} or {ID_FILE_NAME})")
+
+
+# -- the fitted arithmetic as arrays ------------------------------------------------------------
+
+_TREE_FIELDS = ("feature", "threshold", "left", "right", "leaf", "value", "missing_left")
+
+
+def _state_of(learner: str, model) -> dict:
+    """The arrays ``model`` (the fitted scikit-learn estimator of ``learner``) predicts with."""
+    if learner in ("friction", "identification"):
+        return {"coef": model.coef_}
+    if learner == "linear":
+        return {"coef": model.coef_, "intercept": np.atleast_1d(model.intercept_)}
+    if learner == "boosting":
+        joints = []
+        for est in model.estimators_:
+            trees = []
+            for (predictor,) in est._predictors:           # one tree per iteration (a single output)
+                nodes = predictor.nodes
+                trees.append({"feature": nodes["feature_idx"].astype(int), "threshold": nodes["num_threshold"],
+                              "left": nodes["left"].astype(int), "right": nodes["right"].astype(int),
+                              "leaf": nodes["is_leaf"].astype(int), "value": nodes["value"],
+                              "missing_left": nodes["missing_go_to_left"].astype(int)})
+            joints.append({"baseline": float(np.ravel(est._baseline_prediction)[0]), "trees": trees})
+        return {"joints": joints}
+    scaler, *rest, last = list(model.named_steps.values())
+    state = {"mean": scaler.mean_, "scale": scaler.scale_}
+    if learner == "ridge":
+        return {**state, "coef": last.coef_, "intercept": np.atleast_1d(last.intercept_)}
+    if learner == "kernel":
+        (nystroem,) = rest
+        return {**state, "landmarks": nystroem.components_, "normalization": nystroem.normalization_,
+                "gamma": float(nystroem.gamma), "coef": last.coef_, "intercept": np.atleast_1d(last.intercept_)}
+    return {**state, "weights": list(last.coefs_), "biases": list(last.intercepts_)}         # mlp
+
+
+def _tree_values(tree: dict, X: np.ndarray) -> np.ndarray:
+    """A regression tree's leaf value for each row of ``X`` (scikit-learn's rule: ``x <= threshold``
+    goes left, a missing value where ``missing_left`` says)."""
+    node = np.zeros(len(X), dtype=int)
+    for _ in range(len(tree["leaf"])):                     # children follow their parents: depth < nodes
+        inner = ~tree["leaf"][node].astype(bool)
+        if not inner.any():
+            break
+        rows, at = np.flatnonzero(inner), node[inner]
+        x = X[rows, tree["feature"][at]]
+        left = np.where(np.isnan(x), tree["missing_left"][at].astype(bool), x <= tree["threshold"][at])
+        node[rows] = np.where(left, tree["left"][at], tree["right"][at])
+    return tree["value"][node]
+
+
+def _predict_state(learner: str, state: dict, X: np.ndarray) -> np.ndarray:
+    """The scaled targets for features ``X``, computed from ``state`` as scikit-learn's ``predict``
+    computes them (the same operations in the same order)."""
+    if learner == "friction":
+        return np.einsum("njk,jk->nj", X, state["coef"])
+    if learner == "identification":
+        return X @ state["coef"]
+    if learner == "linear":
+        return X @ state["coef"].T + state["intercept"]
+    if learner == "boosting":
+        out = np.empty((len(X), len(state["joints"])))
+        for j, joint in enumerate(state["joints"]):
+            raw = np.zeros(len(X))
+            raw += joint["baseline"]
+            for tree in joint["trees"]:
+                raw += _tree_values(tree, X)
+            out[:, j] = raw
+        return out
+    Xs = (X - state["mean"]) / state["scale"]
+    if learner == "ridge":
+        return Xs @ state["coef"].T + state["intercept"]
+    if learner == "kernel":
+        from sklearn.metrics.pairwise import rbf_kernel
+
+        features = rbf_kernel(Xs, state["landmarks"], gamma=state["gamma"]) @ state["normalization"].T
+        return features @ state["coef"].T + state["intercept"]
+    a = Xs
+    for k, (W, b) in enumerate(zip(state["weights"], state["biases"])):
+        a = a @ W
+        a += b
+        if k < len(state["weights"]) - 1:
+            np.maximum(a, 0, out=a)
+    return a
+
+
+def _read_state(v: Validator, learner: str, state: Any, k: int, n: int, options: dict) -> dict:
+    """A saved ``state`` validated for ``learner`` with ``k`` features and ``n`` joints."""
+    if learner in ("friction", "identification"):
+        v.mapping(state, "state", {"coef": True})
+        return {"coef": v.array(state["coef"], "state.coef", (n, 3) if learner == "friction" else (k,))}
+    if learner == "linear":
+        v.mapping(state, "state", {"coef": True, "intercept": True})
+        return {"coef": v.array(state["coef"], "state.coef", (n, k)),
+                "intercept": v.array(state["intercept"], "state.intercept", (n,))}
+    if learner == "boosting":
+        v.mapping(state, "state", {"joints": True})
+        joints = v.sequence(state["joints"], "state.joints", min_len=n, max_len=n)
+        out = []
+        for j, joint in enumerate(joints):
+            at = f"state.joints[{j}]"
+            v.mapping(joint, at, {"baseline": True, "trees": True})
+            trees = v.sequence(joint["trees"], f"{at}.trees", max_len=options["max_iter"])
+            read = []
+            for t, tree in enumerate(trees):
+                where = f"{at}.trees[{t}]"
+                v.mapping(tree, where, dict.fromkeys(_TREE_FIELDS, True))
+                ints = {f: v.array(tree[f], f"{where}.{f}", (None,), integer=True)
+                        for f in ("feature", "left", "right", "leaf", "missing_left")}
+                floats = {f: v.array(tree[f], f"{where}.{f}", (None,)) for f in ("threshold", "value")}
+                m = len(ints["leaf"])
+                if m == 0 or any(len(a) != m for a in (*ints.values(), *floats.values())):
+                    v.fail(where, "must hold equally long, non-empty node arrays")
+                inner = np.flatnonzero(ints["leaf"] == 0)
+                idx = np.arange(m)
+                if not np.isin(ints["leaf"], (0, 1)).all() or not np.isin(ints["missing_left"], (0, 1)).all():
+                    v.fail(f"{where}.leaf", "leaf and missing_left must hold 0 or 1")
+                if ((ints["feature"][inner] < 0) | (ints["feature"][inner] >= k)).any():
+                    v.fail(f"{where}.feature", f"must name features 0 to {k - 1}")
+                for f in ("left", "right"):
+                    child = ints[f][inner]
+                    if ((child <= idx[inner]) | (child >= m)).any():
+                        v.fail(f"{where}.{f}", "must name a later node of the tree")
+                read.append({**ints, **floats})
+            out.append({"baseline": v.number(joint["baseline"], f"{at}.baseline"), "trees": read})
+        return {"joints": out}
+    scaled = {"mean": True, "scale": True}
+    if learner == "ridge":
+        v.mapping(state, "state", {**scaled, "coef": True, "intercept": True})
+        read = {"coef": v.array(state["coef"], "state.coef", (n, k)),
+                "intercept": v.array(state["intercept"], "state.intercept", (n,))}
+    elif learner == "kernel":
+        v.mapping(state, "state", {**scaled, "landmarks": True, "normalization": True, "coef": True,
+                                   "intercept": True, "gamma": True})
+        landmarks = v.array(state["landmarks"], "state.landmarks", (None, k))
+        m = len(landmarks)
+        read = {"landmarks": landmarks, "normalization": v.array(state["normalization"], "state.normalization", (m, m)),
+                "coef": v.array(state["coef"], "state.coef", (n, m)),
+                "intercept": v.array(state["intercept"], "state.intercept", (n,)),
+                "gamma": v.number(state["gamma"], "state.gamma", lo=0, lo_open=True)}
+    else:
+        v.mapping(state, "state", {**scaled, "weights": True, "biases": True})
+        widths = [k, *options["hidden"], n]
+        layers = len(widths) - 1
+        weights = v.sequence(state["weights"], "state.weights", min_len=layers, max_len=layers)
+        biases = v.sequence(state["biases"], "state.biases", min_len=layers, max_len=layers)
+        read = {"weights": [v.array(w, f"state.weights[{i}]", (widths[i], widths[i + 1])) for i, w in enumerate(weights)],
+                "biases": [v.array(b, f"state.biases[{i}]", (widths[i + 1],)) for i, b in enumerate(biases)]}
+    read["mean"] = v.array(state["mean"], "state.mean", (k,))
+    read["scale"] = v.array(state["scale"], "state.scale", (k,))
+    if not (read["scale"] > 0).all():
+        v.fail("state.scale", "must hold positive numbers")
+    return read
 
 
 @functools.cache

@@ -58,7 +58,7 @@ BASES = ("generic", "chain", "generic_linear", "chain_linear")
 #: The tiers of prior knowledge, by key, as tables name them (module docstring).
 TIERS = {"generic": "generic", "structure": "structure-informed", "identification": "identification",
          "nominal": "nominal model + learned"}
-_STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine",), ("regressor",)
+_STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine",), ("regressor", "regressor_drives")
 _STRUCTURE_BASES = ("chain", "chain_linear")
 
 

@@ -43,7 +43,7 @@ __all__ = ["LearnedID", "id_features", "id_states", "regressor_columns", "INPUT_
 
 
 #: Input sets of :class:`LearnedID`: what each joint's model sees of a state ``(q, q̇, q̈)``.
-INPUT_SETS = ("own", "all", "trig", "affine_generic", "affine", "regressor")
+INPUT_SETS = ("own", "all", "trig", "affine_generic", "affine", "regressor", "regressor_drives")
 #: Input sets every joint's model sees alike: their joints can share premises.
 SHARED_INPUT_SETS = ("all", "trig", "affine_generic", "affine")
 #: Input sets whose rules are built over the configuration ``q`` only (the first n columns).
@@ -75,7 +75,11 @@ def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, in
       (:func:`nfarm.model.dynamics.regressor`): the columns of links j..n that are not zero for
       every state (:func:`regressor_columns`; for intelbot5 34, 38, 28, 17 and 8). The
       geometry (DH parameters) is known, the masses are not: ``τ_j`` is linear in these
-      inputs, so one rule (least squares) can already be exact.
+      inputs, so one rule (least squares) can already be exact;
+    * ``"regressor_drives"`` — those columns and the joint's own drive terms ``q̈_j, q̇_j,
+      sign q̇_j`` (armature, viscous and Coulomb friction): what the identification of a built
+      arm (:class:`nfarm.learning.baselines.BaselineID`, learner ``identification``) sees of
+      joint j, so that the ANFIS of the identification tier gets the same inputs as its rival.
     """
     if inputs == "own":
         return [np.column_stack([q[:, j], qd[:, j], qdd[:, j]]) for j in range(robot.n)]
@@ -90,7 +94,10 @@ def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, in
         X = np.concatenate([q, basis(robot, q, qd, qdd, kind)[:, 1:]], axis=1)
         return [X] * robot.n
     Y = regressor(robot, q, qd, qdd)
-    return [np.ascontiguousarray(Y[:, j, cols]) for j, cols in enumerate(regressor_columns(robot))]
+    rows = [np.ascontiguousarray(Y[:, j, cols]) for j, cols in enumerate(regressor_columns(robot))]
+    if inputs == "regressor_drives":
+        rows = [np.column_stack([Y_j, qdd[:, j], qd[:, j], np.sign(qd[:, j])]) for j, Y_j in enumerate(rows)]
+    return rows
 
 
 @functools.lru_cache(maxsize=16)
@@ -113,8 +120,8 @@ def regressor_columns(robot: Robot) -> list[np.ndarray]:
 
 
 def _id_widths(inputs: str, robot: Robot) -> list[int]:
-    if inputs == "regressor":
-        return [len(cols) for cols in _regressor_columns(robot)]
+    if inputs in ("regressor", "regressor_drives"):
+        return [len(cols) + 3 * (inputs == "regressor_drives") for cols in _regressor_columns(robot)]
     n = robot.n
     if inputs in _CONFIGURATION_PREMISES:
         kind = "chain_linear" if inputs == "affine" else "generic_linear"

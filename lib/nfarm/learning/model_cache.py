@@ -1,5 +1,6 @@
 """A cache of fitted learned models (:class:`~nfarm.learning.learned.LearnedIK`,
-:class:`~nfarm.learning.learned_id.LearnedID`): a model is fitted once for its options, data,
+:class:`~nfarm.learning.learned_id.LearnedID`, their rivals :class:`~nfarm.learning.ik_rivals.RivalIK`
+and :class:`~nfarm.learning.baselines.BaselineID`): a model is fitted once for its options, data,
 robot, code and numerical environment, and loaded while they are unchanged.
 """
 
@@ -18,6 +19,7 @@ from ..infra.paths import atomic_path
 from ..infra.provenance import code_digest
 from ..infra.reading import json_ready
 from ..model.robot import Robot, robot_hash
+from .baselines import FILE_NAME as BASELINE_FILE_NAME, FORMAT as BASELINE_FORMAT, BaselineID
 from .ik_rivals import FILE_NAME as RIVAL_FILE_NAME, FORMAT as RIVAL_FORMAT, RivalIK
 from .learned import FILE_NAME, FORMAT, LearnedIK, ik_pairs
 from .learned_id import ID_FILE_NAME, ID_FORMAT, LearnedID, id_states
@@ -44,8 +46,8 @@ NUMERICS_ENV = ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE", "OPENBLAS_NUM_T
 
 def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
                directory: str | os.PathLike) -> tuple[Any, str]:
-    """Fit ``model`` (a :class:`LearnedIK`, :class:`LearnedID` or
-    :class:`~nfarm.learning.ik_rivals.RivalIK`), or load the one saved in
+    """Fit ``model`` (a :class:`LearnedIK`, :class:`LearnedID`,
+    :class:`~nfarm.learning.ik_rivals.RivalIK` or :class:`~nfarm.learning.baselines.BaselineID`), or load the one saved in
     ``directory`` if it was fitted with the same options on the same data for the same robot
     by the same code.
 
@@ -68,11 +70,12 @@ def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
     elif isinstance(model, RivalIK):
         cls, name, form = RivalIK, RIVAL_FILE_NAME, RIVAL_FORMAT
         arrays = lambda data, what: ik_pairs(data, robot, what)          # noqa: E731
-    elif isinstance(model, LearnedID):
-        cls, name, form = LearnedID, ID_FILE_NAME, ID_FORMAT
+    elif isinstance(model, (LearnedID, BaselineID)):
+        cls, name, form = (LearnedID, ID_FILE_NAME, ID_FORMAT) if isinstance(model, LearnedID) else \
+            (BaselineID, BASELINE_FILE_NAME, BASELINE_FORMAT)
         arrays = lambda data, what: id_states(data, robot, what)         # noqa: E731
     else:
-        raise TypeError(f"model must be a LearnedIK, a LearnedID or a RivalIK, got {type(model).__name__}")
+        raise TypeError(f"model must be a LearnedIK, a LearnedID, a RivalIK or a BaselineID, got {type(model).__name__}")
     parts = [cls.__name__, json.dumps(json_ready(model.get_params()), sort_keys=True),
              fingerprint(*arrays(train, "train")), robot_hash(robot), form, code_digest("learning.model_cache"),
              json.dumps({k: os.environ.get(k) for k in NUMERICS_ENV})]

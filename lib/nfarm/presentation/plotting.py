@@ -23,7 +23,7 @@ from ..model.robot import Robot
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
            "plot_region", "plot_histograms", "plot_id_trajectories", "plot_torque_distributions",
            "plot_convergence", "plot_joint_paths", "plot_profiles", "plot_per_joint",
-           "plot_motion", "plot_learning_curves", "plot_joint_curves", "plot_size_curve",
+           "plot_motion", "plot_learning_curves", "plot_joint_curves", "plot_size_curve", "plot_error_by_size",
            "plot_predicted_vs_true", "plot_sweep", "plot_error_map", "plot_error_against",
            "plot_planar_subproblem", "plot_against", "DPI"]
 
@@ -470,6 +470,31 @@ def plot_torque_distributions(tau: np.ndarray, joint_names) -> Figure:
     ax.set_xticks(range(1, n + 1), joint_names, fontsize=8)
     ax.set(ylabel="τ [N·m]", title="joint torques over all training samples")
     ax.grid(alpha=0.3, axis="y")
+    return fig
+
+
+def plot_error_by_size(curves, *, unit: str = "%", quantity: str = "worst joint NRMSE",
+                       xlabel: str = "training states") -> Figure:
+    """Validation error against the number of training states, one line per model (``curves``:
+    label → ``(sizes, errors)``, each a sequence), both axes logarithmic, every size a tick;
+    models sharing a label's text before ":" (a tier) share a colour, ANFIS solid, others dashed."""
+    fig, ax = plt.subplots(figsize=(7.5, 4), layout="constrained")
+    groups = list(dict.fromkeys(label.split(":")[0] for label in curves))
+    ticks = set()
+    for label, (sizes, errors) in curves.items():
+        colour = f"C{groups.index(label.split(':')[0]) % 10}"
+        ax.plot(sizes, errors, "o-" if "ANFIS" in label else "s--", color=colour, label=label)
+        ticks |= {int(round(s)) for s in sizes}
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(f"{quantity} [{unit}]")
+    ticks = sorted(ticks)
+    ax.set_xticks(ticks, [f"{s:,}" for s in ticks])
+    ax.xaxis.set_minor_locator(mticker.NullLocator())
+    _readable_log_axis(ax.yaxis)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(alpha=0.3, which="both")
     return fig
 
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["times", "times_range", "about", "listed", "sig", "range_text", "resolved_joints", "worst_of", "torque_columns"]
+__all__ = ["times", "times_range", "about", "listed", "sig", "range_text", "worst_of", "torque_columns", "ordinal"]
 
 #: Ratios within this of 1 read as "about the same": measured ratios of timings and errors
 #: move by several per cent between runs and seeds.
@@ -92,28 +92,8 @@ def range_text(lo: float, hi: float, fmt: str = ".3g") -> str:
     return a if a == b else f"{a}–{b}"
 
 
-def resolved_joints(spread, noise):
-    """``(n,)`` bool: the joints whose torque a sensor of the measured arm resolves, i.e. whose
-    torque spread (``spread (n,)``, the standard deviation an NRMSE divides by [N·m]) is at
-    least the sensor's noise σ (``noise (n,)`` [N·m]; ``None``: no sensor declared, every joint).
-
-    A joint below its noise (the wrist roll of both shipped arms: spread 0.0001–0.0014 N·m
-    against σ = 0.005 N·m) has an NRMSE that is a ratio of two numbers no sensor would see; the
-    chapters show it but take the **worst joint** — by which ID models are chosen and judged —
-    over the resolved joints only. If no joint is resolved, every joint counts (a worst over
-    none is undefined).
-    """
-    import numpy as np
-
-    spread = np.asarray(spread, float)
-    if noise is None:
-        return np.ones(spread.shape, bool)
-    resolved = spread >= np.asarray(noise, float)
-    return resolved if resolved.any() else np.ones(spread.shape, bool)
-
-
 def worst_of(resolved) -> str:
-    """The words for the worst joint over ``resolved (n,)`` bool (:func:`resolved_joints`):
+    """The words for the worst joint over ``resolved (n,)`` bool (:func:`nfarm.study.statistics.resolved_joints`):
     "worst" when every joint counts, else "worst of τ1–τ4" (a run of joints) or "worst of τ1,
     τ2 and τ4" — a table's header and a sentence say over which joints the worst is taken."""
     joints = [j + 1 for j, r in enumerate(resolved) if r]
@@ -129,7 +109,7 @@ def torque_columns(spread, noise, joint_names, unit: str = "%") -> tuple[list[st
 
     A joint whose torque spread (``spread (n,)``, the standard deviation the NRMSE divides by
     [N·m]) is below its sensor's noise σ (``noise (n,)`` [N·m], or ``None``: no sensor
-    declared) has a torque no sensor of the measured arm resolves (:func:`resolved_joints`):
+    declared) has a torque no sensor of the measured arm resolves (:func:`nfarm.study.statistics.resolved_joints`):
     its header is marked "(below noise)" and the sentence names it with both values, so its
     NRMSE is read as what it is, not as evidence for or against a model, and says that the worst
     joint is taken over the others. The sentence ("" when no joint is) ends a
@@ -148,3 +128,14 @@ def torque_columns(spread, noise, joint_names, unit: str = "%") -> tuple[list[st
                      f"no sensor would resolve {'it' if len(parts) == 1 else 'them'}, and {'its' if len(parts) == 1 else 'their'} "
                      f"NRMSE is shown but is not evidence for or against a model"
                      + (", and the worst joint is taken over the others" if not all(below) else ""))
+
+
+def ordinal(n: int) -> str:
+    """``n`` as an English ordinal: ``"1st"``, ``"2nd"``, ``"32nd"``, ``"11th"``.
+
+    Example:
+        >>> [ordinal(k) for k in (1, 2, 3, 4, 11, 12, 13, 21, 32, 64)]
+        ['1st', '2nd', '3rd', '4th', '11th', '12th', '13th', '21st', '32nd', '64th']
+    """
+    n = int(n)
+    return f"{n}{'th' if 11 <= n % 100 <= 13 else {1: 'st', 2: 'nd', 3: 'rd'}.get(n % 10, 'th')}"

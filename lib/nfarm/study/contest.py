@@ -19,24 +19,38 @@ how each contestant's configuration is chosen, with what budget, and how they ar
   :func:`standings` ranks the contestants in contention by the mean over the seeds, then the
   pruned ones by seed 0; :func:`paired_gap` compares two of them seed by seed (the same draw of
   data for both): a gap whose range over the seeds contains 0 is no difference.
+
+**The learned-ID contest on the measured arm** (chapter 6.8, ``params/sweeps/id_contest.yaml``)
+follows the same rules with its own contestants and metric: a contestant is a learner within a
+**tier of prior knowledge** (:func:`id_family`: ``"<tier>:anfis"`` or ``"<tier>:<learner>"``,
+the tier from :func:`nfarm.learning.bases.tier_of`), every learner of a tier has the same number
+of configurations, and they are ranked by :data:`ID_RANKED_BY` — the study's target metric, the
+worst resolved joint's NRMSE against the measured torques' spread, then the worst joint's RMSE.
+In contention after seed 0 (:func:`id_contending`): each tier's best ANFIS and best rival, so
+that every tier's verdict — ANFIS against the best of the others with the same knowledge — has
+its spread over the seeds. Pass ``family_of=id_family, ranked_by=ID_RANKED_BY`` to
+:func:`choose`, :func:`budgets` and :func:`standings`.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..learning.bases import tier_of
 from ..learning.ik_rivals import KINDS as RIVAL_KINDS
 from ..learning.ik_rivals import RivalIK
 from ..learning.learned import ik_errors
 from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration
 
-__all__ = ["RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
+__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
            "standings", "paired_gap"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -51,6 +65,59 @@ LABELS = {"anfis:arm_plane": "ANFIS in the arm's plane", "anfis:quat_xyz": "ANFI
           "knn": "k nearest neighbours", "mlp": "multilayer perceptron", "kernel_ridge": "kernel ridge (Nyström)"}
 
 
+#: The learned-ID contest's metrics, in order (validation, lower is better).
+ID_RANKED_BY = ("worst_nrmse", "worst_rmse")
+
+
+#: Each learned-ID learner in words a reader knows.
+ID_LABELS = {"anfis": "ANFIS", "linear": "least squares on the states", "ridge": "ridge regression",
+             "kernel": "kernel ridge (Nyström)", "boosting": "gradient-boosted trees", "mlp": "multilayer perceptron",
+             "friction": "friction identification (least squares)",
+             "identification": "identification of the built arm (least squares)"}
+
+
+def id_label(name: str) -> str:
+    """A learned-ID contestant (``"<tier>:<learner>"``) in words: ``"generic: ANFIS"``."""
+    tier, learner = name.rsplit(":", 1)
+    return f"{tier}: {ID_LABELS.get(learner, learner)}"
+
+
+def id_configuration(params: Mapping[str, Any]) -> str:
+    """An ``id_contest`` cell's options in one line (``residual`` left out: the tier says it)."""
+    options = {k: v for k, v in (params.get("options") or {}).items() if k != "residual"}
+    return ", ".join(f"{k}={v}" for k, v in options.items()) or "nothing to tune"
+
+
+def id_tier(params: Mapping[str, Any]) -> str:
+    """The tier of prior knowledge of an ``id_contest`` cell's learner (``params``: the cell's
+    parameters; :func:`nfarm.learning.bases.tier_of`)."""
+    options = dict(params.get("options") or {})
+    return tier_of(options if params["learner"] == "anfis" else {**options, "learner": params["learner"]})
+
+
+def id_family(params: Mapping[str, Any]) -> str:
+    """The learned-ID contestant an ``id_contest`` cell belongs to: ``"<tier>:<learner>"``.
+
+    Example:
+        >>> id_family({"learner": "anfis", "options": {"inputs": "affine"}})
+        'structure-informed:anfis'
+        >>> id_family({"learner": "boosting", "options": {"residual": True}})
+        'nominal model + learned:boosting'
+    """
+    return f"{id_tier(params)}:{params['learner']}"
+
+
+def id_contending(chosen: Mapping[str, CellResult], ranked_by: Sequence[str] = ID_RANKED_BY) -> list[str]:
+    """The learned-ID contestants still in contention after seed 0: in each tier, the best ANFIS
+    and the best of the other learners (by ``ranked_by`` on validation)."""
+    best: dict[tuple[str, bool], str] = {}
+    for name, r in chosen.items():
+        slot = (name.rsplit(":", 1)[0], name.endswith(":anfis"))
+        if slot not in best or _key(r, ranked_by) < _key(chosen[best[slot]], ranked_by):
+            best[slot] = name
+    return [name for name in chosen if name in best.values()]
+
+
 def family(params: Mapping[str, Any]) -> str:
     """The contestant a cell's parameters belong to: ``"anfis:<encoding>"`` for an ANFIS, else
     the rival's kind."""
@@ -62,31 +129,32 @@ def label(name: str) -> str:
     return LABELS.get(name, name)
 
 
-def _key(r: CellResult | Replicates) -> tuple[float, ...]:
-    return tuple(float(r.metrics[m]) for m in RANKED_BY)
+def _key(r: CellResult | Replicates, ranked_by: Sequence[str] = RANKED_BY) -> tuple[float, ...]:
+    return tuple(float(r.metrics[m]) for m in ranked_by)
 
 
-def choose(results: Iterable[CellResult]) -> dict[str, CellResult]:
-    """Each contestant's chosen configuration among its seed-0 cells (:data:`RANKED_BY`, on
-    validation), in the order the contestants first appear."""
+def choose(results: Iterable[CellResult], *, family_of=family,
+           ranked_by: Sequence[str] = RANKED_BY) -> dict[str, CellResult]:
+    """Each contestant's chosen configuration among its seed-0 cells (``ranked_by``, on
+    validation), in the order the contestants first appear (``family_of``: a cell's contestant)."""
     chosen: dict[str, CellResult] = {}
     for r in results:
         if r.cell.params.get("seed", 0) != 0 or r.cell.params.get("split", "val") != "val":
             continue
-        name = family(r.cell.params)
-        if name not in chosen or _key(r) < _key(chosen[name]):
+        name = family_of(r.cell.params)
+        if name not in chosen or _key(r, ranked_by) < _key(chosen[name], ranked_by):
             chosen[name] = r
     return chosen
 
 
-def budgets(results: Iterable[CellResult]) -> dict[str, tuple[int, float, float]]:
+def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, tuple[int, float, float]]:
     """Each contestant's tuning budget spent: seed-0 configurations tried, the seconds their
     training took (the models' own ``fit_seconds``) and the seconds their cells took (training,
     the validation's predictions and the data's loading, when they ran)."""
     spent: dict[str, list[tuple[float, float]]] = {}
     for r in results:
         if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
-            spent.setdefault(family(r.cell.params), []).append((float(r.metrics["fit_seconds"]), float(r.seconds)))
+            spent.setdefault(family_of(r.cell.params), []).append((float(r.metrics["fit_seconds"]), float(r.seconds)))
     return {name: (len(s), float(sum(a for a, _ in s)), float(sum(b for _, b in s))) for name, s in spent.items()}
 
 
@@ -101,19 +169,22 @@ def contending(chosen: Mapping[str, CellResult], keep_within: float = KEEP_WITHI
 
 
 def spread_params(chosen: Mapping[str, CellResult], seeds: Sequence[int] = SPREAD_SEEDS, *,
-                  keep_within: float = KEEP_WITHIN) -> list[dict]:
-    """The cells that train each chosen configuration in contention on the other draws."""
-    return [{**chosen[name].cell.params, "seed": int(s)} for name in contending(chosen, keep_within) for s in seeds]
+                  keep_within: float = KEEP_WITHIN, names: Sequence[str] | None = None) -> list[dict]:
+    """The cells that train each chosen configuration in contention on the other draws (those of
+    ``names``, or by :func:`contending`)."""
+    names = contending(chosen, keep_within) if names is None else names
+    return [{**chosen[name].cell.params, "seed": int(s)} for name in names for s in seeds]
 
 
-def standings(chosen: Mapping[str, CellResult], spread: Iterable[CellResult]) -> list[Replicates]:
+def standings(chosen: Mapping[str, CellResult], spread: Iterable[CellResult], *, family_of=family,
+              ranked_by: Sequence[str] = RANKED_BY) -> list[Replicates]:
     """The chosen configurations over their seeds (seed 0 and ``spread``): those trained on
-    several draws best first by the mean of :data:`RANKED_BY` over the seeds, then the pruned ones
+    several draws best first by the mean of ``ranked_by`` over the seeds, then the pruned ones
     (one seed) by their seed-0 values."""
     groups = by_configuration([*chosen.values(), *spread])
-    wanted = {family(r.cell.params) for r in chosen.values()}
-    kept = [g for g in groups if family(g.cell.params) in wanted]
-    return sorted(kept, key=lambda g: (g.n == 1 and len(kept) > 1 and any(h.n > 1 for h in kept), _key(g)))
+    wanted = {family_of(r.cell.params) for r in chosen.values()}
+    kept = [g for g in groups if family_of(g.cell.params) in wanted]
+    return sorted(kept, key=lambda g: (g.n == 1 and len(kept) > 1 and any(h.n > 1 for h in kept), _key(g, ranked_by)))
 
 
 def paired_gap(a: Replicates, b: Replicates, metric: str = RANKED_BY[0]) -> tuple[float, float, float]:
@@ -146,3 +217,75 @@ def rival_ranking(robot: Robot, rivals: Mapping[str, RivalIK], val: Mapping) -> 
         return float(np.percentile(e["position"], 95)), float(np.percentile(e["orientation"], 95))
     keys = {kind: key(kind) for kind in rivals}
     return sorted(rivals, key=keys.get)
+
+
+# --------------------------------------------------------------------------------------------
+# The learned-ID contest on the measured arm
+
+
+@dataclass(frozen=True)
+class IDContest:
+    """The learned-ID contest's outcome (module docstring): each contestant's chosen configuration
+    (``chosen``: family → its seed-0 cell), those kept in contention (``finalists``), every chosen
+    configuration over its seeds (``standings``, best first) and each contestant's budget spent
+    (``budgets``: :func:`budgets`)."""
+
+    chosen: Mapping[str, CellResult]
+    finalists: tuple[str, ...]
+    standings: tuple[Replicates, ...]
+    budgets: Mapping[str, tuple[int, float, float]]
+
+    @property
+    def tiers(self) -> list[str]:
+        """The tiers present, in the order of the sweep's first cells."""
+        return list(dict.fromkeys(name.rsplit(":", 1)[0] for name in self.chosen))
+
+    def group(self, name: str) -> Replicates:
+        """Contestant ``name``'s chosen configuration over its seeds."""
+        return next(g for g in self.standings if id_family(g.cell.params) == name)
+
+    def pair(self, tier: str) -> tuple[Replicates | None, Replicates | None]:
+        """The tier's ANFIS finalist and its best rival over their seeds (``None`` where the tier
+        has no such contestant)."""
+        names = [n for n in self.finalists if n.rsplit(":", 1)[0] == tier]
+        anfis = next((self.group(n) for n in names if n.endswith(":anfis")), None)
+        rival = next((self.group(n) for n in names if not n.endswith(":anfis")), None)
+        return anfis, rival
+
+    def winner(self, tier: str) -> Replicates:
+        """The tier's best finalist by the mean of :data:`ID_RANKED_BY` over the seeds."""
+        return min((g for g in self.pair(tier) if g is not None), key=lambda g: _key(g, ID_RANKED_BY))
+
+
+def id_model_dir(models_dir: str | os.PathLike, tier: str, slot: str) -> Path:
+    """Where chapter 6.8 saves a tier's finalist for ``robot``'s models directory: ``slot``
+    ``"anfis"`` or ``"rival"`` under ``models_dir/id_measured/<tier's first word>/``
+    (``generic``, ``structure_informed``, ``identification``, ``nominal``); read it with
+    :func:`nfarm.learning.baselines.load_id_model`."""
+    if slot not in ("anfis", "rival"):
+        raise ValueError(f"slot must be 'anfis' or 'rival', got {slot!r}")
+    return Path(models_dir) / "id_measured" / tier.split()[0].replace("-", "_") / slot
+
+
+def id_contest(seed0: Iterable[CellResult], spread: Iterable[CellResult] = ()) -> IDContest:
+    """The learned-ID contest's outcome from its seed-0 cells (``seed0``, validation) and the
+    finalists' cells on the other draws (``spread``, those of :func:`id_spread_params`)."""
+    seed0 = [r for r in seed0 if r.cell.params.get("split", "val") == "val"]
+    chosen = choose(seed0, family_of=id_family, ranked_by=ID_RANKED_BY)
+    finalists = tuple(id_contending(chosen))
+    wanted = {json_key(chosen[n].cell.params) for n in finalists}
+    spread = [r for r in spread if json_key(r.cell.params) in wanted]
+    groups = standings({n: chosen[n] for n in chosen}, spread, family_of=id_family, ranked_by=ID_RANKED_BY)
+    return IDContest(chosen, finalists, tuple(groups), budgets(seed0, family_of=id_family))
+
+
+def id_spread_params(seed0: Iterable[CellResult], seeds: Sequence[int] = SPREAD_SEEDS) -> list[dict]:
+    """The cells that train each learned-ID finalist on the other draws."""
+    seed0 = [r for r in seed0 if r.cell.params.get("split", "val") == "val"]
+    chosen = choose(seed0, family_of=id_family, ranked_by=ID_RANKED_BY)
+    return spread_params(chosen, seeds, names=id_contending(chosen))
+
+
+def json_key(params: Mapping[str, Any]) -> str:
+    """A cell's parameters without its seed, as one text: the configuration it trains."""
+    return json.dumps({k: v for k, v in params.items() if k != "seed"}, sort_keys=True, default=str)

@@ -67,13 +67,14 @@ from ..learning import jang
 from ..learning.anfis import ANFIS
 from ..learning.baselines import DEFAULTS as BASELINE_OPTIONS
 from ..learning.baselines import BaselineID
+from ..learning.bases import tier_of
 from ..learning.ik_rivals import KINDS as RIVAL_KINDS
 from ..learning.ik_rivals import RivalIK
 from ..learning.learned import LearnedIK, ik_errors
 from ..learning.learned_id import LearnedID
 from ..learning.model_cache import fit_cached, n_parameters
 from ..model.dynamics import rnea
-from .statistics import trajectory_maxima, trajectory_sums
+from .statistics import resolved_joints, trajectory_maxima, trajectory_sums
 
 __all__ = ["Job", "JOBS", "REQUIRED", "id_model", "ik_model", "contest_model", "id_training_data"]
 
@@ -541,6 +542,78 @@ def id_baseline(p: dict) -> dict:
             "payload_trajectory_sums": payload_sums, "payload_trajectory_maxima": payload_maxima}
 
 
+def _fit_id_contestant(p: dict):
+    """An ``id_contest`` cell's model, trained or reused (:func:`fit_cached`): an ANFIS
+    (:class:`LearnedID`) or a rival (:class:`BaselineID`) fitted to the measured torques of the
+    training trajectories (every ``stride``-th state), the validation trajectories stopping the
+    iterative ones early; with its study, the validation split and the training states' count."""
+    study, directory, models = _study_data(p)
+    robot = study.robot
+    if study.id.measured is None:
+        raise ParamsError(f"{p['study_file']}: id_contest: the study declares no measured arm (id.measured)")
+    q = {**p, "torques": "measured"}
+    train = _first(_id_split(q, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"], None, p["stride"])
+    val = _id_split(q, study, directory, "val")
+    options = dict(p["options"] or {})
+    try:
+        if "random_state" in options:
+            raise ValueError("options: random_state is the cell's own parameter (seed)")
+        if p["learner"] == "anfis":
+            model = LearnedID(**options, random_state=p["seed"])     # its options are checked by fit
+        elif p["learner"] in BASELINE_OPTIONS:
+            residual = bool(options.pop("residual", False))
+            model = BaselineID(p["learner"], options, residual=residual, random_state=p["seed"])
+            model._options()
+        else:
+            raise ValueError(f"learner must be anfis or one of {', '.join(BASELINE_OPTIONS)}, got {p['learner']!r}")
+    except (ValueError, TypeError) as exc:
+        raise ParamsError(f"id_contest: {exc}") from None
+    where = _options_dir(models, "id_contest", {"class": type(model).__name__, **json.loads(
+        json.dumps(model.get_params(), default=str)), "fraction": p["fraction"], "stride": p["stride"]})
+    return fit_cached(model, robot, train, val, where)[0], study, val, len(train["q"])
+
+
+def id_contest(p: dict) -> dict:
+    if p["split"] not in ("val", "test"):
+        raise ParamsError(f"split must be 'val' or 'test', got {p['split']!r}")
+    model, study, val, n_train = _fit_id_contestant(p)
+    judged = val if p["split"] == "val" else _test_split({**p, "torques": "measured"}, _id_split)
+    start = time.perf_counter()
+    predicted = model.predict(judged["q"], judged["qd"], judged["qdd"])
+    seconds = time.perf_counter() - start
+    rmse = np.sqrt(((predicted - judged["tau"]) ** 2).mean(axis=0))
+    nrmse = rmse / judged["tau"].std(axis=0)
+    # The worst joint over those a sensor resolves, fixed on the validation trajectories (as chapter 6 fixes it)
+    resolved = resolved_joints(val["tau"].std(axis=0), study.id.noise)
+    out = {"tier": tier_of(p["options"] if p["learner"] == "anfis" else {**(p["options"] or {}), "learner": p["learner"]}),
+           "rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse[resolved].max()),
+           "worst_rmse": float(rmse.max()), "resolved": resolved.astype(int).tolist(), "train_samples": int(n_train),
+           "predict_us": 1e6 * seconds / len(predicted)}
+    if isinstance(model, LearnedID):
+        out |= {"fit_seconds": float(sum(model.fit_seconds_)), "epochs": [len(m.loss_curve_) for m in model.models_],
+                "best_epoch": [int(m.best_epoch_) for m in model.models_]}
+    else:
+        out |= {"fit_seconds": float(model.fit_seconds_), "epochs": [int(model.epochs_ or 0)],
+                "best_epoch": [int(model.best_epoch_ or 0)]}
+    sums = maxima = payload_sums = payload_maxima = []
+    if p["split"] == "test":                  # what chapter 7's intervals over the held-out trajectories need
+        sums = trajectory_sums(predicted, judged["tau"], judged["trajectory"]).ravel().tolist()
+        maxima = trajectory_maxima(predicted, judged["tau"], judged["trajectory"]).ravel().tolist()
+        if "tau_payload" in judged:
+            payload_sums = trajectory_sums(predicted, judged["tau_payload"], judged["trajectory"]).ravel().tolist()
+            payload_maxima = trajectory_maxima(predicted, judged["tau_payload"], judged["trajectory"]).ravel().tolist()
+    return {**out, "trajectory_sums": sums, "trajectory_maxima": maxima, "payload_trajectory_sums": payload_sums,
+            "payload_trajectory_maxima": payload_maxima}
+
+
+def id_contest_model(params: Mapping[str, Any]):
+    """The model an ``id_contest`` cell trains (``params``: the cell's parameters), reused from
+    where the cell keeps it: a :class:`LearnedID` or a :class:`BaselineID`, each loadable on its
+    own (:func:`nfarm.learning.baselines.load_id_model`)."""
+    with cell_threads():
+        return _fit_id_contestant(JOBS["id_contest"].complete(params))[0]
+
+
 def idle(p: dict) -> dict:
     time.sleep(p["seconds"])
     return {"seconds": p["seconds"], "value": p["value"]}
@@ -591,6 +664,15 @@ JOBS: dict[str, Job] = {
          "trajectory_sums", "trajectory_maxima", "payload_trajectory_sums", "payload_trajectory_maxima"),
         paths=("study_file", "data_dir", "models_dir"),
         doc="a model-free scikit-learn baseline of a study's ID",
+        prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
+    "id_contest": Job(
+        id_contest,
+        {**_STUDY, "stride": 1, "learner": "anfis", "options": None, "split": "val"},
+        ("tier", "rmse", "nrmse", "worst_nrmse", "worst_rmse", "resolved", "train_samples", "predict_us",
+         "fit_seconds", "epochs", "best_epoch", "trajectory_sums", "trajectory_maxima", "payload_trajectory_sums",
+         "payload_trajectory_maxima"),
+        paths=("study_file", "data_dir", "models_dir"),
+        doc="one contestant of the learned-ID contest on the measured arm",
         prepare=_build_data, shared=("study_file", "smoke", "data_dir", "seed")),
     "idle": Job(idle, {"seconds": 0.0, "value": 0}, ("seconds", "value"),
                 doc="sleeps; the sweep machinery's own cost"),

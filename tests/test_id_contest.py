@@ -1,0 +1,91 @@
+"""The learned-ID contest on the measured arm (chapter 6.8, ``params/sweeps/id_contest.yaml``):
+its contestants by tier, the finalists of each tier, equal budgets in the sweep file, and its job
+fitting a frozen model that the test split reuses."""
+
+from __future__ import annotations
+
+import collections
+
+import numpy as np
+import pytest
+
+from nfarm.infra.paths import PARAMS
+from nfarm.infra.reading import ParamsError
+from nfarm.study import contest
+from nfarm.study.sweep import CellResult
+from nfarm.study.sweep_files import Cell, load_sweep
+
+
+def _result(learner, seed, nrmse, rmse=0.1, **options):
+    params = {"learner": learner, "options": options, "seed": seed, "split": "val"}
+    return CellResult(Cell(params, f"{learner}{seed}{sorted(options.items())}"), "ok",
+                      {"worst_nrmse": nrmse, "worst_rmse": rmse, "fit_seconds": 1.0}, 1.0, "w")
+
+
+def test_contestants_are_learners_within_their_tier_and_each_tier_keeps_its_best_anfis_and_rival():
+    seed0 = [_result("anfis", 0, 0.30, inputs="affine_generic", n_mfs=1),
+             _result("anfis", 0, 0.20, inputs="affine_generic", n_mfs=2),
+             _result("mlp", 0, 0.10, hidden=[8]), _result("boosting", 0, 0.15, max_iter=5),
+             _result("ridge", 0, 0.40, basis="chain"), _result("anfis", 0, 0.50, inputs="affine"),
+             _result("friction", 0, 0.05, residual=True), _result("anfis", 0, 0.04, inputs="own", residual=True),
+             _result("boosting", 0, 0.03, residual=True, max_iter=5)]
+    chosen = contest.choose(seed0, family_of=contest.id_family, ranked_by=contest.ID_RANKED_BY)
+    assert list(chosen) == ["generic:anfis", "generic:mlp", "generic:boosting", "structure-informed:ridge",
+                            "structure-informed:anfis", "nominal model + learned:friction",
+                            "nominal model + learned:anfis", "nominal model + learned:boosting"]
+    assert chosen["generic:anfis"].cell.params["options"]["n_mfs"] == 2
+    # Each tier's best ANFIS and best rival go on to the other draws; the others are pruned
+    assert contest.id_contending(chosen) == ["generic:anfis", "generic:mlp", "structure-informed:ridge",
+                                             "structure-informed:anfis", "nominal model + learned:anfis",
+                                             "nominal model + learned:boosting"]
+    spread = [_result(p["learner"], p["seed"], 0.2 + 0.01 * p["seed"] if p["learner"] == "anfis" else 0.1, **p["options"])
+              for p in contest.id_spread_params(seed0, (1, 2))]
+    outcome = contest.id_contest(seed0, spread)
+    anfis, rival = outcome.pair("generic")
+    assert (anfis.n, rival.n) == (3, 3) and contest.id_family(rival.cell.params) == "generic:mlp"
+    assert contest.id_family(outcome.winner("generic").cell.params) == "generic:mlp"
+    assert outcome.group("generic:boosting").n == 1                       # pruned after seed 0
+    assert outcome.budgets["generic:anfis"][0] == 2 and outcome.budgets["generic:mlp"][0] == 1
+    assert contest.id_label("nominal model + learned:friction") == \
+        "nominal model + learned: friction identification (least squares)"
+
+
+def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
+    """Two configurations each; a least squares with nothing to tune, one."""
+    sweep = load_sweep(PARAMS / "sweeps" / "id_contest.yaml")
+    tried = collections.Counter(contest.id_family(c.params) for c in sweep.cells
+                                if c.params["study_file"].endswith("intelbot5.yaml"))
+    untunable = {"identification", "friction"}
+    assert {n for n, k in tried.items() if k != 2} == {n for n in tried if n.rsplit(":", 1)[1] in untunable}
+    assert all(k == 1 for n, k in tried.items() if n.rsplit(":", 1)[1] in untunable)
+    assert {n.rsplit(":", 1)[0] for n in tried} == {"generic", "structure-informed", "identification",
+                                                    "nominal model + learned"}
+    assert all(any(n == f"{tier}:anfis" for n in tried) for tier in {n.rsplit(":", 1)[0] for n in tried})
+
+
+def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
+    from nfarm.study.jobs import JOBS, id_contest_model
+
+    cell = {"study_file": "params/studies/intelbot5.yaml", "smoke": True, "stride": 4, "learner": "boosting",
+            "options": {"residual": True, "max_iter": 5}, "models_dir": str(tmp_path)}
+    val = JOBS["id_contest"].function(JOBS["id_contest"].complete(cell))
+    test = JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "split": "test"}))
+    assert val["tier"] == test["tier"] == "nominal model + learned"
+    assert val["trajectory_sums"] == [] and len(test["trajectory_sums"]) > 0 and len(test["payload_trajectory_sums"]) > 0
+    assert val["worst_nrmse"] == pytest.approx(max(np.array(val["nrmse"])[np.array(val["resolved"], bool)]))
+    saved = list(tmp_path.rglob("baseline_id.json"))
+    assert len(saved) == 1                                               # one fit, reused by the test split
+    model = id_contest_model(cell)
+    assert model.residual and model.learner == "boosting"
+    with pytest.raises(ParamsError, match="id_contest: learner must be anfis or one of"):
+        JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "learner": "forest"}))
+    with pytest.raises(ParamsError, match="id_contest: options: random_state is the cell's own parameter"):
+        JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"random_state": 3}}))
+
+
+def test_a_finalist_is_saved_where_chapters_7_and_8_read_it(tmp_path):
+    assert contest.id_model_dir(tmp_path, "structure-informed", "anfis") == \
+        tmp_path / "id_measured" / "structure_informed" / "anfis"
+    assert contest.id_model_dir(tmp_path, "nominal model + learned", "rival").parts[-2:] == ("nominal", "rival")
+    with pytest.raises(ValueError, match="slot must be 'anfis' or 'rival'"):
+        contest.id_model_dir(tmp_path, "generic", "best")
