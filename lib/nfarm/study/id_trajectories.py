@@ -130,7 +130,7 @@ def with_payload(robot: Robot, mass: float) -> Robot:
     """``robot`` carrying a point mass ``mass`` [kg] at its tool point: the last link's mass,
     centre of mass and inertia about it combined with the point's (parallel-axis theorem,
     ``I = I_c + m (|d|² 1 − d dᵀ)`` for each part's offset ``d`` from the joint centre).
-    Statically it adds ``Jᵀ f`` with ``f = −mass·g`` at the tool point (``tests/test_datasets.py``).
+    Statically it adds ``Jᵀ f`` with ``f = −mass·g`` at the tool point (``tests/test_measured_arm.py``).
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
