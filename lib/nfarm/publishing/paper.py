@@ -25,7 +25,8 @@ from pathlib import Path
 from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from .editions import Edition
-from .pages import ABSTRACT_LIMITS, ABSTRACT_QUESTION, PAPER_NAME, ReportPages, _git, abstract_answers, chapter_title
+from .pages import (ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
+                    _git, abstract_answers, chapter_title, verdict_rows)
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
@@ -35,12 +36,6 @@ BIBLIOGRAPHY = ROOT / "docs" / "references.bib"
 DISSERTATION = "tu_rain_2023"
 
 #: The dissertation as its title page names it (the Russian title as published; an English rendering).
-DISSERTATION_TITLE = ("Модели, алгоритмы и комплекс программ для моделирования манипуляторов на основе "
-                      "архитектуры адаптивной нейро-нечеткой системы вывода и обучающих алгоритмов")
-DISSERTATION_TITLE_EN = ("Models, algorithms and a software package for modelling manipulators based on "
-                         "the architecture of an adaptive neuro-fuzzy inference system and learning "
-                         "algorithms")
-
 #: What each part of the study rests on, cited (the front matter's "Sources").
 SOURCES = (
     "The arm is described with Denavit–Hartenberg parameters [@denavit_hartenberg_1955], in the standard "
@@ -180,9 +175,27 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
     return "\n\n".join(parts) + "\n"
 
 
+def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
+    """The verdict table and the conclusion, as on the index (:func:`nfarm.publishing.pages.verdict_rows`)."""
+    from ..study.summary import conclusion
+
+    rows = verdict_rows(figures_dir, arms)
+    if not rows:
+        return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 07 has not published its verdict table."
+    head = "| task | arm | best on held-out data | ANFIS's best (rank) | ANFIS − best other (95 % paired interval) | verdict | targets met: ANFIS / best other |"
+    lines = [head, "|" + "---|" * 7]
+    lines += [f"| {_escape(r['task'])} | {_escape(r['arm'])} | {_escape(r['best'])}: {r['best_value']} {r['unit']} | "
+              f"{_escape(r['anfis'])}: {r['anfis_value']} {r['unit']} ({r['rank']} of {r['compared']}) | "
+              f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']} | {r['verdict']} | "
+              f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'} |" for r in rows]
+    return ("# Verdict {.unnumbered}\n\n" + "\n".join(lines)
+            + "\n\n: The verdict on held-out data, per task and arm (each arm's 07_verdict table)\n\n"
+            + " ".join(_escape(sentence) for sentence in conclusion(rows)))
+
+
 def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
-    parts = ["# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
+    parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
         parts.append("**Answers** (on held-out data, with 95 % bootstrap intervals):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))
