@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import base64
 import datetime
+import hashlib
 import re
 import shutil
 import subprocess
@@ -278,8 +279,27 @@ def _pandoc() -> str:
     return pypandoc.get_pandoc_path()
 
 
+_BUILT = "@@built@@"      # the build time's place in the Markdown while its key is taken
+
+
+def _paper_key(markdown: str, assets: Path, bibliography: Path) -> str:
+    """SHA-256 of what the PDF is made of: its Markdown (the build time left out), every figure
+    copied beside it, the bibliography, this module (the preamble, the pandoc call) and the
+    locked environment (pandoc's and Typst's versions)."""
+    from ..infra.paths import ROOT
+
+    h = hashlib.sha256(markdown.encode())
+    for path in [*sorted(assets.rglob("*")), bibliography, Path(__file__), ROOT / "environment.lock"]:
+        if path.is_file():
+            h.update(path.name.encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()
+
+
 def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = BIBLIOGRAPHY) -> Path:
-    """Write ``report.report_dir / PAPER_NAME`` (atomically) and return its path.
+    """Write ``report.report_dir / PAPER_NAME`` (atomically) and return its path. A PDF whose
+    inputs (:func:`_paper_key`, stored beside it as ``.paper.sha256``) are unchanged is kept as it
+    is, with the build time it states.
 
     Raises:
         ReportError: pandoc or Typst failed (one line with the tool's message).
@@ -287,6 +307,7 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
     import typst
 
     target = report.report_dir / PAPER_NAME
+    stamp = report.report_dir / ".paper.sha256"
     report.report_dir.mkdir(parents=True, exist_ok=True)
     for stale in report.report_dir.glob(".paper-*"):    # a killed build's work directory
         shutil.rmtree(stale, ignore_errors=True)
@@ -297,7 +318,11 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
     with tempfile.TemporaryDirectory(prefix=".paper-", dir=report.report_dir) as tmp:
         work = Path(tmp)
         (work / "assets").mkdir()
-        markdown = paper_markdown(report, work / "assets", commit=commit, built=built)
+        markdown = paper_markdown(report, work / "assets", commit=commit, built=_BUILT)
+        key = _paper_key(markdown, work / "assets", bibliography)
+        if target.is_file() and stamp.is_file() and stamp.read_text(encoding="utf-8").strip() == key:
+            return target
+        markdown = markdown.replace(_BUILT, built)
         (work / "paper.md").write_text(markdown, encoding="utf-8")
         done = subprocess.run(
             [_pandoc(), "paper.md", "--from", "markdown-auto_identifiers",
@@ -317,6 +342,9 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
         except Exception as exc:                     # typst.TypstError: the compiler's diagnostics
             first = str(exc).strip().splitlines()[:3]
             raise ReportError(f"the PDF: Typst failed: {' '.join(first)}") from None
+        stamp.unlink(missing_ok=True)               # a PDF without its stamp is never kept
         with atomic_path(target) as out:
             out.write_bytes(pdf)
+        with atomic_path(stamp) as out:
+            out.write_text(key + "\n", encoding="utf-8")
     return target
