@@ -198,3 +198,11 @@ def test_the_pdf_is_built_again_only_when_what_it_is_made_of_changes(smoke_repor
     (smoke_report / "again" / ".paper.sha256").write_text("0" * 64 + "\n")   # a stamp that does not match
     paper.write_paper(pages, commit="abd")
     assert len(compiled) == 3
+
+
+@pytest.mark.notebook
+def test_each_edition_s_html_numbers_its_figures_as_the_pdf_does(smoke_report):
+    assert "<b>Figure 1.1.</b>" in (smoke_report / "01_robot.html").read_text()
+    other = (smoke_report / "b" / "01_robot.html").read_text()
+    assert "<b>Figure B1.1.</b>" in other and "<b>Figure 1.1.</b>" not in other
+    assert "<b>Figure 2.1.</b>" in (smoke_report / "b" / "02_shared.html").read_text()   # the same for every arm

@@ -23,7 +23,7 @@ from ..infra.paths import ROOT, atomic_path, shown_path
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ReportPages", "write_pages", "abstract_answers", "verdict_rows", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ReportPages", "write_pages", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -140,13 +140,23 @@ PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
 """
 
 
+def edition_letter(edition: Edition) -> str:
+    """The letter before an edition's chapter numbers — "" for the primary, the arm's initial for
+    the others ("Figure S6.1" in the SO-101's edition) — the same in its HTML pages and the PDF."""
+    return "" if edition.primary else edition.name[:1].upper()
+
+
+_FIGURE_NUMBER = re.compile(r"<b>Figure (\d+\.\d+)\.</b>")
+
+
 def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
-                 title: str = "", arm: str = "", fold_code: bool = False) -> None:
+                title: str = "", arm: str = "", fold_code: bool = False, letter: str = "") -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters; one parameters cell with the run's values
     (:func:`_merge_parameters`); the heading naming ``arm`` when given; with ``fold_code``,
-    every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`). Nothing is
+    every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`); the figures'
+    numbers after ``letter`` (:func:`edition_letter`), as the PDF numbers them. Nothing is
     loaded from elsewhere."""
     import nbformat
     from jinja2 import DictLoader
@@ -180,6 +190,8 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     finally:
         exporter.log.removeFilter(quiet)
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
+    if letter:
+        body = _FIGURE_NUMBER.sub(lambda m: f"<b>Figure {letter}{m.group(1)}.</b>", body)
     if nav:
         body = re.sub(r"(<body[^>]*>)", lambda m: m.group(1) + nav, body, count=1)
         body = body.replace("</body>", nav + "</body>", 1)
@@ -582,7 +594,8 @@ def write_pages(report: ReportPages) -> None:
             export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX, fold_code=True,
                         title=f"{title} · {arm.name}" if prefix in per_arm else
                         f"{title} · the same for every arm" if same_for_all else title,
-                        arm=arm.name if prefix in per_arm else "")
+                        arm=arm.name if prefix in per_arm else "",
+                        letter=edition_letter(arm) if prefix in per_arm else "")
     _write_index(report_dir, report.figures_dir, {a.name: pages.get(a.name, []) for a in arms}, list(arms),
                  compared, parameters=dict(report.parameters), smoke=report.smoke,
                  recordings_dir=report.recordings_dir)

@@ -27,7 +27,7 @@ from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from .editions import Edition
 from .pages import (ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
-                    _git, abstract_answers, chapter_title, verdict_rows)
+                    _git, abstract_answers, chapter_title, edition_letter, verdict_rows)
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
@@ -211,7 +211,7 @@ def paper_chapters(report: ReportPages) -> list[tuple[str, str, list[PaperChapte
     parts = []
     primary = [nb for nb in report.chapters if report.arms and report.arms[0] in report.runs.get(nb.name, ())]
     for arm in report.arms:
-        letter = "" if arm.primary else arm.name[:1].upper()
+        letter = edition_letter(arm)
         chapters = []
         for nb in report.chapters:
             if nb.name in report.comparing or arm not in report.runs.get(nb.name, ()):
