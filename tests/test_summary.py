@@ -269,7 +269,7 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
     from nfarm.study.summary import conclusion, read_verdicts, targets_met, verdict, verdict_table
 
     ik = verdict("arm A", "inverse kinematics", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
-                 (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"})
+                 (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"}, exact="the closed form")
     assert (ik.best, ik.rank, ik.compared, ik.rival, ik.rival_value, ik.verdict) == ("ANFIS", 1, 3, "RBF", 4.9, "ANFIS better")
     idv = verdict("arm A", "rigid-body inverse dynamics", WORST_ID, "%", {"ANFIS": 2.5, "ridge": 1e-7}, "ANFIS",
                   (2.5, 2.1, 2.9))
@@ -289,7 +289,8 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
     assert "Another method is better than ANFIS, beyond the paired interval, on rigid-body inverse dynamics (arm A: ridge" in said[1]
     assert said[2] == "ANFIS and its best rival are no different within the paired interval on measured arm, generic (arm B, against MLP)."
     assert "inverse kinematics (arm A) 3 of 3, its best rival 2 of 3" in said[3]
-    assert said[4].startswith("What to use, by the held-out data: inverse kinematics, ANFIS; rigid-body inverse dynamics, ridge")
+    assert said[4].startswith("What to use, by the held-out data: inverse kinematics, the closed form (exact; of the "
+                              "learned methods, ANFIS); rigid-body inverse dynamics, ridge")
     (tmp_path / "bad.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match="bad.csv: not a verdict table: columns arm, task"):
         read_verdicts(tmp_path / "bad.csv")

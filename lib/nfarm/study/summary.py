@@ -530,7 +530,8 @@ IK_TARGETS = (("per-joint RMSE", "worst joint RMSE", 1.0, "°"), ("median positi
 ID_TARGET_PCT = 5.0
 #: The verdict table's columns (:func:`verdict_table`), as chapter 07 writes them and the index reads them.
 VERDICT_COLUMNS = ("arm", "task", "metric", "unit", "best", "best_value", "anfis", "anfis_value", "rank", "compared",
-                   "rival", "rival_value", "gap", "gap_low", "gap_high", "verdict", "anfis_targets", "rival_targets")
+                   "rival", "rival_value", "gap", "gap_low", "gap_high", "verdict", "anfis_targets", "rival_targets",
+                   "exact")
 
 
 @dataclass(frozen=True)
@@ -538,7 +539,8 @@ class Verdict:
     """One task's verdict on one arm, on held-out data: the best of the methods compared, the
     ANFIS's best and its rank among them, its paired difference from the best other method
     (``gap``, ANFIS minus rival, with the interval ``gap_low``–``gap_high``), and the study's
-    targets each met (``"2 of 3"``; ``""`` where the task has none)."""
+    targets each met (``"2 of 3"``; ``""`` where the task has none); ``exact`` names a method that
+    solves the task exactly, where one exists (not ranked: the learned methods are compared)."""
 
     arm: str
     task: str
@@ -557,6 +559,7 @@ class Verdict:
     gap_high: float
     anfis_targets: str = ""
     rival_targets: str = ""
+    exact: str = ""
 
     @property
     def verdict(self) -> str:
@@ -566,11 +569,11 @@ class Verdict:
 
 
 def verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, float], anfis: str,
-            gap: tuple[float, float, float], targets: Mapping[str, str] | None = None) -> Verdict:
+            gap: tuple[float, float, float], targets: Mapping[str, str] | None = None, exact: str = "") -> Verdict:
     """The :class:`Verdict` of one task: ``values`` every compared method's value of ``metric``
     (lower is better) on held-out data, ``anfis`` the ANFIS among them, ``gap`` its paired
     difference from the best other method ``(value, low, high)``, ``targets`` each method's
-    targets met (``"2 of 3"``).
+    targets met (``"2 of 3"``), ``exact`` the method that solves the task exactly, if any.
 
     Example:
         >>> v = verdict("arm", "IK", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
@@ -585,7 +588,7 @@ def verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, fl
     targets = targets or {}
     return Verdict(arm, task, metric, unit, ranked[0], float(values[ranked[0]]), anfis, float(values[anfis]),
                    ranked.index(anfis) + 1, len(ranked), rival, float(values[rival]), *map(float, gap), targets.get(anfis, ""),
-                   targets.get(rival, ""))
+                   targets.get(rival, ""), exact)
 
 
 def targets_met(rows: Sequence[Row], limits: Sequence[float]) -> str:
@@ -602,7 +605,7 @@ def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | 
     return Table(list(VERDICT_COLUMNS),
                  [[v.arm, v.task, v.metric, v.unit, v.best, fmt(v.best_value, v.unit), v.anfis, fmt(v.anfis_value, v.unit),
                    v.rank, v.compared, v.rival, fmt(v.rival_value, v.unit), fmt(v.gap, v.unit), fmt(v.gap_low, v.unit), fmt(v.gap_high, v.unit),
-                   v.verdict, v.anfis_targets, v.rival_targets] for v in verdicts], caption=caption)
+                   v.verdict, v.anfis_targets, v.rival_targets, v.exact] for v in verdicts], caption=caption)
 
 
 def read_verdicts(path) -> list[dict[str, str]]:
@@ -652,7 +655,8 @@ def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
     use = []
     for task in tasks:
         rows = [r for r in verdicts if r["task"] == task]
-        best = list(dict.fromkeys(r["best"] for r in rows))
-        use.append(f"{task}, {' or '.join(best)}")
+        best = " or ".join(dict.fromkeys(r["best"] for r in rows))
+        exact = " or ".join(dict.fromkeys(r["exact"] for r in rows if r.get("exact")))
+        use.append(f"{task}, {exact} (exact; of the learned methods, {best})" if exact else f"{task}, {best}")
     sentences.append("What to use, by the held-out data: " + "; ".join(use) + ".")
     return sentences
