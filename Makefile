@@ -42,10 +42,11 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 	@install -D -m 644 jupyter/lab-overrides.json $(VENV)/share/jupyter/lab/settings/overrides.json
 	@touch $@
 
-# make report [SCHEDULER=tcp://host:8786]: chapter 6's missing sweep cells on a running Dask
+# make report [ARM=name] [SCHEDULER=tcp://host:8786]: ARM runs one arm's edition (and the chapters comparing
+# the arms) without the others'; SCHEDULER sends chapter 6's missing sweep cells to a running Dask
 # cluster (its workers: this checkout and `make setup`); the published files are the same.
 report: $(STAMP)
-	$(REPORT_ENV) $(PY) -m nfarm report $(if $(SCHEDULER),--scheduler "$(SCHEDULER)")
+	$(REPORT_ENV) $(PY) -m nfarm report $(if $(SCHEDULER),--scheduler "$(SCHEDULER)") $(if $(ARM),--arm "$(ARM)")
 
 # make arm URDF=path/to/arm.urdf [NAME=n] [ARM_ARGS="--tip LINK --lock JOINT=VALUE"]: a new arm's
 # robot and study files in params/, with defaults derived from its URDF (README "A new arm").

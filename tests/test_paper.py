@@ -176,3 +176,33 @@ def test_the_bibliography_has_every_work_the_pdf_cites():
 def test_a_notebook_s_prose_keeps_its_at_signs_and_its_headings_go_one_level_down():
     assert paper._prose("# A\n\nmail me@x.org or @someone\n\n```\n# kept\n```") == \
         "## A\n\nmail me@x.org or \\@someone\n\n```\n# kept\n```"
+
+
+@pytest.mark.notebook
+def test_the_pdf_is_built_again_only_when_what_it_is_made_of_changes(smoke_report, monkeypatch):
+    """A second build with the same inputs keeps the PDF (no pandoc, no Typst); a changed input
+    makes it again."""
+    import typst
+
+    pages = report.ReportPages(chapters=(), runs={}, comparing=frozenset(), arms=(), executed_dir=smoke_report,
+                               report_dir=smoke_report / "again", figures_dir=smoke_report, parameters={}, smoke=True,
+                               recordings_dir=None)
+    compiled = []
+    real = typst.compile
+    monkeypatch.setattr(typst, "compile", lambda *a, **k: compiled.append(1) or real(*a, **k))
+    first = paper.write_paper(pages, commit="abc")
+    made = first.read_bytes()
+    assert paper.write_paper(pages, commit="abc").read_bytes() == made and len(compiled) == 1
+    paper.write_paper(pages, commit="abd")                      # the commit it states changed
+    assert len(compiled) == 2
+    (smoke_report / "again" / ".paper.sha256").write_text("0" * 64 + "\n")   # a stamp that does not match
+    paper.write_paper(pages, commit="abd")
+    assert len(compiled) == 3
+
+
+@pytest.mark.notebook
+def test_each_edition_s_html_numbers_its_figures_as_the_pdf_does(smoke_report):
+    assert "<b>Figure 1.1.</b>" in (smoke_report / "01_robot.html").read_text()
+    other = (smoke_report / "b" / "01_robot.html").read_text()
+    assert "<b>Figure B1.1.</b>" in other and "<b>Figure 1.1.</b>" not in other
+    assert "<b>Figure 2.1.</b>" in (smoke_report / "b" / "02_shared.html").read_text()   # the same for every arm

@@ -492,6 +492,19 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     assert "(the same for every arm)" in index
 
 
+def test_one_arm_s_edition_runs_alone_with_the_comparison(two_arms, capsys):
+    """``make report ARM=b``: b's chapters and the comparing chapter run, a's are neither run nor
+    checked, and the index still lists both editions."""
+    runs, dirs = two_arms
+    assert build_report(arm="b", **dirs) == 0
+    assert runs == [("01_robot.ipynb", {"smoke": False, "robot_file": "rb.yaml"}),
+                    ("03_study.ipynb", {"smoke": False, "study_file": "sb.yaml"}),
+                    ("04_compare.ipynb", {"smoke": False, "study_files": ["sa.yaml", "sb.yaml"]})]
+    assert "Chapters for a" in (dirs["build_dir"] / "report" / "index.html").read_text()
+    assert build_report(arm="c", **dirs) == 2
+    assert "--arm: no edition 'c'; the editions are a, b (params/studies/*.yaml)" in capsys.readouterr().err
+
+
 def test_chapters_whose_inputs_are_unchanged_are_not_run_again(two_arms, capsys):
     runs, dirs = two_arms
     figures = dirs["figures_dir"]

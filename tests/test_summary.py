@@ -260,3 +260,39 @@ def test_the_abstract_says_what_the_measured_arm_gives_each_tier(tmp_path):
             in line)
     assert line.endswith("over every joint, the noise-level ones included: met by none (best identification of the "
                          "built arm, 30 % (27–33)).")
+
+
+# -- the verdict -------------------------------------------------------------------------------
+
+
+def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
+    from nfarm.study.summary import conclusion, read_verdicts, targets_met, verdict, verdict_table
+
+    ik = verdict("arm A", "inverse kinematics", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
+                 (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"}, exact="the closed form")
+    assert (ik.best, ik.rank, ik.compared, ik.rival, ik.rival_value, ik.verdict) == ("ANFIS", 1, 3, "RBF", 4.9, "ANFIS better")
+    idv = verdict("arm A", "rigid-body inverse dynamics", WORST_ID, "%", {"ANFIS": 2.5, "ridge": 1e-7}, "ANFIS",
+                  (2.5, 2.1, 2.9))
+    tie = verdict("arm B", "measured arm, generic", "worst joint RMSE", "N·m", {"ANFIS": 0.30, "MLP": 0.28}, "ANFIS",
+                  (0.02, -0.01, 0.05))
+    assert (idv.rank, idv.verdict, tie.verdict) == (2, "rival better", "no difference")
+    with pytest.raises(ValueError, match="must be one of at least two methods compared"):
+        verdict("arm", "t", "m", "mm", {"ANFIS": 1.0}, "ANFIS", (0, 0, 0))
+    verdict_table([ik, idv, tie], floors={"%": 1e-6}).save(tmp_path, "07_verdict")
+    rows = read_verdicts(tmp_path / "tables" / "07_verdict.csv")
+    assert [r["verdict"] for r in rows] == ["ANFIS better", "rival better", "no difference"]
+    assert rows[1]["best"] == "ridge" and rows[1]["best_value"] == "< 1e-6"       # noise level, shown as such
+    said = conclusion(rows)
+    assert len(said) <= 5
+    assert said[0].startswith("ANFIS is better than its best rival, beyond the paired interval, on inverse kinematics "
+                              "(arm A: 0.9 against RBF's 4.9 mm)")
+    assert "Another method is better than ANFIS, beyond the paired interval, on rigid-body inverse dynamics (arm A: ridge" in said[1]
+    assert said[2] == "ANFIS and its best rival are no different within the paired interval on measured arm, generic (arm B, against MLP)."
+    assert "inverse kinematics (arm A) 3 of 3, its best rival 2 of 3" in said[3]
+    assert said[4].startswith("What to use, by the held-out data: inverse kinematics, the closed form (exact; of the "
+                              "learned methods, ANFIS); rigid-body inverse dynamics, ridge")
+    (tmp_path / "bad.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match="bad.csv: not a verdict table: columns arm, task"):
+        read_verdicts(tmp_path / "bad.csv")
+    row = Row("t", "m", ROLE_CHOSEN, "position p95", "mm", 4.0, 3.0, 5.0, 100, 0.95, "")
+    assert targets_met([row, row], [10.0, 4.5]) == "1 of 2"

@@ -84,6 +84,9 @@ def main(argv: list[str] | None = None) -> int:
     report = sub.add_parser("report", help="run every chapter notebook and build the report")
     report.add_argument("--smoke", action="store_true", help="small parameter set (for tests)")
     report.add_argument("--only", nargs="*", metavar="NN", help="run only these chapters")
+    report.add_argument("--arm", default=None, metavar="NAME",
+                        help="run one arm's edition (params/studies/NAME.yaml) and the chapters comparing the "
+                             "arms, not the other arms' chapters")
     report.add_argument("--force", action="store_true",
                         help="run chapters whose inputs are unchanged since their last run too")
     report.add_argument("--serial", action="store_true",
@@ -136,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
         return run_sweep_file(args.file, args.scheduler, args.workers, args.out, args.smoke)
     return report_command(smoke=args.smoke, only=args.only, cell_timeout=args.cell_timeout,
                           force=args.force, parallel=False if args.serial else None,
-                          scheduler=args.scheduler)
+                          scheduler=args.scheduler, arm=args.arm)
 
 
 def add_arm_command(urdf: str, name: str | None, tip: str | None, locks: list[str],

@@ -23,7 +23,7 @@ from ..infra.paths import ROOT, atomic_path, shown_path
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ReportPages", "write_pages", "abstract_answers", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ReportPages", "write_pages", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -140,13 +140,23 @@ PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
 """
 
 
+def edition_letter(edition: Edition) -> str:
+    """The letter before an edition's chapter numbers — "" for the primary, the arm's initial for
+    the others ("Figure S6.1" in the SO-101's edition) — the same in its HTML pages and the PDF."""
+    return "" if edition.primary else edition.name[:1].upper()
+
+
+_FIGURE_NUMBER = re.compile(r"<b>Figure (\d+\.\d+)\.</b>")
+
+
 def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
-                 title: str = "", arm: str = "", fold_code: bool = False) -> None:
+                title: str = "", arm: str = "", fold_code: bool = False, letter: str = "") -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters; one parameters cell with the run's values
     (:func:`_merge_parameters`); the heading naming ``arm`` when given; with ``fold_code``,
-    every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`). Nothing is
+    every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`); the figures'
+    numbers after ``letter`` (:func:`edition_letter`), as the PDF numbers them. Nothing is
     loaded from elsewhere."""
     import nbformat
     from jinja2 import DictLoader
@@ -180,6 +190,8 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     finally:
         exporter.log.removeFilter(quiet)
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
+    if letter:
+        body = _FIGURE_NUMBER.sub(lambda m: f"<b>Figure {letter}{m.group(1)}.</b>", body)
     if nav:
         body = re.sub(r"(<body[^>]*>)", lambda m: m.group(1) + nav, body, count=1)
         body = body.replace("</body>", nav + "</body>", 1)
@@ -253,16 +265,24 @@ def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> l
     return parts
 
 
+#: The dissertation this study reproduces (``docs/STUDY.md``), its title in Russian and in English.
+DISSERTATION_TITLE = ("Модели, алгоритмы и комплекс программ для моделирования манипуляторов на основе "
+                      "архитектуры адаптивной нейро-нечеткой системы вывода и обучающих алгоритмов")
+DISSERTATION_TITLE_EN = ("Models, algorithms and a software package for modelling manipulators based on "
+                         "the architecture of an adaptive neuro-fuzzy inference system and learning "
+                         "algorithms")
 ABSTRACT_QUESTION = (
     "Can adaptive neuro-fuzzy inference systems (ANFIS), trained with Jang's hybrid rule on data generated "
-    "from a 5-DOF arm's numerical models — the DH forward kinematics, Levenberg–Marquardt inverse "
-    "kinematics and recursive Newton–Euler inverse dynamics — compute the arm's inverse kinematics and "
-    "inverse dynamics, and how do they compare with the exact solutions and with strong baselines?")
+    "from a 5-DOF arm's models — tool poses from the DH forward kinematics of sampled joint configurations, "
+    "torques from recursive Newton–Euler and from a simulated measured arm — compute the arm's inverse "
+    "kinematics and inverse dynamics, and how do they compare with the exact solutions (Levenberg–Marquardt, "
+    "the closed form, Newton–Euler) and with strong baselines given the same inputs and tuning budget?")
 ABSTRACT_LIMITS = (
     "The learned inverse kinematics covers one declared region of each arm, where the inverse map is "
     "single-valued (chapter 05); over the full joint ranges it is many-valued and not learnable as one "
-    "function. The data are simulated: the rigid-body torques are exact, and the arm with friction is a "
-    "model whose law no learner assumes. The dissertation's text does not give its robot's numbers, data "
+    "function. The data are simulated: the rigid-body torques are exact, and the measured arm is a model — "
+    "links off their nominal parameters, friction whose law no learner assumes, torques read from a "
+    "simulated motor current — not a real arm. The dissertation's text does not give its robot's numbers, data "
     "settings, rule bases or budgets: those designs are assumed and labelled so (the deviations table of "
     "chapter 05). The spreads are over the sweep files' seeds (data draws) for the comparisons made on "
     "validation data and bootstrap intervals over the held-out poses or trajectories for the results.")
@@ -285,10 +305,51 @@ def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
     return answers
 
 
+def verdict_rows(figures_dir: Path, arms: list[Edition]) -> list[dict[str, str]]:
+    """Every arm's verdict rows, read from its published ``07_verdict.csv`` (chapter 07;
+    :func:`nfarm.study.summary.verdict_table`), in the arms' order; an arm without one, or with a
+    table an older chapter 07 wrote, adds none."""
+    from ..study.summary import read_verdicts
+
+    rows = []
+    for edition in arms:
+        path = figures_dir / edition.subdir / "tables" / "07_verdict.csv"
+        if path.is_file():
+            try:
+                rows += read_verdicts(path)
+            except ValueError:
+                continue
+    return rows
+
+
+def _verdict_html(rows: list[dict[str, str]]) -> list[str]:
+    """The verdict table and the conclusion (:func:`nfarm.study.summary.conclusion`) as HTML."""
+    from ..study.summary import conclusion
+
+    if not rows:
+        return ["<p><b>Verdict.</b> Not yet computed: chapter 07 has not published its verdict table.</p>"]
+    head = ["task", "arm", "best on held-out data", "ANFIS's best (rank)", "best other", "ANFIS − best other (95 % paired interval)",
+            "verdict", "targets met: ANFIS / best other"]
+    body = [[r["task"], r["arm"], f"{r['best']}: {r['best_value']} {r['unit']}",
+             f"{r['anfis']}: {r['anfis_value']} {r['unit']} ({r['rank']} of {r['compared']})",
+             f"{r['rival']}: {r['rival_value']} {r['unit']}", f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}",
+             r["verdict"], f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'}"] for r in rows]
+    table = ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr></thead><tbody>"
+             + "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in body)
+             + "</tbody></table>")
+    return ["<h2 id='verdict'>Verdict</h2>",
+            "<p>For each task and arm, on held-out data: the best of the methods compared, the ANFIS's best and its "
+            "rank, its difference from the best other method with the paired interval (an interval holding 0 is no "
+            "difference) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
+            "<code>docs/STUDY.md</code>).</p>", table,
+            "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows)) + "</p>"]
+
+
 def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
-    """The abstract: the study's question, each arm's answers (:func:`abstract_answers`) and the
-    study's limits."""
-    parts = ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
+    """The verdict (:func:`verdict_rows`), then the abstract: the study's question, each arm's
+    answers (:func:`abstract_answers`) and the study's limits."""
+    parts = _verdict_html(verdict_rows(figures_dir, arms))
+    parts += ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
     answers = abstract_answers(figures_dir, arms)
     if answers:
         parts.append("<p><b>Answers</b> (on held-out data, with 95 % bootstrap intervals; from each arm's "
@@ -376,7 +437,10 @@ def _write_index(report_dir: Path, figures_dir: Path,
              "figures": shown_path(figures_dir) + " (checked by MANIFEST.sha256)"}
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>nfarm — study report"
              f"</title><style>{_STYLE}</style></head><body><h1>nfarm — a 5-DOF arm modelled with "
-             "numerical methods and ANFIS</h1>"]
+             "numerical methods and ANFIS</h1>",
+             f"<p>A reproduction, as software, of Tu Rain (Ту Раин), <i>{html.escape(DISSERTATION_TITLE_EN)}</i> "
+             f"(«{html.escape(DISSERTATION_TITLE)}»), Candidate of Sciences dissertation, Belgorod State National "
+             "Research University, 2023 — and a test of its answer.</p>"]
     if (report_dir / PAPER_NAME).is_file():
         parts.append(f"<p><a href='{PAPER_NAME}'>The whole study as one PDF</a> (every chapter of both "
                      "editions, without code, with a references list)</p>")
@@ -530,7 +594,8 @@ def write_pages(report: ReportPages) -> None:
             export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX, fold_code=True,
                         title=f"{title} · {arm.name}" if prefix in per_arm else
                         f"{title} · the same for every arm" if same_for_all else title,
-                        arm=arm.name if prefix in per_arm else "")
+                        arm=arm.name if prefix in per_arm else "",
+                        letter=edition_letter(arm) if prefix in per_arm else "")
     _write_index(report_dir, report.figures_dir, {a.name: pages.get(a.name, []) for a in arms}, list(arms),
                  compared, parameters=dict(report.parameters), smoke=report.smoke,
                  recordings_dir=report.recordings_dir)

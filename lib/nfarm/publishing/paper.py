@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import base64
 import datetime
+import hashlib
 import re
 import shutil
 import subprocess
@@ -25,7 +26,8 @@ from pathlib import Path
 from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from .editions import Edition
-from .pages import ABSTRACT_LIMITS, ABSTRACT_QUESTION, PAPER_NAME, ReportPages, _git, abstract_answers, chapter_title
+from .pages import (ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
+                    _git, abstract_answers, chapter_title, edition_letter, verdict_rows)
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
@@ -35,12 +37,6 @@ BIBLIOGRAPHY = ROOT / "docs" / "references.bib"
 DISSERTATION = "tu_rain_2023"
 
 #: The dissertation as its title page names it (the Russian title as published; an English rendering).
-DISSERTATION_TITLE = ("Модели, алгоритмы и комплекс программ для моделирования манипуляторов на основе "
-                      "архитектуры адаптивной нейро-нечеткой системы вывода и обучающих алгоритмов")
-DISSERTATION_TITLE_EN = ("Models, algorithms and a software package for modelling manipulators based on "
-                         "the architecture of an adaptive neuro-fuzzy inference system and learning "
-                         "algorithms")
-
 #: What each part of the study rests on, cited (the front matter's "Sources").
 SOURCES = (
     "The arm is described with Denavit–Hartenberg parameters [@denavit_hartenberg_1955], in the standard "
@@ -180,9 +176,27 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
     return "\n\n".join(parts) + "\n"
 
 
+def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
+    """The verdict table and the conclusion, as on the index (:func:`nfarm.publishing.pages.verdict_rows`)."""
+    from ..study.summary import conclusion
+
+    rows = verdict_rows(figures_dir, arms)
+    if not rows:
+        return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 07 has not published its verdict table."
+    head = "| task | arm | best on held-out data | ANFIS's best (rank) | ANFIS − best other (95 % paired interval) | verdict | targets met: ANFIS / best other |"
+    lines = [head, "|" + "---|" * 7]
+    lines += [f"| {_escape(r['task'])} | {_escape(r['arm'])} | {_escape(r['best'])}: {r['best_value']} {r['unit']} | "
+              f"{_escape(r['anfis'])}: {r['anfis_value']} {r['unit']} ({r['rank']} of {r['compared']}) | "
+              f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']} | {r['verdict']} | "
+              f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'} |" for r in rows]
+    return ("# Verdict {.unnumbered}\n\n" + "\n".join(lines)
+            + "\n\n: The verdict on held-out data, per task and arm (each arm's 07_verdict table)\n\n"
+            + " ".join(_escape(sentence) for sentence in conclusion(rows)))
+
+
 def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
-    parts = ["# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
+    parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
         parts.append("**Answers** (on held-out data, with 95 % bootstrap intervals):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))
@@ -197,7 +211,7 @@ def paper_chapters(report: ReportPages) -> list[tuple[str, str, list[PaperChapte
     parts = []
     primary = [nb for nb in report.chapters if report.arms and report.arms[0] in report.runs.get(nb.name, ())]
     for arm in report.arms:
-        letter = "" if arm.primary else arm.name[:1].upper()
+        letter = edition_letter(arm)
         chapters = []
         for nb in report.chapters:
             if nb.name in report.comparing or arm not in report.runs.get(nb.name, ()):
@@ -265,8 +279,27 @@ def _pandoc() -> str:
     return pypandoc.get_pandoc_path()
 
 
+_BUILT = "@@built@@"      # the build time's place in the Markdown while its key is taken
+
+
+def _paper_key(markdown: str, assets: Path, bibliography: Path) -> str:
+    """SHA-256 of what the PDF is made of: its Markdown (the build time left out), every figure
+    copied beside it, the bibliography, this module (the preamble, the pandoc call) and the
+    locked environment (pandoc's and Typst's versions)."""
+    from ..infra.paths import ROOT
+
+    h = hashlib.sha256(markdown.encode())
+    for path in [*sorted(assets.rglob("*")), bibliography, Path(__file__), ROOT / "environment.lock"]:
+        if path.is_file():
+            h.update(path.name.encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()
+
+
 def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = BIBLIOGRAPHY) -> Path:
-    """Write ``report.report_dir / PAPER_NAME`` (atomically) and return its path.
+    """Write ``report.report_dir / PAPER_NAME`` (atomically) and return its path. A PDF whose
+    inputs (:func:`_paper_key`, stored beside it as ``.paper.sha256``) are unchanged is kept as it
+    is, with the build time it states.
 
     Raises:
         ReportError: pandoc or Typst failed (one line with the tool's message).
@@ -274,6 +307,7 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
     import typst
 
     target = report.report_dir / PAPER_NAME
+    stamp = report.report_dir / ".paper.sha256"
     report.report_dir.mkdir(parents=True, exist_ok=True)
     for stale in report.report_dir.glob(".paper-*"):    # a killed build's work directory
         shutil.rmtree(stale, ignore_errors=True)
@@ -284,7 +318,11 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
     with tempfile.TemporaryDirectory(prefix=".paper-", dir=report.report_dir) as tmp:
         work = Path(tmp)
         (work / "assets").mkdir()
-        markdown = paper_markdown(report, work / "assets", commit=commit, built=built)
+        markdown = paper_markdown(report, work / "assets", commit=commit, built=_BUILT)
+        key = _paper_key(markdown, work / "assets", bibliography)
+        if target.is_file() and stamp.is_file() and stamp.read_text(encoding="utf-8").strip() == key:
+            return target
+        markdown = markdown.replace(_BUILT, built)
         (work / "paper.md").write_text(markdown, encoding="utf-8")
         done = subprocess.run(
             [_pandoc(), "paper.md", "--from", "markdown-auto_identifiers",
@@ -304,6 +342,9 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
         except Exception as exc:                     # typst.TypstError: the compiler's diagnostics
             first = str(exc).strip().splitlines()[:3]
             raise ReportError(f"the PDF: Typst failed: {' '.join(first)}") from None
+        stamp.unlink(missing_ok=True)               # a PDF without its stamp is never kept
         with atomic_path(target) as out:
             out.write_bytes(pdf)
+        with atomic_path(stamp) as out:
+            out.write_text(key + "\n", encoding="utf-8")
     return target

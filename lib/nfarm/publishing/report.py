@@ -190,7 +190,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  build_dir: Path = BUILD, extra_parameters: dict | None = None,
                  cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
                  force: bool = False, parallel: bool | None = None, scheduler: str | None = None,
-                 say: Callable[[str], None] = _quiet) -> ReportRun:
+                 arm: str | None = None, say: Callable[[str], None] = _quiet) -> ReportRun:
     """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
     export HTML and write the index.
 
@@ -210,11 +210,16 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     they miss. Where a cell runs changes none of its results, so it is neither part of a
     chapter's key nor a reason to publish elsewhere.
 
+    ``arm``: the name of one edition (``params/studies/<arm>.yaml``) whose chapters run, with
+    the chapters comparing the editions; the other editions' chapters are neither run nor
+    checked (their published files stay as they are), and the index still lists every edition.
+
     ``say`` receives a line per chapter as it starts, is found up to date, or is published
     (``python -m nfarm report`` prints them).
 
     Raises:
-        ReportUsageError: ``only`` names no chapter, or one that does not exist.
+        ReportUsageError: ``only`` names no chapter, or one that does not exist; ``arm`` names no
+            edition.
         ReportInterrupted: Ctrl-C; the figures directory holds the chapters published before.
         ReportError: a chapter failed (one line naming it and its cell), a notebook or study
             file is not valid, or a directory cannot be written.
@@ -234,6 +239,9 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         raise ReportError(str(exc)) from None
     if extra:
         arms = [a for a in arms if a.primary]
+    if arm is not None and arm not in [a.name for a in arms]:
+        raise ReportUsageError(f"--arm: no edition {arm!r}; the editions are {', '.join(a.name for a in arms)} "
+                               f"(params/studies/*.yaml)")
     declared = {nb.name: declared_parameters(nb) for nb in everything}
 
     def runs(nb: Path) -> list[tuple[Edition, dict]]:
@@ -247,9 +255,10 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         return [(a, p) for a in arms if (p := a.parameters(names)) is not None]
 
     comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
-    jobs = [(nb, arm, own) for nb in notebooks for arm, own in runs(nb)]
-    keys = _chained_keys([(nb, arm, own) for nb in everything for arm, own in runs(nb)], comparing, smoke, extra)
-    sequences = [[j for j in jobs if j[1] is arm and j[0].name not in comparing] for arm in arms]
+    jobs = [(nb, edition, own) for nb in notebooks for edition, own in runs(nb)
+            if arm is None or nb.name in comparing or edition.name == arm]
+    keys = _chained_keys([(nb, edition, own) for nb in everything for edition, own in runs(nb)], comparing, smoke, extra)
+    sequences = [[j for j in jobs if j[1] is edition and j[0].name not in comparing] for edition in arms]
     sequences = [seq for seq in sequences if seq]
     if parallel is None:
         parallel = _cpus() >= 2

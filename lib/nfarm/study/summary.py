@@ -40,7 +40,8 @@ from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
-           "target_verdict", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
+           "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "Verdict", "verdict", "targets_met",
+           "verdict_table", "read_verdicts", "conclusion", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE",
            "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL"]
 
@@ -515,3 +516,147 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
                             f"met by none (best {best['method']}, {_with_interval(best)})."))
         lines.append(text)
     return lines
+
+
+# --------------------------------------------------------------------------------------------
+# The study's targets and its verdict
+
+#: The study's targets for the learned IK (``docs/STUDY.md``, "The study's targets"): words, the
+#: summary metric (:data:`IK_METRICS`), the upper limit and its unit; each judged on a model's
+#: whole interval (:func:`target_verdict`).
+IK_TARGETS = (("per-joint RMSE", "worst joint RMSE", 1.0, "°"), ("median position", "position median", 2.0, "mm"),
+              ("95th percentile", "position p95", 10.0, "mm"))
+#: The study's target for the learned ID: the worst joint's NRMSE, in % of the torque's spread.
+ID_TARGET_PCT = 5.0
+#: The verdict table's columns (:func:`verdict_table`), as chapter 07 writes them and the index reads them.
+VERDICT_COLUMNS = ("arm", "task", "metric", "unit", "best", "best_value", "anfis", "anfis_value", "rank", "compared",
+                   "rival", "rival_value", "gap", "gap_low", "gap_high", "verdict", "anfis_targets", "rival_targets",
+                   "exact")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One task's verdict on one arm, on held-out data: the best of the methods compared, the
+    ANFIS's best and its rank among them, its paired difference from the best other method
+    (``gap``, ANFIS minus rival, with the interval ``gap_low``–``gap_high``), and the study's
+    targets each met (``"2 of 3"``; ``""`` where the task has none); ``exact`` names a method that
+    solves the task exactly, where one exists (not ranked: the learned methods are compared)."""
+
+    arm: str
+    task: str
+    metric: str
+    unit: str
+    best: str
+    best_value: float
+    anfis: str
+    anfis_value: float
+    rank: int
+    compared: int
+    rival: str
+    rival_value: float
+    gap: float
+    gap_low: float
+    gap_high: float
+    anfis_targets: str = ""
+    rival_targets: str = ""
+    exact: str = ""
+
+    @property
+    def verdict(self) -> str:
+        """``"ANFIS better"``, ``"rival better"`` or ``"no difference"``: the paired interval
+        against 0."""
+        return "ANFIS better" if self.gap_high < 0 else "rival better" if self.gap_low > 0 else "no difference"
+
+
+def verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, float], anfis: str,
+            gap: tuple[float, float, float], targets: Mapping[str, str] | None = None, exact: str = "") -> Verdict:
+    """The :class:`Verdict` of one task: ``values`` every compared method's value of ``metric``
+    (lower is better) on held-out data, ``anfis`` the ANFIS among them, ``gap`` its paired
+    difference from the best other method ``(value, low, high)``, ``targets`` each method's
+    targets met (``"2 of 3"``), ``exact`` the method that solves the task exactly, if any.
+
+    Example:
+        >>> v = verdict("arm", "IK", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
+        ...             (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"})
+        >>> v.best, v.rank, v.compared, v.rival, v.verdict
+        ('ANFIS', 1, 3, 'RBF', 'ANFIS better')
+    """
+    if anfis not in values or len(values) < 2:
+        raise ValueError(f"verdict: {anfis!r} must be one of at least two methods compared, got {list(values)}")
+    ranked = sorted(values, key=lambda name: values[name])
+    rival = next(name for name in ranked if name != anfis)
+    targets = targets or {}
+    return Verdict(arm, task, metric, unit, ranked[0], float(values[ranked[0]]), anfis, float(values[anfis]),
+                   ranked.index(anfis) + 1, len(ranked), rival, float(values[rival]), *map(float, gap), targets.get(anfis, ""),
+                   targets.get(rival, ""), exact)
+
+
+def targets_met(rows: Sequence[Row], limits: Sequence[float]) -> str:
+    """``"k of n"``: how many of one method's ``rows`` meet their ``limits`` on the whole
+    interval (:func:`target_verdict`)."""
+    return f"{sum(target_verdict(r, limit) == '✓' for r, limit in zip(rows, limits))} of {len(limits)}"
+
+
+def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | None = None, caption: str = "") -> Table:
+    """The verdicts as one table of :data:`VERDICT_COLUMNS` (machine-readable: chapter 08 and
+    the index read it back with :func:`read_long_table`)."""
+    floors = floors or {}
+    fmt = lambda v, unit: shown(v, ".3g", **({"floor": floors[unit]} if unit in floors else {}))   # noqa: E731
+    return Table(list(VERDICT_COLUMNS),
+                 [[v.arm, v.task, v.metric, v.unit, v.best, fmt(v.best_value, v.unit), v.anfis, fmt(v.anfis_value, v.unit),
+                   v.rank, v.compared, v.rival, fmt(v.rival_value, v.unit), fmt(v.gap, v.unit), fmt(v.gap_low, v.unit), fmt(v.gap_high, v.unit),
+                   v.verdict, v.anfis_targets, v.rival_targets, v.exact] for v in verdicts], caption=caption)
+
+
+def read_verdicts(path) -> list[dict[str, str]]:
+    """The rows of a verdict table written by :func:`verdict_table` (``07_verdict.csv``), as dicts
+    of its columns' text; a file without the table's columns is refused with a one-line error."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as f:
+        rows = list(csv.DictReader(f))
+    missing = [c for c in VERDICT_COLUMNS if rows and c not in rows[0]]
+    if missing:
+        raise ValueError(f"{path}: not a verdict table: columns {', '.join(missing)} missing")
+    return rows
+
+
+def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
+    """At most five plain sentences from the verdict rows of every arm (:data:`VERDICT_COLUMNS`,
+    as read back from the published tables): where the ANFIS wins beyond the paired interval,
+    where another method wins and which, where no difference is shown, the study's targets the
+    ANFIS meets, and what to use for each task."""
+    tasks = list(dict.fromkeys(r["task"] for r in verdicts))
+
+    def grouped(kind: str, say) -> list[str]:
+        out = []
+        for task in tasks:
+            rows = [r for r in verdicts if r["task"] == task and r["verdict"] == kind]
+            if rows:
+                out.append(f"{task} ({'; '.join(say(r) for r in rows)})")
+        return out
+
+    sentences = []
+    won = grouped("ANFIS better", lambda r: f"{r['arm']}: {r['anfis_value']} against {r['rival']}'s {r['rival_value']} {r['unit']}")
+    lost = grouped("rival better", lambda r: f"{r['arm']}: {r['rival']}, {r['rival_value']} against {r['anfis_value']} {r['unit']}")
+    tied = grouped("no difference", lambda r: f"{r['arm']}, against {r['rival']}")
+    if won:
+        sentences.append("ANFIS is better than its best rival, beyond the paired interval, on " + "; ".join(won) + ".")
+    if lost:
+        sentences.append("Another method is better than ANFIS, beyond the paired interval, on " + "; ".join(lost) + ".")
+    if tied:
+        sentences.append("ANFIS and its best rival are no different within the paired interval on " + "; ".join(tied) + ".")
+    met = [f"{r['task']} ({r['arm']}) {r['anfis_targets']}" + (f", its best rival {r['rival_targets']}" if r["rival_targets"] else "")
+           for r in verdicts if r["anfis_targets"]]
+    if met:
+        sentences.append("The study's targets the ANFIS meets on its whole interval: " + "; ".join(met) + ".")
+    use = []
+    for task in tasks:
+        rows = [r for r in verdicts if r["task"] == task]
+        best = " or ".join(dict.fromkeys(r["best"] for r in rows))
+        exact = " or ".join(dict.fromkeys(r["exact"] for r in rows if r.get("exact")))
+        use.append(f"{task}, {exact} (exact; of the learned methods, {best})" if exact else f"{task}, {best}")
+    sentences.append("What to use, by the held-out data: " + "; ".join(use) + ".")
+    return sentences
