@@ -145,7 +145,8 @@ def test_a_failing_notebook_stops_the_run_and_names_the_source_cell(project, cap
 ])
 def test_dead_and_hanging_kernels_are_one_line(project, capsys, code, message):
     root, dirs = project
-    make_notebook(dirs["notebooks_dir"] / "02_second.ipynb", code)
+    # a cell after the one that fails: the message names the one that ran, not the last
+    make_notebook(dirs["notebooks_dir"] / "02_second.ipynb", code, "after = 1")
     assert build_report(only=["02"], cell_timeout=3, **dirs) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert re.search(message, err[-1]), err

@@ -118,8 +118,10 @@ def _running_cell(executed: Path) -> tuple[int, str] | None:
         cells = nbformat.read(executed, 4).cells
     except Exception:  # noqa: BLE001
         return None
-    started = [k for k, c in enumerate(cells)
-               if c.metadata.get("papermill", {}).get("status", "pending") != "pending"]
+    # A cell started has its start time; on a time-out papermill marks the cells after the running
+    # one "completed" too, without a start time (seen: the report named the last cell, not the one
+    # that ran out of time).
+    started = [k for k, c in enumerate(cells) if c.metadata.get("papermill", {}).get("start_time")]
     if not started:
         return None
     k = started[-1]
