@@ -266,18 +266,18 @@ def test_the_abstract_says_what_the_measured_arm_gives_each_tier(tmp_path):
 
 
 def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
-    from nfarm.study.summary import conclusion, read_verdicts, targets_met, verdict, verdict_table
+    from nfarm.study.summary import conclusion, read_verdicts, targets_met, task_verdict, verdict_table
 
-    ik = verdict("arm A", "inverse kinematics", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
+    ik = task_verdict("arm A", "inverse kinematics", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
                  (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"}, exact="the closed form")
     assert (ik.best, ik.rank, ik.compared, ik.rival, ik.rival_value, ik.verdict) == ("ANFIS", 1, 3, "RBF", 4.9, "ANFIS better")
-    idv = verdict("arm A", "rigid-body inverse dynamics", WORST_ID, "%", {"ANFIS": 2.5, "ridge": 1e-7}, "ANFIS",
+    idv = task_verdict("arm A", "rigid-body inverse dynamics", WORST_ID, "%", {"ANFIS": 2.5, "ridge": 1e-7}, "ANFIS",
                   (2.5, 2.1, 2.9))
-    tie = verdict("arm B", "measured arm, generic", "worst joint RMSE", "N·m", {"ANFIS": 0.30, "MLP": 0.28}, "ANFIS",
+    tie = task_verdict("arm B", "measured arm, generic", "worst joint RMSE", "N·m", {"ANFIS": 0.30, "MLP": 0.28}, "ANFIS",
                   (0.02, -0.01, 0.05))
     assert (idv.rank, idv.verdict, tie.verdict) == (2, "rival better", "no difference")
     with pytest.raises(ValueError, match="must be one of at least two methods compared"):
-        verdict("arm", "t", "m", "mm", {"ANFIS": 1.0}, "ANFIS", (0, 0, 0))
+        task_verdict("arm", "t", "m", "mm", {"ANFIS": 1.0}, "ANFIS", (0, 0, 0))
     verdict_table([ik, idv, tie], floors={"%": 1e-6}).save(tmp_path, "07_verdict")
     rows = read_verdicts(tmp_path / "tables" / "07_verdict.csv")
     assert [r["verdict"] for r in rows] == ["ANFIS better", "rival better", "no difference"]

@@ -40,7 +40,7 @@ from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
-           "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "Verdict", "verdict", "targets_met",
+           "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "Verdict", "task_verdict", "targets_met",
            "verdict_table", "read_verdicts", "conclusion", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE",
            "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL"]
@@ -568,7 +568,7 @@ class Verdict:
         return "ANFIS better" if self.gap_high < 0 else "rival better" if self.gap_low > 0 else "no difference"
 
 
-def verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, float], anfis: str,
+def task_verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, float], anfis: str,
             gap: tuple[float, float, float], targets: Mapping[str, str] | None = None, exact: str = "") -> Verdict:
     """The :class:`Verdict` of one task: ``values`` every compared method's value of ``metric``
     (lower is better) on held-out data, ``anfis`` the ANFIS among them, ``gap`` its paired
@@ -576,7 +576,7 @@ def verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, fl
     targets met (``"2 of 3"``), ``exact`` the method that solves the task exactly, if any.
 
     Example:
-        >>> v = verdict("arm", "IK", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
+        >>> v = task_verdict("arm", "IK", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
         ...             (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"})
         >>> v.best, v.rank, v.compared, v.rival, v.verdict
         ('ANFIS', 1, 3, 'RBF', 'ANFIS better')
