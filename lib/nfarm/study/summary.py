@@ -627,36 +627,45 @@ def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
     """At most five plain sentences from the verdict rows of every arm (:data:`VERDICT_COLUMNS`,
     as read back from the published tables): where the ANFIS wins beyond the paired interval,
     where another method wins and which, where no difference is shown, the study's targets the
-    ANFIS meets, and what to use for each task."""
-    tasks = list(dict.fromkeys(r["task"] for r in verdicts))
+    ANFIS meets, and what to use for each task. A task ending in "every tier" sums up the tasks of
+    its tiers: it gives the targets and what to use, the tiers the wins and losses."""
+    def plain(task: str, name: str) -> str:          # "generic: multilayer perceptron" in "…, generic": the learner
+        tier = task.rsplit(", ", 1)[-1]
+        return name.split(": ", 1)[1] if name.startswith(tier + ": ") else name
+
+    summed = [r for r in verdicts if r["task"].endswith("every tier")]
+    judged = [r for r in verdicts if r not in summed]
+    tasks = list(dict.fromkeys(r["task"] for r in judged))
 
     def grouped(kind: str, say) -> list[str]:
         out = []
         for task in tasks:
-            rows = [r for r in verdicts if r["task"] == task and r["verdict"] == kind]
+            rows = [r for r in judged if r["task"] == task and r["verdict"] == kind]
             if rows:
                 out.append(f"{task} ({'; '.join(say(r) for r in rows)})")
         return out
 
     sentences = []
-    won = grouped("ANFIS better", lambda r: f"{r['arm']}: {r['anfis_value']} against {r['rival']}'s {r['rival_value']} {r['unit']}")
-    lost = grouped("rival better", lambda r: f"{r['arm']}: {r['rival']}, {r['rival_value']} against {r['anfis_value']} {r['unit']}")
-    tied = grouped("no difference", lambda r: f"{r['arm']}, against {r['rival']}")
+    won = grouped("ANFIS better", lambda r: r["arm"])
+    lost = grouped("rival better", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}")
+    tied = grouped("no difference", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}")
     if won:
-        sentences.append("ANFIS is better than its best rival, beyond the paired interval, on " + "; ".join(won) + ".")
+        sentences.append("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
+                         + "; ".join(won) + ".")
     if lost:
         sentences.append("Another method is better than ANFIS, beyond the paired interval, on " + "; ".join(lost) + ".")
     if tied:
         sentences.append("ANFIS and its best rival are no different within the paired interval on " + "; ".join(tied) + ".")
-    met = [f"{r['task']} ({r['arm']}) {r['anfis_targets']}" + (f", its best rival {r['rival_targets']}" if r["rival_targets"] else "")
-           for r in verdicts if r["anfis_targets"]]
-    if met:
-        sentences.append("The study's targets the ANFIS meets on its whole interval: " + "; ".join(met) + ".")
+    headline = [r for r in verdicts if r["anfis_targets"] and (r in summed or not r["task"].startswith("measured arm"))]
+    if headline:
+        sentences.append("The study's targets the ANFIS meets on the whole interval: " + "; ".join(
+            f"{r['task'].replace(', every tier', '')} ({r['arm']}) {r['anfis_targets']}" for r in headline) + ".")
     use = []
-    for task in tasks:
+    for task in [t for t in tasks if not t.startswith("measured arm")] + list(dict.fromkeys(r["task"] for r in summed)):
         rows = [r for r in verdicts if r["task"] == task]
         best = " or ".join(dict.fromkeys(r["best"] for r in rows))
         exact = " or ".join(dict.fromkeys(r["exact"] for r in rows if r.get("exact")))
-        use.append(f"{task}, {exact} (exact; of the learned methods, {best})" if exact else f"{task}, {best}")
+        name = task.replace(", every tier", "")
+        use.append(f"{name}, {exact} (exact; of the learned methods, {best})" if exact else f"{name}, {best}")
     sentences.append("What to use, by the held-out data: " + "; ".join(use) + ".")
     return sentences
