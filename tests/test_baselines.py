@@ -55,11 +55,9 @@ def test_residual_baseline_adds_newton_euler(trajectories):
     np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
 
 
-def test_the_identification_refits_a_built_arm_that_the_friction_identification_cannot(trajectories):
-    """Torques of a built arm (masses, centres and inertias off the model's) plus a drive law of
-    the identified form: the full identification reproduces them to rounding on other
-    trajectories; Newton–Euler with the nominal masses plus the friction identification does
-    not, by far more than rounding."""
+def _built_arm_torques(trajectories):
+    """The training and validation trajectories with the torques of a built arm (masses, centres
+    and inertias off the model's) plus a drive law of the identified form ``[q̈_j, q̇_j, sign q̇_j]``."""
     from nfarm.study.id_trajectories import TrueArm, true_arm
 
     built = true_arm(ROBOT, TrueArm(mass_sd=0.1, com_sd=0.005, inertia_sd=0.2), np.random.default_rng(5))
@@ -69,7 +67,15 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
         drive = np.einsum("njk,jk->nj", np.stack([d["qdd"], d["qd"], np.sign(d["qd"])], axis=-1), law)
         return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + drive}
 
-    train, val = measured(trajectories["train"]), measured(trajectories["val"])
+    return measured(trajectories["train"]), measured(trajectories["val"])
+
+
+def test_the_identification_refits_a_built_arm_that_the_friction_identification_cannot(trajectories):
+    """Torques of a built arm (masses, centres and inertias off the model's) plus a drive law of
+    the identified form: the full identification reproduces them to rounding on other
+    trajectories; Newton–Euler with the nominal masses plus the friction identification does
+    not, by far more than rounding."""
+    train, val = _built_arm_torques(trajectories)
     X = (val["q"], val["qd"], val["qdd"])
     full = BaselineID("identification").fit(ROBOT, train)
     nominal = BaselineID("friction", residual=True).fit(ROBOT, train)
@@ -225,16 +231,7 @@ def test_the_identification_tier_anfis_sees_the_identifications_columns(trajecto
     least squares on them, so a built arm with a drive law of that form is reproduced to rounding —
     the inputs the identification learner has, given to the ANFIS of its tier."""
     from nfarm.learning.learned_id import LearnedID, id_features
-    from nfarm.study.id_trajectories import TrueArm, true_arm
-
-    built = true_arm(ROBOT, TrueArm(mass_sd=0.1, com_sd=0.005, inertia_sd=0.2), np.random.default_rng(5))
-    law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
-
-    def measured(d):
-        drive = np.einsum("njk,jk->nj", np.stack([d["qdd"], d["qd"], np.sign(d["qd"])], axis=-1), law)
-        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + drive}
-
-    train, val = measured(trajectories["train"]), measured(trajectories["val"])
+    train, val = _built_arm_torques(trajectories)
     X = (val["q"], val["qd"], val["qdd"])
     with_drives = LearnedID(inputs="regressor_drives", n_mfs=1, epochs=1).fit(ROBOT, train)
     without = LearnedID(inputs="regressor", n_mfs=1, epochs=1).fit(ROBOT, train)
