@@ -274,6 +274,8 @@ def bad(path, value):
     (("robot_file",), "params/robots/none.yaml", r"robot_file: cannot load the robot: .*none.yaml: file not found"),
     (("seed",), -1, r"seed: must be >= 0, got -1"),
     (("seed",), 1.5, r"seed: must be a whole number, got 1.5"),
+    (("test_seed",), 1.5, r"test_seed: must be a whole number, got 1.5"),
+    (("test_seed",), "fresh", r"test_seed: must be a whole number, got 'fresh'"),
     (("sead",), 1, r"sead: unknown field \(did you mean 'seed'\?\)"),
     (("ik",), KeyError, r"ik: required field is missing"),
     (("ik", "region", "joints_deg"), [[-80, 80]] * 4, r"ik.region.joints_deg: must be a list of 5 items, got 4"),
@@ -485,3 +487,28 @@ def test_a_region_too_narrow_for_its_size_is_refused_once_a_million_draws_say_so
     with pytest.raises(ValueError, match=r"accepted [\d,]+ of 1,04\d,\d+ draws, too few for the 50,000,000 asked "
                                          r"for within 100,000,000 draws: widen them"):
         region.sample(50_000_000, 0)
+
+
+def test_a_fresh_test_seed_redraws_the_test_split_alone(built, tmp_path):
+    """``test_seed`` draws the held-out set apart: changing it alone changes every test file's
+    arrays (new poses, new trajectories, new sensor noise) and leaves the training and
+    validation files byte for byte, so a fresh final test set leaves every model and choice as
+    it was."""
+    study, out, _ = built
+    data = small_study()
+    data["test_seed"] = study.test_seed + 1
+    fresh = study_from_dict(data, source="small.yaml")
+    out2 = tmp_path / "fresh"
+    build_datasets(fresh, out2)
+    for kind in ("ik", "id", "ik_full"):
+        for split in ("train", "val"):
+            a = load(out / f"{kind}_{split}.npz", study.robot, study)
+            b = load(out2 / f"{kind}_{split}.npz", fresh.robot, fresh)
+            assert all(np.array_equal(a[k], b[k]) for k in a), (kind, split)
+        a = load(out / f"{kind}_test.npz", study.robot, study)
+        b = load(out2 / f"{kind}_test.npz", fresh.robot, fresh)
+        key = "q" if kind != "id" else "tau_measured"
+        assert a[key].shape[1:] == b[key].shape[1:] and not np.array_equal(a[key][:len(b[key])], b[key][:len(a[key])])
+    assert datasets.split_seed(fresh, "test") == fresh.test_seed != fresh.seed == datasets.split_seed(fresh, "val")
+    with pytest.raises(ParamsError, match=r"small.yaml: test_seed: must be >= 0, got -1"):
+        study_from_dict({**data, "test_seed": -1}, source="small.yaml")

@@ -81,6 +81,12 @@ def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "learner": "forest"}))
     with pytest.raises(ParamsError, match="id_contest: options: random_state is the cell's own parameter"):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"random_state": 3}}))
+    with pytest.raises(ParamsError, match="id_contest: options: residual must be true or false, got 'no'"):
+        JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"residual": "no"}}))
+    # An ANFIS cell without options: the tier of LearnedID's defaults (its own joint's state: generic)
+    anfis = JOBS["id_contest"].function(JOBS["id_contest"].complete(
+        {**cell, "learner": "anfis", "options": None, "stride": 16}))
+    assert anfis["tier"] == "generic"
 
 
 def test_a_finalist_is_saved_where_chapters_7_and_8_read_it(tmp_path):

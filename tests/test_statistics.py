@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.study.statistics import (bootstrap_nrmse, bootstrap_rows, nrmse_from_sums, trajectory_maxima, trajectory_sums,
+from nfarm.study.statistics import (bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums, trajectory_maxima, trajectory_sums,
                               worst_difference)
 
 
@@ -159,3 +159,41 @@ def test_tail_ratios_refuse_bad_input_in_one_line(causes, error, message):
     from nfarm.study.statistics import tail_ratios
     with pytest.raises(ValueError, match=message):
         tail_ratios(causes, error)
+
+
+def _mean(X):
+    return X[..., 0].mean(axis=1)
+
+
+def test_two_level_bootstrap_covers_the_seeds_spread_and_pairs_methods():
+    """Over seeds and units: with the seeds' means far apart the interval spans them (a one-level
+    bootstrap over the units of one seed's model does not); with identical models it is the
+    units' spread alone; a method that is another plus a constant differs by exactly that
+    constant on every resample (paired by seed and unit); the same seed gives the same bits."""
+    rng = np.random.default_rng(3)
+    units = rng.normal(size=(1, 300, 1))
+    shifted = units + np.array([0.0, 1.0, 2.0, 3.0, 4.0])[:, None, None]         # (5, 300, 1)
+    both = bootstrap_seeds(shifted, _mean, draws=1000)
+    one = bootstrap_rows(shifted[0], _mean, draws=1000)
+    assert both.seeds == 5 and both.rows == 300 and one.seeds == 1
+    assert both.low < 1.0 and both.high > 3.0 and both.low <= both.value <= both.high
+    assert one.high - one.low < 0.5 < (both.high - both.low) / 4
+    same = bootstrap_seeds(np.repeat(units, 5, axis=0), _mean, draws=1000)
+    assert same.high - same.low < 0.5
+    paired = bootstrap_seeds(np.concatenate([shifted + 0.25, shifted], axis=-1),
+                             lambda X: X[..., 0].mean(axis=1) - X[..., 1].mean(axis=1), draws=500)
+    assert paired.low == pytest.approx(0.25, abs=1e-12) and paired.high == pytest.approx(0.25, abs=1e-12)
+    again = bootstrap_seeds(shifted, _mean, draws=1000)
+    assert (again.low, again.high) == (both.low, both.high)
+    assert bootstrap_seeds(shifted, _mean, draws=1000, seed=1).low != both.low
+
+
+@pytest.mark.parametrize("values, kwargs, message", [
+    (np.zeros((2, 1, 1)), {}, r"values must be a finite \(seeds >= 1, units >= 2, k\) array, got shape \(2, 1, 1\)"),
+    (np.full((2, 5, 1), np.nan), {}, r"values must be a finite"),
+    (np.zeros((2, 5, 1)), {"draws": 10}, r"draws must be an integer >= 100, got 10"),
+    (np.zeros((2, 5, 1)), {"level": 1.0}, r"level must be in \(0, 1\), got 1.0"),
+])
+def test_two_level_bootstrap_refuses_bad_input(values, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        bootstrap_seeds(values, _mean, **kwargs)

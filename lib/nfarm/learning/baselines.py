@@ -61,13 +61,12 @@ import numpy as np
 
 from .. import __version__
 from ..infra.limits import check_time
-from ..infra.reading import ParamsError, Validator, json_ready, load_json, show
+from ..infra.reading import ParamsError, Validator, json_ready
 from ..model.dynamics import regressor, rnea
 from ..model.robot import Robot, robot_hash
 from .bases import BASES, basis
-from .estimator import Estimator, model_file, write_model
+from .estimator import SavedModel, check_robot
 from .learned_id import ID_FILE_NAME, ID_FORMAT, LearnedID, id_states
-from .per_joint import checked_file
 
 __all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label", "load_id_model", "FILE_NAME", "FORMAT"]
 
@@ -104,7 +103,7 @@ def _smooth_inputs(q, qd, qdd) -> np.ndarray:
     return np.concatenate([np.sin(q), np.cos(q), qd, qdd], axis=1)
 
 
-class BaselineID(Estimator):
+class BaselineID(SavedModel):
     """One scikit-learn learner of the torques of every joint (scikit-learn conventions).
 
     Args:
@@ -132,6 +131,8 @@ class BaselineID(Estimator):
     """
 
     _fitted = "state_"
+
+    file_name, file_format, what = FILE_NAME, FORMAT, "baseline ID"
 
     def __init__(self, learner: str = "ridge", options: Mapping | None = None, residual: bool = False,
                  random_state: int = 0):
@@ -313,23 +314,6 @@ class BaselineID(Estimator):
                 "y_scale": json_ready(self.y_scale_), "fit_seconds": float(self.fit_seconds_),
                 "epochs": self.epochs_, "best_epoch": self.best_epoch_, "state": json_ready(self.state_)}
 
-    def save(self, directory: str | os.PathLike) -> Path:
-        """Write the model as ``directory/baseline_id.json`` (atomically); :meth:`load` predicts
-        the same bits."""
-        return write_model(directory, FILE_NAME, self.to_dict())
-
-    @classmethod
-    def load(cls, directory: str | os.PathLike, robot: Robot) -> "BaselineID":
-        """Read a model saved by :meth:`save` for ``robot`` (its directory or the file).
-
-        Raises:
-            ParamsError: a missing, damaged or edited file (named, with the field), or a model
-                of another robot.
-        """
-        path = model_file(directory, FILE_NAME)
-        data = checked_file(load_json(path, what="baseline ID model"), str(path), FORMAT, "baseline ID")
-        return cls.from_dict(data, robot, str(path))
-
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "BaselineID":
         v = Validator(source)
@@ -338,9 +322,7 @@ class BaselineID(Estimator):
                 "best_epoch", "state")
         v.mapping(data, "", dict.fromkeys(keys, True))
         learner = v.choice(data["learner"], "learner", LEARNERS)
-        if data["robot_params_sha256"] != robot_hash(robot):
-            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other parameters than "
-                                          f"{robot.name!r} ({robot.source}): retrain it for this robot")
+        check_robot(v, data, robot)
         n = v.integer(data["n_joints"], "n_joints", lo=robot.n, hi=robot.n)
         model = cls(learner, v.mapping(data["options"], "options", dict.fromkeys(DEFAULTS[learner], True)),
                     residual=v.boolean(data["residual"], "residual"),

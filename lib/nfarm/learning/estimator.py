@@ -5,10 +5,12 @@ one line naming the valid ones); ``repr`` shows those that differ from their def
 learner used before it was fitted says so in one line.
 
 **Saving.** A learner that can be saved (:class:`nfarm.learning.anfis.ANFIS`, ``ANFISMulti``,
-:class:`nfarm.learning.learned.LearnedIK`, ``LearnedID``) takes a *directory* and writes one JSON
-file of a fixed name in it (:func:`write_model`), so that a model's directory can hold what
-belongs with it (``fit_cached``'s ``inputs.sha256``); loading takes that directory or the file
-itself (:func:`model_file`).
+and the robot's learners, :class:`SavedModel`: ``LearnedIK``, ``LearnedID``, ``RivalIK``,
+``BaselineID``) takes a *directory* and writes one JSON file of a fixed name in it
+(:func:`write_model`), so that a model's directory can hold what belongs with it
+(``fit_cached``'s ``inputs.sha256``); loading takes that directory or the file itself
+(:func:`model_file`), refuses an edited file before reading any field (:func:`checked_file`) and a
+model of another robot (:func:`check_robot`).
 
 A learner whose ``__init__`` takes ``**options`` passes them on to the learners it builds (an
 :class:`nfarm.learning.anfis.ANFIS` per joint): they are parameters too, kept in the attribute
@@ -24,9 +26,10 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from ..infra.paths import atomic_path
-from ..infra.reading import with_content_digest
+from ..infra.reading import Validator, checked_content, load_json, show, with_content_digest
+from ..model.robot import Robot, robot_hash
 
-__all__ = ["Estimator", "write_model", "model_file"]
+__all__ = ["Estimator", "SavedModel", "write_model", "model_file", "checked_file", "check_robot"]
 
 
 class Estimator:
@@ -147,3 +150,51 @@ def model_file(path: str | os.PathLike, file_name: str) -> Path:
     :func:`write_model` was given), else ``path`` itself (the file)."""
     path = Path(path)
     return path / file_name if path.is_dir() else path
+
+
+def checked_file(data: Any, source: str, form: str, what: str) -> dict:
+    """A saved model's content once it is an nfarm ``what`` model of format ``form`` whose
+    content hash matches (:func:`nfarm.infra.reading.checked_content`): an edited file is refused
+    whatever the edit, before any field is read."""
+    v = Validator(source)
+    if not isinstance(data, dict):
+        v.fail("", f"must be a JSON object (an nfarm {what} model), got {show(data)}")
+    if data.get("format") != form:
+        v.fail("format", f"must be {form!r} (an nfarm {what} model), got {show(data.get('format'))}")
+    return checked_content(data, source)
+
+
+def check_robot(v: Validator, data: Any, robot: Robot) -> None:
+    """Refuse (through ``v``, naming ``robot_params_sha256``) a saved model's ``data`` trained for
+    a robot with other parameters than ``robot``."""
+    if data["robot_params_sha256"] != robot_hash(robot):
+        v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other parameters than "
+                                      f"{robot.name!r} ({robot.source}): retrain it for this robot")
+
+
+class SavedModel(Estimator):
+    """A learner of a robot saved as one JSON file of a fixed name: ``file_name``, of format
+    ``file_format``, a ``what`` model (in messages). Subclasses supply ``to_dict`` and
+    ``from_dict(data, robot, source)``."""
+
+    file_name: ClassVar[str]
+    file_format: ClassVar[str]
+    what: ClassVar[str]
+
+    def save(self, directory: str | os.PathLike) -> Path:
+        """Write the model as ``directory/<file_name>`` (JSON, atomically) and return the file's
+        path; :meth:`load` of the directory reproduces the predictions bit for bit."""
+        return write_model(directory, self.file_name, self.to_dict())
+
+    @classmethod
+    def load(cls, directory: str | os.PathLike, robot: Robot):
+        """Read a model saved by :meth:`save` for ``robot`` from the directory it was saved
+        into (or from the file itself).
+
+        Raises:
+            ParamsError: a missing, damaged or edited file (named, with the field), or a model
+                trained for another robot.
+        """
+        path = model_file(directory, cls.file_name)
+        data = checked_file(load_json(path, what=f"{cls.what} model"), str(path), cls.file_format, cls.what)
+        return cls.from_dict(data, robot, str(path))

@@ -26,22 +26,19 @@ Nyström landmarks) comes from ``random_state``.
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .. import __version__
-from ..infra.reading import Validator, json_ready, load_json, show
+from ..infra.reading import Validator, json_ready, show
 from ..model.robot import Robot, robot_hash
 from ..solvers.ik import check_targets
 from .encoding import ENCODINGS, PoseEncoder
-from .estimator import Estimator, model_file, write_model
+from .estimator import SavedModel, check_robot
 from .learned import ik_pairs
-from .per_joint import checked_file
 
 __all__ = ["RivalIK", "KINDS", "FILE_NAME", "FORMAT"]
 
@@ -112,7 +109,7 @@ def _checked_options(kind: Any, options: Any) -> dict:
     return o
 
 
-class RivalIK(Estimator):
+class RivalIK(SavedModel):
     """A rival of the learned IK (module docstring; scikit-learn conventions).
 
     Args:
@@ -141,6 +138,8 @@ class RivalIK(Estimator):
     """
 
     _fitted = "encoder_"
+
+    file_name, file_format, what = FILE_NAME, FORMAT, "rival IK"
 
     def __init__(self, kind: str = "rbf", encoding: str = "arm_plane", options: Mapping | None = None,
                  max_out_of_plane: float = math.pi, random_state: int | None = None):
@@ -285,23 +284,6 @@ class RivalIK(Estimator):
                 "fit_seconds": self.fit_seconds_, "epochs": self.epochs_, "best_epoch": self.best_epoch_,
                 "state": state, **self.encoder_.to_dict()}
 
-    def save(self, directory: str | os.PathLike) -> Path:
-        """Write the model as ``directory/rival_ik.json`` (atomically); :meth:`load` predicts
-        the same bits."""
-        return write_model(directory, FILE_NAME, self.to_dict())
-
-    @classmethod
-    def load(cls, directory: str | os.PathLike, robot: Robot) -> "RivalIK":
-        """Read a model saved by :meth:`save` for ``robot`` (its directory or the file).
-
-        Raises:
-            ParamsError: a missing, damaged or edited file (named, with the field), or a model
-                of another robot.
-        """
-        path = model_file(directory, FILE_NAME)
-        data = checked_file(load_json(path, what="rival IK model"), str(path), FORMAT, "rival IK")
-        return cls.from_dict(data, robot, str(path))
-
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "RivalIK":
         v = Validator(source)
@@ -314,13 +296,12 @@ class RivalIK(Estimator):
             options = _checked_options(kind, data["options"])
         except ValueError as exc:
             v.fail("options", str(exc))
-        if data["robot_params_sha256"] != robot_hash(robot):
-            v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other parameters than "
-                                          f"{robot.name!r} ({robot.source}): retrain it for this robot")
+        check_robot(v, data, robot)
         n = v.integer(data["n_joints"], "n_joints", lo=robot.n, hi=robot.n)
         encoder = PoseEncoder.from_dict(data, source)
         d = len(encoder.input_lo_)
-        model = cls(kind, encoder.encoding, options, encoder.max_out_of_plane, data["random_state"])
+        seed = None if data["random_state"] is None else v.integer(data["random_state"], "random_state", lo=0)
+        model = cls(kind, encoder.encoding, options, encoder.max_out_of_plane, seed)
         model.encoder_, model.n_joints_, model.robot_hash_ = encoder, n, data["robot_params_sha256"]
         model.robot_name_ = data["robot"]
         model.fit_seconds_ = v.number(data["fit_seconds"], "fit_seconds", lo=0)

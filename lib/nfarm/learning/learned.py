@@ -32,7 +32,7 @@ from ..model.robot import Robot, robot_hash
 from ..model.rotations import pose_error
 from ..solvers.ik import check_targets
 from .anfis import ANFIS, fit_shared
-from .encoding import ANGULAR, ENCODINGS, PoseEncoder, arm_chart, encode, out_of_plane
+from .encoding import ANGULAR, ENCODINGS, FEATURE_NAMES, PoseEncoder, arm_chart, encode, out_of_plane
 from .estimator import Estimator
 from .per_joint import (PerJointModel, CHUNK, FAR, OutsideTrainingWarning, beyond_range, check_far, check_joint_array,
                         joint_anfis_options, model_lines, read_joint_models, warn_far)
@@ -183,7 +183,8 @@ class LearnedIK(PerJointModel):
     def _pitch(self, X: np.ndarray) -> np.ndarray:
         """The approach axis's pitch ``φ`` [rad] of ``"arm_plane"`` inputs ``X`` (scaled)."""
         lo, span = self.encoder_.input_lo_, self.encoder_.input_span_
-        return np.arctan2(X[:, 4] * span[4] + lo[4], X[:, 3] * span[3] + lo[3])
+        c, s = (FEATURE_NAMES["arm_plane"].index(name) for name in ("cos_pitch", "sin_pitch"))
+        return np.arctan2(X[:, s] * span[s] + lo[s], X[:, c] * span[c] + lo[c])
 
     def _closure(self, X: np.ndarray, q: np.ndarray) -> dict:
         """The pitch closure's sign, offset and centre, fitted on the training poses (class

@@ -8,49 +8,24 @@ summary line per joint model, and the warning for inputs far outside the trainin
 from __future__ import annotations
 
 import math
-import os
 import warnings
 from collections.abc import Mapping, Sequence
-from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
-from ..infra.reading import Validator, checked_content, load_json, show
-from ..model.robot import Robot, robot_hash
+from ..infra.reading import Validator, show
+from ..model.robot import Robot
 from .anfis import ANFIS
-from .estimator import Estimator, model_file, write_model
+from .estimator import SavedModel, check_robot, checked_file
 
 __all__ = ["PerJointModel", "OutsideTrainingWarning", "FAR", "CHUNK", "check_far", "beyond_range", "warn_far", "check_joint_array",
-           "checked_file", "read_joint_models", "joint_anfis_options", "model_lines", "n_parameters"]
+           "read_joint_models", "joint_anfis_options", "model_lines", "n_parameters"]
 
 
-class PerJointModel(Estimator):
-    """A learner of one ANFIS per joint saved as one JSON file of a fixed name: ``file_name``,
-    of format ``file_format``, a ``what`` model (in messages). Subclasses supply ``to_dict`` and
-    ``from_dict(data, robot, source)``."""
-
-    file_name: ClassVar[str]
-    file_format: ClassVar[str]
-    what: ClassVar[str]
-
-    def save(self, directory: str | os.PathLike) -> Path:
-        """Write the model as ``directory/<file_name>`` (JSON, atomically) and return the file's
-        path; :meth:`load` of the directory reproduces the predictions bit for bit."""
-        return write_model(directory, self.file_name, self.to_dict())
-
-    @classmethod
-    def load(cls, directory: str | os.PathLike, robot: Robot):
-        """Read a model saved by :meth:`save` for ``robot`` from the directory it was saved
-        into (or from the file itself).
-
-        Raises:
-            ParamsError: a missing, damaged or edited file (named, with the field), or a model
-                trained for another robot.
-        """
-        path = model_file(directory, cls.file_name)
-        data = checked_file(load_json(path, what=f"{cls.what} model"), str(path), cls.file_format, cls.what)
-        return cls.from_dict(data, robot, str(path))
+class PerJointModel(SavedModel):
+    """A learner of one ANFIS per joint saved as one JSON file of a fixed name
+    (:class:`nfarm.learning.estimator.SavedModel`)."""
 
 
 class OutsideTrainingWarning(UserWarning):
@@ -118,27 +93,12 @@ def check_joint_array(q, robot: Robot, what: str, name: str = "q") -> np.ndarray
     return q
 
 
-def checked_file(data: Any, source: str, form: str, what: str) -> dict:
-    """A saved model's content once it is an nfarm ``what`` model of format ``form`` whose
-    content hash matches (:func:`nfarm.infra.reading.checked_content`): an edited file is refused
-    whatever the edit, before any field is read."""
-    v = Validator(source)
-    if not isinstance(data, dict):
-        v.fail("", f"must be a JSON object (an nfarm {what} model), got {show(data)}")
-    if data.get("format") != form:
-        v.fail("format", f"must be {form!r} (an nfarm {what} model), got {show(data.get('format'))}")
-    return checked_content(data, source)
-
-
 def read_joint_models(v: Validator, data: Mapping, robot: Robot, source: str, widths: list[int],
                        what: str) -> tuple[int, dict, list | None, list, list]:
     """The fields every per-joint model file holds, validated for ``robot``: the joint count,
     the shared and per-joint ANFIS options, the fitted models (joint j taking ``widths[j]``
     inputs, those of ``what``) and the training times."""
-    if data["robot_params_sha256"] != robot_hash(robot):
-        v.fail("robot_params_sha256", f"trained for robot {show(data['robot'])} with other "
-                                      f"parameters than {robot.name!r} ({robot.source}): "
-                                      f"retrain it for this robot")
+    check_robot(v, data, robot)
     n = v.integer(data["n_joints"], "n_joints", lo=1, hi=64)
     if n != robot.n:
         v.fail("n_joints", f"must be {robot.n} for {robot.name}, got {n}")

@@ -15,11 +15,11 @@ seed, the nfarm and data-code versions, the array shapes, the npz's SHA-256 and 
 A file whose inputs' hash is unchanged is reused. :func:`load` refuses a file made for another
 robot or other study parameters, saying what differs and how to regenerate.
 
-Every random draw comes from the study's ``seed``, through one named stream per use
-(``numpy.random.SeedSequence([seed, stream])``), so adding a use never shifts another's draws.
-
-Every random draw comes from the study's ``seed``, through one named stream per use
-(:data:`nfarm.study.regions.STREAMS`), so adding a use never shifts another's draws.
+Every random draw comes from the study's ``seed``, through one named stream per use and split
+(``numpy.random.SeedSequence([seed, stream, split])``, :data:`nfarm.study.regions.STREAMS`), so
+adding a use never shifts another's draws. The test split's draws come from the study's own
+``test_seed`` instead (:func:`split_seed`): a fresh held-out set is drawn by changing it alone,
+every model and choice unchanged.
 """
 
 from __future__ import annotations
@@ -47,11 +47,26 @@ from .id_trajectories import current_sensed, measured_states, random_trajectorie
 from .regions import STREAMS, IKRegion, ik_samples
 from .study_files import SPLITS, Study
 
-__all__ = ["Dataset", "build_datasets", "built_arm", "load", "dataset_dir", "inputs_hash", "DATA_VERSION", "SPLITS"]
+__all__ = ["Dataset", "build_datasets", "built_arm", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
+           "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
 DATA_VERSION = 3
 _SPLIT_STREAM = {"train": 0, "val": 1, "test": 2}
+
+
+def split_seed(study: Study, split: str) -> int:
+    """The seed a split's draws come from: the study's ``test_seed`` for the test split, its
+    ``seed`` for the others.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.study.study_files import load_study
+        >>> study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+        >>> split_seed(study, "train") == study.seed, split_seed(study, "test") == study.test_seed
+        (True, True)
+    """
+    return study.test_seed if split == "test" else study.seed
 
 
 def inputs_hash(study: Study) -> str:
@@ -219,7 +234,7 @@ def _measured_torques(study: Study, data: dict, split: str) -> dict[str, np.ndar
         cases["tau_payload"] = with_payload(arm, settings.true_arm.payload)
     out = {}
     for k, (key, built) in enumerate(cases.items()):
-        stream = [study.seed, STREAMS["id_noise"], _SPLIT_STREAM[split]] + ([k] if k else [])
+        stream = [split_seed(study, split), STREAMS["id_noise"], _SPLIT_STREAM[split]] + ([k] if k else [])
         rigid = data["tau"] if built is settings.measured else rnea(built, data["q"], data["qd"], data["qdd"])
         drive = stribeck_drive_torques(built, data["qd"], data["qdd"], rigid, **settings.friction)
         out[key] = current_sensed(rigid + drive, np.random.default_rng(np.random.SeedSequence(stream)),
@@ -253,7 +268,7 @@ def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force:
         if not force and _up_to_date(path, digest):
             done.append((path, "reused"))
         else:
-            seed = [study.seed, STREAMS[kind], _SPLIT_STREAM[split]]
+            seed = [split_seed(study, split), STREAMS[kind], _SPLIT_STREAM[split]]
             if kind == "id":
                 data = random_trajectories(study.robot, study.id, study.id.trajectories[split],
                                            np.random.SeedSequence(seed))

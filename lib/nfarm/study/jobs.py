@@ -551,9 +551,10 @@ def _fit_id_contestant(p: dict):
     robot = study.robot
     if study.id.measured is None:
         raise ParamsError(f"{p['study_file']}: id_contest: the study declares no measured arm (id.measured)")
-    q = {**p, "torques": "measured"}
-    train = _first(_id_split(q, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"], None, p["stride"])
-    val = _id_split(q, study, directory, "val")
+    measured = {**p, "torques": "measured"}
+    train = _first(_id_split(measured, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"], None,
+                   p["stride"])
+    val = _id_split(measured, study, directory, "val")
     options = dict(p["options"] or {})
     try:
         if "random_state" in options:
@@ -561,7 +562,9 @@ def _fit_id_contestant(p: dict):
         if p["learner"] == "anfis":
             model = LearnedID(**options, random_state=p["seed"])     # its options are checked by fit
         elif p["learner"] in BASELINE_OPTIONS:
-            residual = bool(options.pop("residual", False))
+            residual = options.pop("residual", False)
+            if not isinstance(residual, bool):
+                raise ValueError(f"options: residual must be true or false, got {residual!r}")
             model = BaselineID(p["learner"], options, residual=residual, random_state=p["seed"])
             model._options()
         else:
@@ -585,7 +588,10 @@ def id_contest(p: dict) -> dict:
     nrmse = rmse / judged["tau"].std(axis=0)
     # The worst joint over those a sensor resolves, fixed on the validation trajectories (as chapter 6 fixes it)
     resolved = resolved_joints(val["tau"].std(axis=0), study.id.noise)
-    out = {"tier": tier_of(p["options"] if p["learner"] == "anfis" else {**(p["options"] or {}), "learner": p["learner"]}),
+    # The tier from the model as fitted (its defaults included), not from the options the cell wrote
+    described = {"inputs": model.inputs, "residual": model.residual} if isinstance(model, LearnedID) else \
+        {**model.options_, "learner": model.learner, "residual": model.residual}
+    out = {"tier": tier_of(described),
            "rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse[resolved].max()),
            "worst_rmse": float(rmse.max()), "resolved": resolved.astype(int).tolist(), "train_samples": int(n_train),
            "predict_us": 1e6 * seconds / len(predicted)}

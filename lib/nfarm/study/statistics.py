@@ -23,6 +23,10 @@ per-trajectory maxima of a torque error) :func:`bootstrap_rows` resamples rows w
 10 000 poses stay within a few tens of MB). :func:`tail_ratios` does the same for the question
 "does the error grow near a place": the ratio of the median error over the poses nearest to it
 to that over the poses farthest from it, for several places on the same resamples.
+
+Over **seeds and test units together** (the headline numbers of chapters 07–08: the models of
+five seeds each judged on the same test set) :func:`bootstrap_seeds` resamples the models, then
+the units, so an interval covers what varies between trainings as well as the test draw.
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ import numpy as np
 import scipy.stats
 
 __all__ = ["trajectory_sums", "trajectory_maxima", "nrmse_from_sums", "Interval", "bootstrap_nrmse",
-           "worst_difference", "Estimate", "bootstrap_rows", "ranges_separate", "separation_level",
+           "worst_difference", "Estimate", "bootstrap_rows", "bootstrap_seeds", "ranges_separate", "separation_level",
            "TailRatios", "tail_ratio", "tail_ratios", "resolved_joints"]
 
 
@@ -175,6 +179,8 @@ class Estimate:
     level: float
     draws: int
     rows: int
+    #: The models (seeds) resampled with the rows (:func:`bootstrap_seeds`); 1: the rows alone.
+    seeds: int = 1
 
 
 def bootstrap_rows(rows: np.ndarray, statistic, *, draws: int = 2000, level: float = 0.95, seed: int = 0,
@@ -208,6 +214,56 @@ def bootstrap_rows(rows: np.ndarray, statistic, *, draws: int = 2000, level: flo
     scalar = value.ndim == 0
     as_out = (lambda v: float(v)) if scalar else (lambda v: np.asarray(v, float))   # noqa: E731
     return Estimate(as_out(value), as_out(low), as_out(high), level, draws, len(rows))
+
+
+def bootstrap_seeds(values: np.ndarray, statistic, *, draws: int = 2000, level: float = 0.95, seed: int = 0,
+                    batch: int = 10) -> Estimate:
+    """A statistic of ``values (S, N, k)`` — ``S`` models (seeds: data draw and initialisation)
+    each judged on the same ``N`` test units (poses, or trajectories' sums), ``k`` columns — and
+    its two-level percentile-bootstrap interval, which covers what varies between trainings as
+    well as the test draw: each resample draws ``S`` models with replacement, then ``N`` units
+    with replacement (the same units for every model drawn, so the models stay paired on them),
+    and pools the ``S × N`` rows (Davison & Hinkley 1997, §3.8, resampling both stages).
+
+    ``statistic(X)`` maps pooled rows ``X (b, S·N, k)`` to ``(b,)`` or ``(b, m)``, as in
+    :func:`bootstrap_rows`; the value is the statistic of all models' rows pooled. Two methods
+    are compared paired by giving both as columns (model ``s`` of each trained on the same data
+    draw) and a statistic of their difference. ``S = 1`` is :func:`bootstrap_rows`' one-level
+    bootstrap (by its own resamples).
+
+    Example:
+        >>> rng = np.random.default_rng(1)
+        >>> values = rng.normal(size=(5, 400, 1)) + np.arange(5)[:, None, None]   # the seeds differ
+        >>> mean = lambda X: X[..., 0].mean(axis=1)
+        >>> both = bootstrap_seeds(values, mean, draws=500)
+        >>> units = bootstrap_rows(values.reshape(-1, 1), mean, draws=500)           # seeds ignored
+        >>> round(both.value, 6) == round(units.value, 6), both.high - both.low > 3 * (units.high - units.low)
+        (True, True)
+    """
+    values = np.asarray(values, float)
+    if values.ndim == 2:
+        values = values[..., None]
+    if values.ndim != 3 or values.shape[0] < 1 or values.shape[1] < 2 or not np.isfinite(values).all():
+        raise ValueError(f"values must be a finite (seeds >= 1, units >= 2, k) array, got shape {values.shape}")
+    if not (isinstance(draws, int) and draws >= 100):
+        raise ValueError(f"draws must be an integer >= 100, got {draws!r}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    S, N, k = values.shape
+    value = np.asarray(statistic(values.reshape(1, S * N, k)))[0]
+    rng = np.random.default_rng(seed)
+    resampled = []
+    for start in range(0, draws, batch):
+        b = min(batch, draws - start)
+        models = rng.integers(0, S, size=(b, S))
+        units = rng.integers(0, N, size=(b, N))
+        pooled = values[models[:, :, None], units[:, None, :]].reshape(b, S * N, k)
+        resampled.append(np.asarray(statistic(pooled), float))
+    tails = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
+    low, high = np.nanpercentile(np.concatenate(resampled), tails, axis=0)
+    scalar = value.ndim == 0
+    as_out = (lambda v: float(v)) if scalar else (lambda v: np.asarray(v, float))   # noqa: E731
+    return Estimate(as_out(value), as_out(low), as_out(high), level, draws, N, S)
 
 
 def ranges_separate(a, b) -> bool:

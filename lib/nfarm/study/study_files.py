@@ -53,6 +53,9 @@ class Study:
     robot_file: str
     robot: Robot
     seed: int
+    #: The test split's own seed: the held-out set is drawn apart from the training and
+    #: validation data, so a fresh one is drawn by changing this alone (docs/STUDY.md, "Data").
+    test_seed: int
     ik_region: IKRegion
     ik_sampler: str
     ik_sizes: dict[str, int]
@@ -195,6 +198,7 @@ class StudyFile:
     description: Annotated[str, TEXT] = ""
     robot_file: str
     seed: Annotated[int, Range(lo=0, hi=2 ** 63 - 1)]
+    test_seed: Annotated[int, Range(lo=0, hi=2 ** 63 - 1)]
     ik: IKSection
     id: IDSection
     learned_ik: Optional[LearnedIKSection] = None
@@ -330,7 +334,7 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
     learned_ik = {} if file.learned_ik is None else \
         {k: x for k, x in dataclasses.asdict(file.learned_ik).items() if x is not None}
     return Study(source=source, name=file.name, robot_file=robot_file, robot=robot, seed=file.seed,
-                 ik_region=region, ik_sampler=file.ik.sampler, ik_sizes=file.ik.sizes,
+                 test_seed=file.test_seed, ik_region=region, ik_sampler=file.ik.sampler, ik_sizes=file.ik.sizes,
                  ik_full_range=file.ik.full_range, check_targets=file.ik.check.targets,
                  check_starts=file.ik.check.starts, id=id_settings, learned_ik=learned_ik,
                  params=json.loads(json.dumps(data)), file=file)
