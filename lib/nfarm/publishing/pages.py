@@ -324,23 +324,19 @@ def verdict_rows(figures_dir: Path, arms: list[Edition]) -> list[dict[str, str]]
 
 def _verdict_html(rows: list[dict[str, str]]) -> list[str]:
     """The verdict table and the conclusion (:func:`nfarm.study.summary.conclusion`) as HTML."""
-    from ..study.summary import conclusion
+    from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
 
     if not rows:
         return ["<p><b>Verdict.</b> Not yet computed: chapter 07 has not published its verdict table.</p>"]
-    head = ["task", "arm", "best on held-out data", "ANFIS's best (rank)", "best other", "ANFIS − best other (95 % paired interval)",
-            "verdict", "targets met: ANFIS / best other"]
-    body = [[r["task"], r["arm"], f"{r['best']}: {r['best_value']} {r['unit']}",
-             f"{r['anfis']}: {r['anfis_value']} {r['unit']} ({r['rank']} of {r['compared']})",
-             f"{r['rival']}: {r['rival_value']} {r['unit']}", f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}",
-             r["verdict"], f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'}"] for r in rows]
+    head, body = VERDICT_HEAD, verdict_display(rows)
     table = ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr></thead><tbody>"
              + "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in body)
              + "</tbody></table>")
     return ["<h2 id='verdict'>Verdict</h2>",
             "<p>For each task and arm, on held-out data: the best of the methods compared, the ANFIS's best and its "
             "rank, its difference from the best other method with the paired interval (an interval holding 0 is no "
-            "difference) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
+            "difference; each value pooled over the seeds of its training and the test units, the interval a two-level "
+            "bootstrap over both) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
             "<code>docs/STUDY.md</code>).</p>", table,
             "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows)) + "</p>"]
 
