@@ -194,7 +194,8 @@ def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
     parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
-        parts.append("**Answers** (on held-out data, with 95 % bootstrap intervals):")
+        parts.append("**Answers** (on held-out data, the models of the study's own data, with 95 % bootstrap "
+                     "intervals over the test poses or trajectories; the verdict above pools every seed's model):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))
     parts.append(f"**Limits.** {_escape(ABSTRACT_LIMITS)}")
     parts.append(f"**Sources.** {SOURCES}")
