@@ -164,10 +164,17 @@ def ik_difference(errors_a: Mapping, errors_b: Mapping, *, draws: int = 2000, le
                           draws=draws, level=level, seed=seed)
 
 
-def _pooled_ik(metric: str) -> Callable[[np.ndarray], np.ndarray]:
-    """``X (b, M, n + 2) -> (b,)``: one IK metric of pooled rows (:func:`_ik_columns`' columns)."""
-    k = [m for m, _ in IK_METRICS].index(metric)
-    return lambda X: _ik_statistic(X.shape[-1] - 2)(X)[..., k]         # noqa: E731
+def _pooled_ik(metric: str) -> tuple[slice, Callable[[np.ndarray], np.ndarray]]:
+    """The columns of :func:`_ik_columns` that one IK metric reads, and the metric of pooled rows of
+    those columns ``X (b, M, k) -> (b,)``, as :func:`_ik_statistic` computes it."""
+    if metric not in [m for m, _ in IK_METRICS]:
+        raise ValueError(f"metric must be one of the IK metrics {[m for m, _ in IK_METRICS]}, got {metric!r}")
+    if metric == "worst joint RMSE":
+        return slice(None, -2), lambda X: np.sqrt((X ** 2).mean(axis=-2)).max(axis=-1)     # noqa: E731
+    where, what = metric.split()
+    reduce = {"median": lambda x: np.median(x, axis=-1), "p95": lambda x: np.percentile(x, 95, axis=-1),
+              "max": lambda x: x.max(axis=-1)}[what]
+    return (slice(-2, -1) if where == "position" else slice(-1, None)), lambda X: reduce(X[..., 0])   # noqa: E731
 
 
 def _pooled_worst(resolved, normalised: bool) -> Callable[[np.ndarray], np.ndarray]:
@@ -209,8 +216,9 @@ def seed_comparison(values: Mapping[str, np.ndarray], anfis: str, rival: str, me
         (True, 3, 3)
     """
     boot = {"draws": draws, "level": level, "seed": seed}
-    statistic = _pooled_ik(metric) if ik else _pooled_worst(resolved, normalised)
-    estimates = {name: bootstrap_seeds(np.asarray(v, float), statistic, **boot) for name, v in values.items()}
+    columns, statistic = _pooled_ik(metric) if ik else (slice(None), _pooled_worst(resolved, normalised))
+    values = {name: np.asarray(v, float)[..., columns] for name, v in values.items()}     # what the metric reads
+    estimates = {name: bootstrap_seeds(v, statistic, **boot) for name, v in values.items()}
     a, b = np.asarray(values[anfis], float), np.asarray(values[rival], float)
     common = min(len(a), len(b))
     if a.shape[1:] != b.shape[1:]:
