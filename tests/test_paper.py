@@ -132,6 +132,23 @@ def test_pages_fold_their_code_and_load_nothing_from_the_internet(smoke_report):
 
 
 @pytest.mark.notebook
+def test_each_chapter_page_opens_with_its_contents_and_links_the_other_edition(smoke_report):
+    """A chapter page lists its sections under its title, each a link to the section's anchor; a
+    chapter run for every arm links to the same chapter of the other edition."""
+    for page in (smoke_report / "01_robot.html", smoke_report / "b" / "01_robot.html"):
+        html = page.read_text(encoding="utf-8")
+        toc = re.search(r'<nav class="nfarm-toc"[^>]*>(.*?)</nav>', html, re.S)
+        assert toc and html.index("</h1>") < toc.start(), f"{page}: contents under the title"
+        (anchor,) = re.findall(r'<a href="#([^"]+)">1.1 A section</a>', toc.group(1))
+        assert f'<h2 id="{anchor}">' in html
+    first_a = (smoke_report / "01_robot.html").read_text(encoding="utf-8")
+    first_b = (smoke_report / "b" / "01_robot.html").read_text(encoding="utf-8")
+    assert "href='b/01_robot.html'>b edition:" in first_a and "href='../01_robot.html'>a edition:" in first_b
+    shared = (smoke_report / "02_shared.html").read_text(encoding="utf-8")
+    assert " edition:" not in shared, "a chapter the same for every arm has no other edition"
+
+
+@pytest.mark.notebook
 def test_the_report_folder_holds_what_it_links_and_says_how_to_reproduce_it(smoke_report, tmp_path):
     copy = tmp_path / "elsewhere"                 # the folder copied: its links still resolve
     shutil.copytree(smoke_report, copy)

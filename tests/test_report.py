@@ -488,7 +488,9 @@ def test_each_arm_is_published_in_its_own_directory_and_compared_once(two_arms):
     compare = (build / "report" / "04_compare.html").read_text()     # back to each edition's last chapter
     assert "href='03_study.html'>previous (a):" in compare and "href='b/03_study.html'>previous (b):" in compare
     index = (build / "report" / "index.html").read_text()
-    assert index.index("04_compare.html") < index.index("Chapters for a")      # comparison first
+    # The index: the verdict, then the chapter lists, then the appendix of every figure and table (the comparison's first)
+    assert index.index("Chapters for a") < index.index("id='appendix'") < index.index("id='ch04'") \
+        < index.index("id='a-ch01'")
     assert "Chapters for b" in index and "b/tables/01_given.csv" in index
     assert "(the same for every arm)" in index
 

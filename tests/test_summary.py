@@ -299,3 +299,39 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
         read_verdicts(tmp_path / "bad.csv")
     row = Row("t", "m", ROLE_CHOSEN, "position p95", "mm", 4.0, 3.0, 5.0, 100, 0.95, "")
     assert targets_met([row, row], [10.0, 4.5]) == "1 of 2"
+
+
+def test_the_verdict_is_judged_over_seeds_and_units_and_shown_in_a_readers_words(tmp_path):
+    """Two methods whose seeds differ by a constant: the gap's interval is that constant; a method
+    whose seeds scatter gets a wider interval than one seed's; the table keeps the configuration,
+    the display shows each value with its interval in plain words; a pruned method (one seed) is
+    paired on the seed both have."""
+    from nfarm.study.summary import (read_verdicts, reader_label, seed_comparison, task_verdict, verdict_display,
+                                     verdict_table)
+
+    rng = np.random.default_rng(7)
+    base = np.abs(rng.normal(size=(1, 30, 1 + 3 * 2))) + 1.0
+    scatter = np.array([1.0, 1.5, 2.0, 2.5, 3.0])[:, None, None]
+    a = np.repeat(base, 5, axis=0)
+    a[..., 1:3] *= scatter                                   # the ANFIS's squared errors vary by seed
+    b = a.copy()
+    b[..., 1:3] *= 4.0                                       # the rival's: four times each seed's, RMSE twice
+    est, gap = seed_comparison({"ANFIS (affine)": a, "ridge (basis=chain, alpha=1e-06)": b}, "ANFIS (affine)",
+                               "ridge (basis=chain, alpha=1e-06)", WORST_ID, normalised=False, draws=300)
+    assert gap.high < 0 and est["ANFIS (affine)"].seeds == 5 and gap.seeds == 5
+    one = seed_comparison({"x": a[:1], "y": b}, "x", "y", WORST_ID, normalised=False, draws=300)
+    assert one[1].seeds == 1 and one[0]["x"].seeds == 1
+    assert est["ANFIS (affine)"].high - est["ANFIS (affine)"].low > 2 * (one[0]["x"].high - one[0]["x"].low)
+    with pytest.raises(ValueError, match="the same test units"):
+        seed_comparison({"x": a, "y": b[:, :10]}, "x", "y", WORST_ID, normalised=False, draws=300)
+    v = task_verdict("arm", "rigid-body inverse dynamics", WORST_ID, "N·m", {n: e.value for n, e in est.items()},
+                     "ANFIS (affine)", (gap.value, gap.low, gap.high),
+                     intervals={n: (e.low, e.high) for n, e in est.items()}, interval="two-level, 5 seeds × 30")
+    verdict_table([v]).save(tmp_path, "07_verdict")
+    rows = read_verdicts(tmp_path / "tables" / "07_verdict.csv")
+    assert rows[0]["rival"] == "ridge (basis=chain, alpha=1e-06)" and rows[0]["interval"] == "two-level, 5 seeds × 30"
+    shown_ = verdict_display(rows)[0]
+    assert shown_[3].startswith(f"ANFIS: {rows[0]['anfis_value']} ({rows[0]['anfis_low']}–{rows[0]['anfis_high']}) N·m")
+    assert shown_[4].startswith("ridge regression on the chain's trigonometric basis: ")
+    assert reader_label("ANFIS, dissertation's design (own, assumed)") == "ANFIS, dissertation's design (own, assumed)"
+    assert reader_label("ANFIS, structure-informed (affine)") == "ANFIS, structure-informed"

@@ -135,7 +135,9 @@ PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
 {%- endif -%}
 {% endblock input_group %}
 {% block extra_css %}
-<style>details.nfarm-code>summary{cursor:pointer;color:#666;font:0.85em sans-serif;margin:.2em 0 .2em 1em}</style>
+<style>details.nfarm-code>summary{cursor:pointer;color:#666;font:0.85em sans-serif;margin:.2em 0 .2em 1em}
+nav.nfarm-toc{font:0.9em sans-serif;margin:1em 0 2em;padding:.5em 1em;border-left:3px solid #ccd}
+nav.nfarm-toc ul{list-style:none;margin:.3em 0;padding:0}nav.nfarm-toc li.toc3{margin-left:1.5em}</style>
 {% endblock extra_css %}
 """
 
@@ -147,17 +149,31 @@ def edition_letter(edition: Edition) -> str:
 
 
 _FIGURE_NUMBER = re.compile(r"<b>Figure (\d+\.\d+)\.</b>")
+_SECTION = re.compile(r'<h([23]) id="([^"]+)">(.*?)<a class="anchor-link"', re.S)
+
+
+def _contents(body: str) -> str:
+    """The page with a table of contents under its title: a link to each section (``h2``) and
+    subsection (``h3``) nbconvert gave an anchor, in order; the page unchanged if it has none."""
+    sections = _SECTION.findall(body)
+    if not sections:
+        return body
+    items = "".join(f'<li class="toc{level}"><a href="#{anchor}">{text.strip()}</a></li>'
+                    for level, anchor, text in sections)
+    toc = f'<nav class="nfarm-toc" aria-label="contents"><b>Contents</b><ul>{items}</ul></nav>'
+    return re.sub(r"(</h1>)", lambda m: m.group(1) + toc, body, count=1)
 
 
 def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
-                title: str = "", arm: str = "", fold_code: bool = False, letter: str = "") -> None:
+                title: str = "", arm: str = "", fold_code: bool = False, letter: str = "",
+                contents: bool = False) -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters; one parameters cell with the run's values
     (:func:`_merge_parameters`); the heading naming ``arm`` when given; with ``fold_code``,
     every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`); the figures'
-    numbers after ``letter`` (:func:`edition_letter`), as the PDF numbers them. Nothing is
-    loaded from elsewhere."""
+    numbers after ``letter`` (:func:`edition_letter`), as the PDF numbers them; with ``contents``,
+    a table of contents under the title (:func:`_contents`). Nothing is loaded from elsewhere."""
     import nbformat
     from jinja2 import DictLoader
     from nbconvert import HTMLExporter
@@ -192,6 +208,8 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
     if letter:
         body = _FIGURE_NUMBER.sub(lambda m: f"<b>Figure {letter}{m.group(1)}.</b>", body)
+    if contents:
+        body = _contents(body)
     if nav:
         body = re.sub(r"(<body[^>]*>)", lambda m: m.group(1) + nav, body, count=1)
         body = body.replace("</body>", nav + "</body>", 1)
@@ -324,23 +342,19 @@ def verdict_rows(figures_dir: Path, arms: list[Edition]) -> list[dict[str, str]]
 
 def _verdict_html(rows: list[dict[str, str]]) -> list[str]:
     """The verdict table and the conclusion (:func:`nfarm.study.summary.conclusion`) as HTML."""
-    from ..study.summary import conclusion
+    from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
 
     if not rows:
         return ["<p><b>Verdict.</b> Not yet computed: chapter 07 has not published its verdict table.</p>"]
-    head = ["task", "arm", "best on held-out data", "ANFIS's best (rank)", "best other", "ANFIS − best other (95 % paired interval)",
-            "verdict", "targets met: ANFIS / best other"]
-    body = [[r["task"], r["arm"], f"{r['best']}: {r['best_value']} {r['unit']}",
-             f"{r['anfis']}: {r['anfis_value']} {r['unit']} ({r['rank']} of {r['compared']})",
-             f"{r['rival']}: {r['rival_value']} {r['unit']}", f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}",
-             r["verdict"], f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'}"] for r in rows]
+    head, body = VERDICT_HEAD, verdict_display(rows)
     table = ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr></thead><tbody>"
              + "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in body)
              + "</tbody></table>")
     return ["<h2 id='verdict'>Verdict</h2>",
             "<p>For each task and arm, on held-out data: the best of the methods compared, the ANFIS's best and its "
             "rank, its difference from the best other method with the paired interval (an interval holding 0 is no "
-            "difference) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
+            "difference; each value pooled over the seeds of its training and the test units, the interval a two-level "
+            "bootstrap over both) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
             "<code>docs/STUDY.md</code>).</p>", table,
             "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows)) + "</p>"]
 
@@ -352,8 +366,9 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     parts += ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
     answers = abstract_answers(figures_dir, arms)
     if answers:
-        parts.append("<p><b>Answers</b> (on held-out data, with 95 % bootstrap intervals; from each arm's "
-                     "<code>tables/07_summary.csv</code>):</p><ul>")
+        parts.append("<p><b>Answers</b> (on held-out data, the models of the study's own data, with 95 % bootstrap "
+                     "intervals over the test poses or trajectories; the verdict above pools every seed's model; from "
+                     "each arm's <code>tables/07_summary.csv</code>):</p><ul>")
         parts += [f"<li>{html.escape(line)}</li>" for line in answers]
         parts.append("</ul>")
     else:
@@ -453,10 +468,6 @@ def _write_index(report_dir: Path, figures_dir: Path,
     parts.append("<dl>")
     parts += [f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in facts.items()]
     parts.append("</dl>")
-    for prefix, title, page in compared:           # the arms side by side, first
-        parts.append(f"<h2 id='ch{prefix}'>{html.escape(title)}</h2>"
-                     f"<p><a href='{html.escape(str(page))}'>The chapter in full</a></p>")
-        parts += _figures_html(figures_dir, "", prefix, shown)
 
     def own(edition: Edition, page: str) -> bool:
         return page.startswith(edition.subdir + "/") if edition.subdir else "/" not in page
@@ -494,6 +505,12 @@ def _write_index(report_dir: Path, figures_dir: Path,
                     f"<a href='{html.escape(f.relative_to(report_dir).as_posix())}'>{html.escape(f.name)}</a>"
                     for f in copied) + f" (open one with <code>.venv/bin/rerun "
                     f"{html.escape(copied[0].relative_to(report_dir).as_posix())}</code> in this folder)</p>")
+    # The appendix: every chapter's figures and tables, the arms side by side first
+    parts.append("<h2 id='appendix'>Appendix: every chapter's figures and tables</h2>")
+    for prefix, title, page in compared:
+        parts.append(f"<h3 id='ch{prefix}'>{html.escape(title)}</h3>"
+                     f"<p><a href='{html.escape(str(page))}'>The chapter in full</a></p>")
+        parts += _figures_html(figures_dir, "", prefix, shown)
     for edition in arms:
         for entry in pages.get(edition.name, []):
             prefix, title, page = entry
@@ -588,10 +605,15 @@ def write_pages(report: ReportPages) -> None:
                         links[f"previous ({other.name})"] = (copies(other)[pages[other.name].index(theirs[-1])],
                                                              theirs[-1][1])
                 links["next"] = links.pop("next")
+            if prefix in per_arm:       # the same chapter in the other editions
+                for other in arms:
+                    if other is not arm and any(e[0] == prefix for e in pages[other.name]):
+                        j = next(i for i, e in enumerate(pages[other.name]) if e[0] == prefix)
+                        links[f"{other.name} edition"] = (up + copies(other)[j], title)
             executed = report.executed_dir / page.replace(".html", ".ipynb")
             page = here[k]
             same_for_all = prefix not in per_arm and (prefix, title, own[k][2]) not in compared and len(arms) > 1
-            export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX, fold_code=True,
+            export_html(executed, report_dir / page, _nav(links), mathjax=up + MATHJAX, fold_code=True, contents=True,
                         title=f"{title} · {arm.name}" if prefix in per_arm else
                         f"{title} · the same for every arm" if same_for_all else title,
                         arm=arm.name if prefix in per_arm else "",

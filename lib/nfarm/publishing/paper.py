@@ -178,17 +178,13 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
 
 def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
     """The verdict table and the conclusion, as on the index (:func:`nfarm.publishing.pages.verdict_rows`)."""
-    from ..study.summary import conclusion
+    from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
 
     rows = verdict_rows(figures_dir, arms)
     if not rows:
         return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 07 has not published its verdict table."
-    head = "| task | arm | best on held-out data | ANFIS's best (rank) | ANFIS − best other (95 % paired interval) | verdict | targets met: ANFIS / best other |"
-    lines = [head, "|" + "---|" * 7]
-    lines += [f"| {_escape(r['task'])} | {_escape(r['arm'])} | {_escape(r['best'])}: {r['best_value']} {r['unit']} | "
-              f"{_escape(r['anfis'])}: {r['anfis_value']} {r['unit']} ({r['rank']} of {r['compared']}) | "
-              f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']} | {r['verdict']} | "
-              f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'} |" for r in rows]
+    lines = ["| " + " | ".join(VERDICT_HEAD) + " |", "|" + "---|" * len(VERDICT_HEAD)]
+    lines += ["| " + " | ".join(_escape(cell) for cell in row) + " |" for row in verdict_display(rows)]
     return ("# Verdict {.unnumbered}\n\n" + "\n".join(lines)
             + "\n\n: The verdict on held-out data, per task and arm (each arm's 07_verdict table)\n\n"
             + " ".join(_escape(sentence) for sentence in conclusion(rows)))
@@ -198,7 +194,8 @@ def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
     parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
-        parts.append("**Answers** (on held-out data, with 95 % bootstrap intervals):")
+        parts.append("**Answers** (on held-out data, the models of the study's own data, with 95 % bootstrap "
+                     "intervals over the test poses or trajectories; the verdict above pools every seed's model):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))
     parts.append(f"**Limits.** {_escape(ABSTRACT_LIMITS)}")
     parts.append(f"**Sources.** {SOURCES}")

@@ -25,6 +25,7 @@ differences only.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from typing import Callable, Mapping, Sequence
 
@@ -34,13 +35,13 @@ from ..learning.baselines import label as baseline_label
 from ..model.robot import Robot
 from ..presentation.tables import Table, shown
 from ..presentation.wording import times
-from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows, resolved_joints
+from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums, resolved_joints
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
-__all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference",
+__all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison", "seeds_text",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
-           "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "Verdict", "task_verdict", "targets_met",
+           "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
            "verdict_table", "read_verdicts", "conclusion", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE",
            "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL"]
@@ -161,6 +162,79 @@ def ik_difference(errors_a: Mapping, errors_b: Mapping, *, draws: int = 2000, le
     stat = _ik_statistic(width - 2)
     return bootstrap_rows(np.hstack([a, b]), lambda X: stat(X[..., :width]) - stat(X[..., width:]),
                           draws=draws, level=level, seed=seed)
+
+
+def _pooled_ik(metric: str) -> tuple[slice, Callable[[np.ndarray], np.ndarray]]:
+    """The columns of :func:`_ik_columns` that one IK metric reads, and the metric of pooled rows of
+    those columns ``X (b, M, k) -> (b,)``, as :func:`_ik_statistic` computes it."""
+    if metric not in [m for m, _ in IK_METRICS]:
+        raise ValueError(f"metric must be one of the IK metrics {[m for m, _ in IK_METRICS]}, got {metric!r}")
+    if metric == "worst joint RMSE":
+        return slice(None, -2), lambda X: np.sqrt((X ** 2).mean(axis=-2)).max(axis=-1)     # noqa: E731
+    where, what = metric.split()
+    reduce = {"median": lambda x: np.median(x, axis=-1), "p95": lambda x: np.percentile(x, 95, axis=-1),
+              "max": lambda x: x.max(axis=-1)}[what]
+    return (slice(-2, -1) if where == "position" else slice(-1, None)), lambda X: reduce(X[..., 0])   # noqa: E731
+
+
+def _pooled_worst(resolved, normalised: bool) -> Callable[[np.ndarray], np.ndarray]:
+    """``X (b, M, 1 + 3n) -> (b,)``: the worst ``resolved`` joint's NRMSE (RMSE) of pooled trajectory sums."""
+    keep = None if resolved is None else np.asarray(resolved, bool)
+    def statistic(X):
+        per_joint = nrmse_from_sums(X.sum(axis=-2), normalised=normalised)
+        return np.nanmax(per_joint if keep is None else per_joint[..., keep], axis=-1)
+    return statistic
+
+
+def ik_seed_values(errors: Sequence[Mapping[str, np.ndarray]]) -> np.ndarray:
+    """``(S, N, n + 2)``: each seed's model's IK errors on the same test poses (a list, one
+    :func:`nfarm.learning.learned.ik_errors` record per seed), as :func:`seed_comparison` takes
+    them."""
+    return np.stack([_ik_columns(e) for e in errors])
+
+
+def seed_comparison(values: Mapping[str, np.ndarray], anfis: str, rival: str, metric: str, *, ik: bool = False,
+                    resolved=None, normalised: bool = True, draws: int = 2000, level: float = 0.95,
+                    seed: int = 0) -> tuple[dict[str, Estimate], Estimate]:
+    """Every method's ``metric`` over its seeds' models and the test units, with the two-level
+    interval (:func:`nfarm.study.statistics.bootstrap_seeds`), and the ANFIS's paired difference
+    from ``rival`` on the seeds both have (seed ``s`` of each trained on the same draw of data).
+
+    ``values``: method → ``(S, N, k)`` — with ``ik=True`` its seeds' IK errors (:func:`ik_seed_values`;
+    ``metric`` one of :data:`IK_METRICS`, e.g. ``"position p95"``), else its seeds' trajectory sums
+    (:func:`nfarm.study.statistics.trajectory_sums` stacked; the worst joint's NRMSE over the
+    ``resolved`` joints, its RMSE with ``normalised=False``, ``metric`` its name); each method's seeds in the same
+    order (a method pruned after seed 0 has one). Returns the estimates by method and the
+    difference's (ANFIS minus rival): an interval holding 0 is no difference.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> sums = {m: np.abs(rng.normal(size=(3, 20, 4))) + 1 for m in ("ANFIS", "ridge")}
+        >>> sums["ridge"][..., 1] *= 4                       # the ridge's squared errors four times larger
+        >>> est, gap = seed_comparison(sums, "ANFIS", "ridge", "worst NRMSE", normalised=False, draws=200)
+        >>> bool(gap.high < 0), est["ANFIS"].seeds, gap.seeds
+        (True, 3, 3)
+    """
+    boot = {"draws": draws, "level": level, "seed": seed}
+    columns, statistic = _pooled_ik(metric) if ik else (slice(None), _pooled_worst(resolved, normalised))
+    values = {name: np.asarray(v, float)[..., columns] for name, v in values.items()}     # what the metric reads
+    estimates = {name: bootstrap_seeds(v, statistic, **boot) for name, v in values.items()}
+    a, b = np.asarray(values[anfis], float), np.asarray(values[rival], float)
+    common = min(len(a), len(b))
+    if a.shape[1:] != b.shape[1:]:
+        raise ValueError(f"the two methods must be judged on the same test units, got {a.shape} and {b.shape}")
+    width = a.shape[-1]
+    gap = bootstrap_seeds(np.concatenate([a[:common], b[:common]], axis=-1),
+                          lambda X: statistic(X[..., :width]) - statistic(X[..., width:]), **boot)
+    return estimates, gap
+
+
+def seeds_text(estimate: Estimate, units: str) -> str:
+    """What an interval resampled, for a reader: ``"two-level bootstrap over 5 seeds × 10,000 test
+    poses"``, or the test units alone for a model of one seed."""
+    if estimate.seeds > 1:
+        return f"two-level bootstrap over {estimate.seeds} seeds × {estimate.rows:,} {units}"
+    return f"bootstrap over {estimate.rows:,} {units} (one seed)"
 
 
 def _largest(X):
@@ -529,9 +603,9 @@ IK_TARGETS = (("per-joint RMSE", "worst joint RMSE", 1.0, "°"), ("median positi
 #: The study's target for the learned ID: the worst joint's NRMSE, in % of the torque's spread.
 ID_TARGET_PCT = 5.0
 #: The verdict table's columns (:func:`verdict_table`), as chapter 07 writes them and the index reads them.
-VERDICT_COLUMNS = ("arm", "task", "metric", "unit", "best", "best_value", "anfis", "anfis_value", "rank", "compared",
-                   "rival", "rival_value", "gap", "gap_low", "gap_high", "verdict", "anfis_targets", "rival_targets",
-                   "exact")
+VERDICT_COLUMNS = ("arm", "task", "metric", "unit", "best", "best_value", "anfis", "anfis_value", "anfis_low",
+                   "anfis_high", "rank", "compared", "rival", "rival_value", "rival_low", "rival_high", "gap", "gap_low",
+                   "gap_high", "interval", "verdict", "anfis_targets", "rival_targets", "exact")
 
 
 @dataclass(frozen=True)
@@ -540,7 +614,9 @@ class Verdict:
     ANFIS's best and its rank among them, its paired difference from the best other method
     (``gap``, ANFIS minus rival, with the interval ``gap_low``–``gap_high``), and the study's
     targets each met (``"2 of 3"``; ``""`` where the task has none); ``exact`` names a method that
-    solves the task exactly, where one exists (not ranked: the learned methods are compared)."""
+    solves the task exactly, where one exists (not ranked: the learned methods are compared).
+    ``anfis_low``–``anfis_high`` and ``rival_low``–``rival_high`` are the two methods' intervals,
+    and ``interval`` says what they and the gap's resampled (:func:`seeds_text`)."""
 
     arm: str
     task: str
@@ -560,6 +636,11 @@ class Verdict:
     anfis_targets: str = ""
     rival_targets: str = ""
     exact: str = ""
+    anfis_low: float = float("nan")
+    anfis_high: float = float("nan")
+    rival_low: float = float("nan")
+    rival_high: float = float("nan")
+    interval: str = ""
 
     @property
     def verdict(self) -> str:
@@ -569,11 +650,13 @@ class Verdict:
 
 
 def task_verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, float], anfis: str,
-            gap: tuple[float, float, float], targets: Mapping[str, str] | None = None, exact: str = "") -> Verdict:
+            gap: tuple[float, float, float], targets: Mapping[str, str] | None = None, exact: str = "", *,
+            intervals: Mapping[str, tuple[float, float]] | None = None, interval: str = "") -> Verdict:
     """The :class:`Verdict` of one task: ``values`` every compared method's value of ``metric``
     (lower is better) on held-out data, ``anfis`` the ANFIS among them, ``gap`` its paired
     difference from the best other method ``(value, low, high)``, ``targets`` each method's
-    targets met (``"2 of 3"``), ``exact`` the method that solves the task exactly, if any.
+    targets met (``"2 of 3"``), ``exact`` the method that solves the task exactly, if any;
+    ``intervals`` each method's ``(low, high)`` and ``interval`` what they resampled.
 
     Example:
         >>> v = task_verdict("arm", "IK", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
@@ -585,10 +668,12 @@ def task_verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[st
         raise ValueError(f"verdict: {anfis!r} must be one of at least two methods compared, got {list(values)}")
     ranked = sorted(values, key=lambda name: values[name])
     rival = next(name for name in ranked if name != anfis)
-    targets = targets or {}
+    targets, intervals = targets or {}, intervals or {}
+    nan = (float("nan"), float("nan"))
     return Verdict(arm, task, metric, unit, ranked[0], float(values[ranked[0]]), anfis, float(values[anfis]),
                    ranked.index(anfis) + 1, len(ranked), rival, float(values[rival]), *map(float, gap), targets.get(anfis, ""),
-                   targets.get(rival, ""), exact)
+                   targets.get(rival, ""), exact, *map(float, intervals.get(anfis, nan)),
+                   *map(float, intervals.get(rival, nan)), interval)
 
 
 def targets_met(rows: Sequence[Row], limits: Sequence[float]) -> str:
@@ -604,8 +689,58 @@ def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | 
     fmt = lambda v, unit: shown(v, ".3g", **({"floor": floors[unit]} if unit in floors else {}))   # noqa: E731
     return Table(list(VERDICT_COLUMNS),
                  [[v.arm, v.task, v.metric, v.unit, v.best, fmt(v.best_value, v.unit), v.anfis, fmt(v.anfis_value, v.unit),
-                   v.rank, v.compared, v.rival, fmt(v.rival_value, v.unit), fmt(v.gap, v.unit), fmt(v.gap_low, v.unit), fmt(v.gap_high, v.unit),
-                   v.verdict, v.anfis_targets, v.rival_targets, v.exact] for v in verdicts], caption=caption)
+                   fmt(v.anfis_low, v.unit), fmt(v.anfis_high, v.unit), v.rank, v.compared, v.rival,
+                   fmt(v.rival_value, v.unit), fmt(v.rival_low, v.unit), fmt(v.rival_high, v.unit), fmt(v.gap, v.unit),
+                   fmt(v.gap_low, v.unit), fmt(v.gap_high, v.unit), v.interval, v.verdict, v.anfis_targets,
+                   v.rival_targets, v.exact] for v in verdicts], caption=caption)
+
+
+#: Configuration words a reader knows, and the learners' names in words (:func:`reader_label`).
+_CONFIG_WORDS = {"arm_plane": "in the arm's plane", "quat_xyz": "on quaternion and position",
+                 "axes_xyz": "on position and two tool axes", "basis=chain": "on the chain's trigonometric basis",
+                 "basis=generic": "on the generic basis"}
+_LEARNER_WORDS = {"ridge": "ridge regression", "ANFIS, chosen": "ANFIS"}
+#: Internal names of input sets and of where a model came from: in the tables, not in prose.
+_INTERNAL = {"contest", "affine", "affine_generic", "own", "regressor", "regressor_drives"}
+
+
+def reader_label(name: str) -> str:
+    """A method's name in words a reader knows, its internal configuration (kept in the tables)
+    left out: a trailing parenthesis of options (``basis=chain, alpha=1e-06``), an encoding's or an
+    input set's code name, or ``contest``; the configuration words a reader knows are kept.
+
+    Example:
+        >>> reader_label("ridge (basis=chain, alpha=1e-06)"), reader_label("ANFIS, chosen (arm_plane)")
+        ("ridge regression on the chain's trigonometric basis", "ANFIS in the arm's plane")
+        >>> reader_label("RBF interpolation (contest)"), reader_label("generic: multilayer perceptron")
+        ('RBF interpolation', 'generic: multilayer perceptron')
+    """
+    match = re.fullmatch(r"(.*?) \(([^()]*)\)", name)
+    if match is None:
+        return name
+    parts = [part.strip() for part in match[2].split(",")]
+    if not all("=" in part or part in _CONFIG_WORDS or part in _INTERNAL for part in parts):
+        return name                      # a parenthesis a reader needs ("assumed", "needs the geometry")
+    return " ".join([_LEARNER_WORDS.get(match[1], match[1]), *(_CONFIG_WORDS[p] for p in parts if p in _CONFIG_WORDS)])
+
+
+#: The verdict as a reader sees it (:func:`verdict_display`): the index, the PDF and chapter 8 show these columns.
+VERDICT_HEAD = ("task", "arm", "best on held-out data", "ANFIS's best (rank)", "best other",
+                "ANFIS − best other (paired interval)", "verdict", "targets met: ANFIS / best other", "interval")
+
+
+def verdict_display(rows: Sequence[Mapping[str, str]]) -> list[list[str]]:
+    """The verdict rows (:func:`read_verdicts`) as the cells of :data:`VERDICT_HEAD`: each method's
+    value with its interval and unit, the ANFIS's rank among the methods compared, the paired gap,
+    the targets met and what the intervals resampled."""
+    def with_interval(r, who):
+        low, high = r[f"{who}_low"], r[f"{who}_high"]
+        return (f"{reader_label(r[who])}: {r[f'{who}_value']}" + (f" ({low}–{high})" if low and low != "nan" else "")
+                + f" {r['unit']}")
+    return [[r["task"], r["arm"], f"{reader_label(r['best'])}: {r['best_value']} {r['unit']}",
+             f"{with_interval(r, 'anfis')} ({r['rank']} of {r['compared']})", with_interval(r, "rival"),
+             f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}", r["verdict"],
+             f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'}", r["interval"]] for r in rows]
 
 
 def read_verdicts(path) -> list[dict[str, str]]:
@@ -630,7 +765,7 @@ def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
     ANFIS meets, and what to use for each task. A task ending in "every tier" sums up the tasks of
     its tiers: it gives the targets and what to use, the tiers the wins and losses."""
     def plain(task: str, name: str) -> str:          # "generic: multilayer perceptron" in "…, generic": the learner
-        tier = task.rsplit(", ", 1)[-1]
+        tier, name = task.rsplit(", ", 1)[-1], reader_label(name)
         return name.split(": ", 1)[1] if name.startswith(tier + ": ") else name
 
     summed = [r for r in verdicts if r["task"].endswith("every tier")]
@@ -663,7 +798,7 @@ def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
     use = []
     for task in [t for t in tasks if not t.startswith("measured arm")] + list(dict.fromkeys(r["task"] for r in summed)):
         rows = [r for r in verdicts if r["task"] == task]
-        best = " or ".join(dict.fromkeys(r["best"] for r in rows))
+        best = " or ".join(dict.fromkeys(reader_label(r["best"]) for r in rows))
         exact = " or ".join(dict.fromkeys(r["exact"] for r in rows if r.get("exact")))
         name = task.replace(", every tier", "")
         use.append(f"{name}, {exact} (exact; of the learned methods, {best})" if exact else f"{name}, {best}")
