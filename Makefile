@@ -59,9 +59,10 @@ verify: $(STAMP)
 	$(PY) -m nfarm verify
 
 # Two pytest-xdist workers: the notebooks' kernels and the unit tests share the two cores;
-# tests that share a chain of chapters' data stay in one worker (--dist loadgroup).
+# tests that share a chain of chapters' data stay in one worker (--dist loadgroup). One BLAS
+# thread per worker: two workers already use both cores (two threads each would thrash them).
 test: $(STAMP)
-	$(PY) -m pytest -n 2 --dist loadgroup
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(PY) -m pytest -n 2 --dist loadgroup
 
 bench: $(STAMP)
 	@set -e; for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b; done

@@ -79,8 +79,14 @@ def test_chain_basis_spans_the_rigid_body_model_the_generic_one_does_not(robot, 
     errors = {}
     for kind in ("chain", "generic"):
         A = bases.basis(robot, train["q"], train["qd"], train["qdd"], kind)
-        # QR with column pivoting (rank-revealing, as the SVD; several times faster on these 3 213 columns)
-        theta = scipy.linalg.lstsq(A, train["tau"], lapack_driver="gelsy")[0]
+        # Normal equations of the unit-norm columns with a ridge of 1e-12 of their mean diagonal (the basis
+        # repeats columns: rank-deficient), by Cholesky: 7x faster than pivoted QR on these 3 213 columns, and
+        # the same test errors (measured: intelbot5 1.3e-11 against QR's 1.4e-15; SO-101 3.18e-2 both)
+        scale = np.sqrt((A ** 2).sum(axis=0))
+        scale[scale == 0] = 1.0
+        G = (A / scale).T @ (A / scale)
+        factor = scipy.linalg.cho_factor(G + 1e-12 * np.trace(G) / len(G) * np.eye(len(G)))
+        theta = scipy.linalg.cho_solve(factor, (A / scale).T @ train["tau"]) / scale[:, None]
         errors[kind] = nrmse(bases.basis(robot, test["q"], test["qd"], test["qdd"], kind) @ theta, test["tau"])
     assert errors["chain"].max() < chain, errors
     assert errors["generic"].max() > 0.01, errors

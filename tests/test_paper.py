@@ -22,6 +22,9 @@ from nfarm.__main__ import report_command as build_report
 
 pypdf = pytest.importorskip("pypdf")
 
+#: Every test here reads one smoke report (a module fixture, made once per pytest-xdist worker): one worker runs them all.
+pytestmark = pytest.mark.xdist_group("paper")
+
 FIGURE_AND_TABLE = """import matplotlib.pyplot as plt
 from nfarm.infra.paths import project_path
 from nfarm.presentation.plotting import save_figure

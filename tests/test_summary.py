@@ -331,7 +331,9 @@ def test_the_verdict_is_judged_over_seeds_and_units_and_shown_in_a_readers_words
     rows = read_verdicts(tmp_path / "tables" / "07_verdict.csv")
     assert rows[0]["rival"] == "ridge (basis=chain, alpha=1e-06)" and rows[0]["interval"] == "two-level, 5 seeds × 30"
     shown_ = verdict_display(rows)[0]
-    assert shown_[3].startswith(f"ANFIS: {rows[0]['anfis_value']} ({rows[0]['anfis_low']}–{rows[0]['anfis_high']}) N·m")
-    assert shown_[4].startswith("ridge regression on the chain's trigonometric basis: ")
+    assert shown_[3].startswith(f"ANFIS, {rows[0]['anfis_value']} ({rows[0]['anfis_low']}–{rows[0]['anfis_high']}) N·m")
+    assert shown_[4].startswith("ridge regression on the chain's trigonometric basis, ")
+    exact = {**rows[0], "rival_value": "< 1e-6", "rival_low": "< 1e-6", "rival_high": "< 1e-6"}
+    assert verdict_display([exact])[0][4] == "ridge regression on the chain's trigonometric basis, < 1e-6 N·m"
     assert reader_label("ANFIS, dissertation's design (own, assumed)") == "ANFIS, dissertation's design (own, assumed)"
     assert reader_label("ANFIS, structure-informed (affine)") == "ANFIS, structure-informed"

@@ -734,10 +734,11 @@ def verdict_display(rows: Sequence[Mapping[str, str]]) -> list[list[str]]:
     value with its interval and unit, the ANFIS's rank among the methods compared, the paired gap,
     the targets met and what the intervals resampled."""
     def with_interval(r, who):
-        low, high = r[f"{who}_low"], r[f"{who}_high"]
-        return (f"{reader_label(r[who])}: {r[f'{who}_value']}" + (f" ({low}–{high})" if low and low != "nan" else "")
-                + f" {r['unit']}")
-    return [[r["task"], r["arm"], f"{reader_label(r['best'])}: {r['best_value']} {r['unit']}",
+        value, low, high = r[f"{who}_value"], r[f"{who}_low"], r[f"{who}_high"]
+        # an interval where there is one: not around a value at rounding level ("< 1e-6"), nor a missing one
+        spread = low and low != "nan" and low != high and not value.startswith("<")
+        return f"{reader_label(r[who])}, {value}" + (f" ({low}–{high})" if spread else "") + f" {r['unit']}"
+    return [[r["task"], r["arm"], f"{reader_label(r['best'])}, {r['best_value']} {r['unit']}",
              f"{with_interval(r, 'anfis')} ({r['rank']} of {r['compared']})", with_interval(r, "rival"),
              f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}", r["verdict"],
              f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'}", r["interval"]] for r in rows]
