@@ -11,8 +11,8 @@ import numpy as np
 import papermill
 import pytest
 
-from nfarm.publishing.course import (TAGS, build_course, check, check_function, check_results, check_that,
-                          exercise_notebook)
+from nfarm.publishing.course import (CHECK_MIME, TAGS, build_course, check, check_function, check_results,
+                                     check_that, exercise_notebook)
 from nfarm.infra.paths import NOTEBOOKS
 from nfarm.infra.notebook_runs import chapters, run_notebook
 
@@ -40,45 +40,64 @@ def test_every_chapter_has_three_to_five_exercises():
         assert all(tags(c) & set(TAGS) for c in cells[first:]), nb.name
 
 
-def _with_unanswered_checks(nb):
-    """Each check cell also run before its exercise's solution: a student who runs the
-    notebook without answering sees "not answered yet", not a traceback."""
+STAGE = "nfarm_test_stage"
+
+
+def _answered_three_ways(notebook):
+    """The chapter's exercise notebook with each check run three times: before its exercise is
+    answered (a student who runs the notebook sees "not answered yet", not a traceback), after
+    the deliberately wrong answer, and after the worked solution. One run of the set-up serves
+    the three; each check cell is marked with its stage."""
+    nb = exercise_notebook(notebook)
     cells = []
     for k, cell in enumerate(nb.cells):
         if "solution" in tags(cell):
             following = next(c for c in nb.cells[k + 1:] if "check" in tags(c))
-            cells.append(nbformat.v4.new_code_cell(following.source, metadata={"tags": ["check"]}))
+            staged = lambda stage: nbformat.v4.new_code_cell(   # noqa: E731
+                following.source, metadata={"tags": ["check"], STAGE: stage})
+            wrong = nbformat.v4.new_code_cell(cell.metadata["nfarm"]["wrong"], metadata={"tags": ["solution"]})
+            cells += [staged("unanswered"), wrong, staged("wrong")]
+        elif "check" in tags(cell):
+            cell.metadata[STAGE] = "worked"
         cells.append(cell)
     nb.cells = cells
     return nb
 
 
+def _verdicts_by_stage(executed) -> dict[str, list[dict]]:
+    found: dict[str, list[dict]] = {"unanswered": [], "wrong": [], "worked": []}
+    for cell in json.loads(executed.read_text(encoding="utf-8"))["cells"]:
+        stage = cell.get("metadata", {}).get(STAGE)
+        for output in cell.get("outputs", []):
+            verdict = output.get("data", {}).get(CHECK_MIME)
+            if verdict and stage:
+                found[stage].append(verdict)
+    return found
+
+
 @pytest.mark.notebook
-@pytest.mark.parametrize("wrong", [False, True], ids=["worked solutions", "unanswered, then wrong"])
 @pytest.mark.parametrize("notebook", WITH_EXERCISES, ids=lambda p: p.stem)
-def test_every_check_passes_on_its_solution_and_fails_on_a_wrong_answer(notebook, wrong, tmp_path):
+def test_every_check_passes_on_its_solution_and_fails_on_a_wrong_answer(notebook, tmp_path):
     source = tmp_path / notebook.name
-    nb = exercise_notebook(notebook, wrong=wrong)
-    nbformat.write(_with_unanswered_checks(nb) if wrong else nb, source)
+    nbformat.write(_answered_three_ways(notebook), source)
     executed = tmp_path / "executed.ipynb"
     parameters = {"smoke": True, "out_dir": str(tmp_path / "out")}
     declared = papermill.inspect_notebook(str(notebook))
     parameters.update({k: str(tmp_path / k) for k in ("data_dir", "models_dir", "recordings_dir", "sweeps_dir")
                        if k in declared})       # nothing written into the checkout
     run_notebook(source, executed, parameters)
-    verdicts = check_results(executed)
-    exercises = {v["exercise"].split()[0] for v in verdicts}
+    staged = _verdicts_by_stage(executed)
+    assert sum(len(v) for v in staged.values()) == len(check_results(executed)), "every check is staged"
     solutions = sum("solution" in tags(c) for c in json.loads(notebook.read_text())["cells"])
+    exercises = {v["exercise"].split()[0] for v in staged["worked"]}
     assert len(exercises) == solutions
-    if wrong:
-        unanswered = [v for v in verdicts if v["message"].startswith("not answered yet")]
-        failed = [v for v in verdicts if v["message"].startswith("not yet: ")]
-        assert {v["exercise"].split()[0] for v in unanswered} == exercises
-        # Every exercise fails at least one of its checks, with a message saying what is wrong.
-        assert {v["exercise"].split()[0] for v in failed} == exercises
-        assert not any(v["passed"] for v in unanswered)
-    else:
-        assert all(v["passed"] for v in verdicts), [v for v in verdicts if not v["passed"]]
+    assert all(v["passed"] for v in staged["worked"]), [v for v in staged["worked"] if not v["passed"]]
+    unanswered = [v for v in staged["unanswered"] if v["message"].startswith("not answered yet")]
+    assert {v["exercise"].split()[0] for v in unanswered} == exercises
+    assert not any(v["passed"] for v in staged["unanswered"])
+    # Every exercise fails at least one of its checks on the wrong answer, with a message saying what is wrong.
+    failed = [v for v in staged["wrong"] if v["message"].startswith("not yet: ")]
+    assert {v["exercise"].split()[0] for v in failed} == exercises
 
 
 def test_the_student_build_has_no_solutions_and_no_outputs(tmp_path):
