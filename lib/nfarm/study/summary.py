@@ -38,7 +38,7 @@ from ..presentation.wording import times
 from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums, resolved_joints
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
-__all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison", "seeds_text",
+__all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
@@ -120,16 +120,23 @@ def _ik_columns(errors: Mapping[str, np.ndarray]) -> np.ndarray:
     return np.column_stack([joint, position, orientation])
 
 
+def _pooled_ik(metric: str) -> tuple[slice, Callable[[np.ndarray], np.ndarray]]:
+    """The columns of :func:`_ik_columns` that one IK metric reads, and the metric of pooled rows of
+    those columns ``X (b, M, k) -> (b,)``, as :func:`_ik_statistic` computes it."""
+    if metric not in [m for m, _ in IK_METRICS]:
+        raise ValueError(f"metric must be one of the IK metrics {[m for m, _ in IK_METRICS]}, got {metric!r}")
+    if metric == "worst joint RMSE":
+        return slice(None, -2), lambda X: np.sqrt((X ** 2).mean(axis=-2)).max(axis=-1)     # noqa: E731
+    where, what = metric.split()
+    reduce = {"median": lambda x: np.median(x, axis=-1), "p95": lambda x: np.percentile(x, 95, axis=-1),
+              "max": lambda x: x.max(axis=-1)}[what]
+    return (slice(-2, -1) if where == "position" else slice(-1, None)), lambda X: reduce(X[..., 0])   # noqa: E731
+
+
 def _ik_statistic(n: int) -> Callable[[np.ndarray], np.ndarray]:
-    """``X (b, N, n + 2) -> (b, 7)``: the metrics of :data:`IK_METRICS`."""
-    def statistic(X):
-        worst = np.sqrt((X[..., :n] ** 2).mean(axis=-2)).max(axis=-1)
-        out = [worst]
-        for column in (n, n + 1):
-            x = X[..., column]
-            out += [np.median(x, axis=-1), np.percentile(x, 95, axis=-1), x.max(axis=-1)]
-        return np.stack(out, axis=-1)
-    return statistic
+    """``X (b, N, n + 2) -> (b, 7)``: the metrics of :data:`IK_METRICS` (each as :func:`_pooled_ik` computes it)."""
+    metrics = [_pooled_ik(metric) for metric, _ in IK_METRICS]
+    return lambda X: np.stack([statistic(X[..., columns]) for columns, statistic in metrics], axis=-1)   # noqa: E731
 
 
 def ik_rows(method: str, role: str, errors: Mapping[str, np.ndarray], *, joint: bool = True,
@@ -162,19 +169,6 @@ def ik_difference(errors_a: Mapping, errors_b: Mapping, *, draws: int = 2000, le
     stat = _ik_statistic(width - 2)
     return bootstrap_rows(np.hstack([a, b]), lambda X: stat(X[..., :width]) - stat(X[..., width:]),
                           draws=draws, level=level, seed=seed)
-
-
-def _pooled_ik(metric: str) -> tuple[slice, Callable[[np.ndarray], np.ndarray]]:
-    """The columns of :func:`_ik_columns` that one IK metric reads, and the metric of pooled rows of
-    those columns ``X (b, M, k) -> (b,)``, as :func:`_ik_statistic` computes it."""
-    if metric not in [m for m, _ in IK_METRICS]:
-        raise ValueError(f"metric must be one of the IK metrics {[m for m, _ in IK_METRICS]}, got {metric!r}")
-    if metric == "worst joint RMSE":
-        return slice(None, -2), lambda X: np.sqrt((X ** 2).mean(axis=-2)).max(axis=-1)     # noqa: E731
-    where, what = metric.split()
-    reduce = {"median": lambda x: np.median(x, axis=-1), "p95": lambda x: np.percentile(x, 95, axis=-1),
-              "max": lambda x: x.max(axis=-1)}[what]
-    return (slice(-2, -1) if where == "position" else slice(-1, None)), lambda X: reduce(X[..., 0])   # noqa: E731
 
 
 def _pooled_worst(resolved, normalised: bool) -> Callable[[np.ndarray], np.ndarray]:
@@ -227,14 +221,6 @@ def seed_comparison(values: Mapping[str, np.ndarray], anfis: str, rival: str, me
     gap = bootstrap_seeds(np.concatenate([a[:common], b[:common]], axis=-1),
                           lambda X: statistic(X[..., :width]) - statistic(X[..., width:]), **boot)
     return estimates, gap
-
-
-def seeds_text(estimate: Estimate, units: str) -> str:
-    """What an interval resampled, for a reader: ``"two-level bootstrap over 5 seeds × 10,000 test
-    poses"``, or the test units alone for a model of one seed."""
-    if estimate.seeds > 1:
-        return f"two-level bootstrap over {estimate.seeds} seeds × {estimate.rows:,} {units}"
-    return f"bootstrap over {estimate.rows:,} {units} (one seed)"
 
 
 def _largest(X):
@@ -616,7 +602,7 @@ class Verdict:
     targets each met (``"2 of 3"``; ``""`` where the task has none); ``exact`` names a method that
     solves the task exactly, where one exists (not ranked: the learned methods are compared).
     ``anfis_low``–``anfis_high`` and ``rival_low``–``rival_high`` are the two methods' intervals,
-    and ``interval`` says what they and the gap's resampled (:func:`seeds_text`)."""
+    and ``interval`` says what they and the gap's resampled."""
 
     arm: str
     task: str
