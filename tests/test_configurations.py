@@ -40,6 +40,10 @@ def test_ranges_counts_and_differences_read_the_seeds():
     assert value_range(group({"worst": 1e-12}, {"worst": 2e-12}), "worst", fmt=lambda v: "< 1e-6") == "< 1e-6"
     assert counts(a, "rules") == "8/8–27" and counts(a, "parameters") == "250–675" and counts(b, "parameters") == "250"
     assert not no_difference(a, b, "worst") and no_difference(a, c, "worst") and no_difference(b, c, "worst")
+    # A configuration pruned after seed 0: its one value within the other's range, or not
+    inside, outside = group({"worst": 0.25}), group({"worst": 0.4})
+    assert no_difference(inside, a, "worst") and no_difference(a, inside, "worst") and not no_difference(outside, a, "worst")
+    assert not no_difference(inside, outside, "worst") and no_difference(inside, group({"worst": 0.25}), "worst")
 
 
 def test_the_kept_validation_loss_is_each_joints_at_its_kept_epoch():

@@ -50,6 +50,27 @@ def test_contestants_are_learners_within_their_tier_and_each_tier_keeps_its_best
         "nominal model + learned: friction identification (least squares)"
 
 
+def _rigid(seed, nrmse, **params):
+    params = {**params, "seed": seed, "split": "val"}
+    return CellResult(Cell(params, f"{sorted(params.items())}"), "ok", {"nrmse": nrmse}, 1.0, "w")
+
+
+def test_the_rigid_body_sweeps_keep_each_tiers_best_on_seed_0_over_the_resolved_joints():
+    """Chapter 6.4's input sets and 6.5's baselines: each tier's best configuration on seed 0
+    (over the joints a sensor resolves) goes on to the other seeds; the others are pruned."""
+    resolved = np.array([True, True, False])
+    runs = [_rigid(0, [0.3, 0.2, 9.0], learner="mlp"), _rigid(0, [0.1, 0.4, 0.0], learner="boosting"),
+            _rigid(0, [0.2, 0.3, 0.0], learner="kernel"),           # τ3 is below the noise: not judged
+            _rigid(0, [0.0, 0.01, 0.0], learner="ridge", basis="chain"),
+            _rigid(1, [0.0, 0.0, 0.0], learner="linear")]            # another draw: not a choice
+    finalists = contest.tier_finalists(runs, resolved, "nrmse")
+    assert [r.cell.params["learner"] for r in finalists] == ["mlp", "ridge"]
+    assert [(p["learner"], p["seed"]) for p in contest.tier_spread_params(runs, resolved, "nrmse", (1, 2))] == \
+        [("mlp", 1), ("mlp", 2), ("ridge", 1), ("ridge", 2)]
+    everything = np.ones(3, bool)
+    assert [r.cell.params["learner"] for r in contest.tier_finalists(runs, everything, "nrmse")] == ["kernel", "ridge"]
+
+
 def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
     """Two configurations each; a least squares with nothing to tune, one."""
     sweep = load_sweep(PARAMS / "sweeps" / "id_contest.yaml")

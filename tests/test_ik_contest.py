@@ -244,6 +244,25 @@ def test_each_contestant_is_chosen_on_its_seed_0_validation_by_the_tool_metrics(
         [("anfis:arm_plane", 1), ("anfis:arm_plane", 2), ("rbf", 1), ("rbf", 2)]
 
 
+def test_successive_halving_promotes_each_contestants_best_two_to_all_the_poses():
+    from nfarm.study import contest
+
+    rung = [_result("anfis", "arm_plane", 0, p95, n_rules=n) for n, p95 in ((8, 4.0), (16, 2.0), (32, 3.0), (64, 1.0))]
+    rung += [_result("rbf", "arm_plane", 0, 1.0, neighbors=32), _result("knn", "arm_plane", 1, 0.5, neighbors=3)]
+    promoted = contest.promoted_params(rung)
+    assert [(contest.family(p), p["options"], p["fraction"]) for p in promoted] == \
+        [("anfis:arm_plane", {"n_rules": 16}, 1.0), ("anfis:arm_plane", {"n_rules": 64}, 1.0),
+         ("rbf", {"neighbors": 32}, 1.0)]                # seed 1 is not a choice; a lone configuration goes on
+    assert [p["options"] for p in contest.promoted_params(rung, keep=1)][:1] == [{"n_rules": 64}]
+    # The budget counts configurations, not rungs: a promoted configuration is one tried, its seconds added
+    from nfarm.study.sweep import CellResult
+    from nfarm.study.sweep_files import Cell
+    again = [CellResult(Cell(p, f"full{k}"), "ok", {"position_p95_mm": p95, "orientation_p95_deg": 0.1, "fit_seconds": 4.0},
+                        4.0, "w") for k, (p, p95) in enumerate(zip(promoted[:2], (1.5, 0.9)))]
+    assert contest.budgets(rung[:4] + again)["anfis:arm_plane"] == (4, 12.0, 12.0)
+    assert contest.choose(again)["anfis:arm_plane"].cell.params["options"] == {"n_rules": 64}
+
+
 def test_standings_rank_by_the_mean_over_seeds_and_gaps_are_paired():
     from nfarm.study import contest
 

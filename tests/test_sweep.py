@@ -326,8 +326,16 @@ def test_a_scheduler_and_two_workers_started_apart_give_the_same_results(tmp_pat
 # Seeds: a configuration's spread
 
 
-@pytest.mark.parametrize("name", ["id_comparison", "id_comparison_large",
-                                  "id_baselines", "id_baselines_large", "id_sizes"])
+@pytest.mark.parametrize("name", ["id_comparison", "id_baselines"])
+def test_the_pruned_sweeps_run_seed_0_and_their_tier_finalists_four_more(name):
+    """Chapter 6 trains every configuration of these with seed 0 and each tier's best on the
+    contest's other seeds (nfarm.study.contest.tier_spread_params): five seeds for a finalist."""
+    from nfarm.study import contest
+    sweep = load_sweep(SWEEPS / f"{name}.yaml")
+    assert {c.params["seed"] for c in sweep.cells} == {0} and len(set(contest.SPREAD_SEEDS) - {0}) >= 4
+
+
+@pytest.mark.parametrize("name", ["id_comparison_large", "id_baselines_large", "id_sizes"])
 def test_the_study_sweeps_run_five_seeds(name):
     """Each configuration of a comparison the chapters show has at least five seeds."""
     sweep = load_sweep(SWEEPS / f"{name}.yaml")
@@ -353,6 +361,11 @@ def test_results_group_by_configuration_with_the_mean_and_range_over_seeds(tmp_p
         assert "seed" not in {k for k in g.cell.params if g.cell.params[k] != g.runs[0].cell.params[k]}
     best = best_by(groups, "partition", "check_rmse")
     assert best["fcm"] is min(groups, key=lambda g: g.metrics["check_rmse"])
+    # Given a seed, the choice is made on that seed's cells (a sweep pruned after seed 0)
+    on_1 = best_by(groups, "partition", "check_rmse", seed=1)
+    assert on_1["fcm"] is min(groups, key=lambda g: g.values("check_rmse")[1])
+    with pytest.raises(ValueError, match="no cell of seed 7"):
+        best_by(groups, "partition", "check_rmse", seed=7)
 
 
 # --------------------------------------------------------------------------------------------

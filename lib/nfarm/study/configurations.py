@@ -64,8 +64,12 @@ def counts(group, metric: str) -> str:
 
 def no_difference(a, b, metric: str) -> bool:
     """Whether two configurations' ranges of ``metric`` over their seeds overlap: no difference
-    by the study's rule (:func:`nfarm.study.statistics.ranges_separate`)."""
-    return not ranges_separate(a.values(metric), b.values(metric))
+    by the study's rule (:func:`nfarm.study.statistics.ranges_separate`). A configuration pruned
+    after seed 0 (one seed, no spread of its own) is no different from another when its one value
+    lies within the other's range; two of one seed each differ unless their values are equal."""
+    if a.n >= 2 and b.n >= 2:
+        return not ranges_separate(a.values(metric), b.values(metric))
+    return bool(a.low(metric) <= b.high(metric) and b.low(metric) <= a.high(metric))
 
 
 def kept_validation_loss(model) -> np.ndarray:

@@ -5,11 +5,15 @@ how each contestant's configuration is chosen, with what budget, and how they ar
   c-means rules shared by the pitch joints, the pitch closure), the ANFIS of the dissertation's
   recipe (seven inputs, a grid of two functions per input), and each rival kind of
   :class:`nfarm.learning.ik_rivals.RivalIK`.
-* **Budget**: every contestant has the same number of configurations in the sweep file, each
-  trained once on all the training poses with seed 0; :func:`budgets` reports what each spent
+* **Budget**: every contestant has the same number of configurations in the sweep file, tuned
+  by **successive halving** (Jamieson & Talwalkar 2016) with seed 0: every configuration trains
+  on a share of the training poses (:data:`RUNG_FRACTION`), and each contestant's
+  :data:`PROMOTED` best of them on validation (:func:`promoted_params`) train again on all of
+  them — the deployment size, where the choice is made; :func:`budgets` reports what each spent
   (configurations and seconds of training), so a reader sees that no one got more.
-* **Choice**, on validation only (:func:`choose`): the configuration of least 95th-percentile
-  tool position error, ties broken by the 95th-percentile orientation error (:data:`RANKED_BY`).
+* **Choice**, on validation only (:func:`choose`, given the cells trained on all the poses): the
+  configuration of least 95th-percentile tool position error, ties broken by the
+  95th-percentile orientation error (:data:`RANKED_BY`).
 * **Spread**: each chosen configuration that is still in contention trained again on other
   draws of the data (:func:`spread_params`, seeds 1-4: each draws the training and validation
   poses anew and seeds the learner). In contention: the two best on seed 0 and every contestant
@@ -48,13 +52,18 @@ from ..learning.ik_rivals import KINDS as RIVAL_KINDS
 from ..learning.ik_rivals import RivalIK
 from ..learning.learned import ik_errors
 from ..model.robot import Robot
-from .sweep import CellResult, Replicates, by_configuration
+from .sweep import CellResult, Replicates, by_configuration, sweep_results
+from .sweep_files import Sweep
 
 __all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
-           "standings", "paired_gap"]
+           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "promoted_params", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
 RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
+#: Successive halving's first rung: the share of the training poses every configuration trains on.
+RUNG_FRACTION = 0.25
+#: Successive halving's second rung: each contestant's configurations trained again on all the poses.
+PROMOTED = 2
 #: The draws each chosen configuration is trained on besides seed 0.
 SPREAD_SEEDS = (1, 2, 3, 4)
 #: A contestant stays in contention within this factor of the best seed-0 95th percentile.
@@ -147,15 +156,32 @@ def choose(results: Iterable[CellResult], *, family_of=family,
     return chosen
 
 
+def promoted_params(results: Iterable[CellResult], *, family_of=family, ranked_by: Sequence[str] = RANKED_BY,
+                    keep: int = PROMOTED) -> list[dict]:
+    """Successive halving's second rung: each contestant's ``keep`` best seed-0 validation cells
+    of the first rung (``results``, by ``ranked_by``) again, on all the training poses
+    (``fraction`` 1), in the order of the first rung."""
+    results = [r for r in results if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val"]
+    by_family: dict[str, list[CellResult]] = {}
+    for r in results:
+        by_family.setdefault(family_of(r.cell.params), []).append(r)
+    kept = {id(r) for rs in by_family.values() for r in sorted(rs, key=lambda r: _key(r, ranked_by))[:keep]}
+    return [{**r.cell.params, "fraction": 1.0} for r in results if id(r) in kept]
+
+
 def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, tuple[int, float, float]]:
-    """Each contestant's tuning budget spent: seed-0 configurations tried, the seconds their
-    training took (the models' own ``fit_seconds``) and the seconds their cells took (training,
-    the validation's predictions and the data's loading, when they ran)."""
+    """Each contestant's tuning budget spent over its seed-0 cells (both rungs of successive
+    halving): the configurations it tried, the seconds their training took (the models' own
+    ``fit_seconds``) and the seconds their cells took (training, the validation's predictions
+    and the data's loading, when they ran)."""
     spent: dict[str, list[tuple[float, float]]] = {}
+    tried: dict[str, set[str]] = {}
     for r in results:
         if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
-            spent.setdefault(family_of(r.cell.params), []).append((float(r.metrics["fit_seconds"]), float(r.seconds)))
-    return {name: (len(s), float(sum(a for a, _ in s)), float(sum(b for _, b in s))) for name, s in spent.items()}
+            name = family_of(r.cell.params)
+            spent.setdefault(name, []).append((float(r.metrics["fit_seconds"]), float(r.seconds)))
+            tried.setdefault(name, set()).add(json_key({k: v for k, v in r.cell.params.items() if k != "fraction"}))
+    return {name: (len(tried[name]), float(sum(a for a, _ in s)), float(sum(b for _, b in s))) for name, s in spent.items()}
 
 
 def contending(chosen: Mapping[str, CellResult], keep_within: float = KEEP_WITHIN) -> list[str]:
@@ -284,6 +310,49 @@ def id_spread_params(seed0: Iterable[CellResult], seeds: Sequence[int] = SPREAD_
     seed0 = [r for r in seed0 if r.cell.params.get("split", "val") == "val"]
     chosen = choose(seed0, family_of=id_family, ranked_by=ID_RANKED_BY)
     return spread_params(chosen, seeds, names=id_contending(chosen))
+
+
+# --------------------------------------------------------------------------------------------
+# Rigid-body ID sweeps pruned after seed 0 (chapter 6.4's input sets, 6.5's baselines)
+
+
+def _resolved_worst(r: CellResult, resolved, source: str) -> float:
+    return float(np.asarray(r.metrics[source], float)[np.asarray(resolved, bool)].max())
+
+
+def tier_finalists(results: Iterable[CellResult], resolved, source: str) -> list[CellResult]:
+    """Each tier's best configuration after seed 0 (:func:`nfarm.learning.bases.tier_of`): of a
+    learned-ID sweep's seed-0 validation cells, the one of least worst-joint NRMSE over the
+    ``resolved (n,)`` joints of its per-joint metric ``source`` (``"val_nrmse"`` of a
+    ``learned_id`` cell, ``"nrmse"`` of an ``id_baseline`` one), in the order the tiers first
+    appear. Only these are trained on the other draws (:data:`SPREAD_SEEDS`): the tier's
+    comparison — its best against another tier's, or against the ANFIS of its tier — then has
+    its spread over the seeds, and the other configurations, chosen against on seed 0, cost one
+    training each (the learned-ID contest's rule, :func:`id_contending`)."""
+    best: dict[str, CellResult] = {}
+    for r in results:
+        if r.cell.params.get("seed", 0) != 0 or r.cell.params.get("split", "val") != "val":
+            continue
+        tier = tier_of(r.cell.params)
+        if tier not in best or _resolved_worst(r, resolved, source) < _resolved_worst(best[tier], resolved, source):
+            best[tier] = r
+    return list(best.values())
+
+
+def tier_spread_params(results: Iterable[CellResult], resolved, source: str,
+                       seeds: Sequence[int] = SPREAD_SEEDS) -> list[dict]:
+    """The cells that train each tier's best configuration (:func:`tier_finalists`) on ``seeds``."""
+    return [{**r.cell.params, "seed": int(s)} for r in tier_finalists(results, resolved, source) for s in seeds]
+
+
+def with_tier_finalists(sweep: Sweep, resolved, source: str, sweeps_dir=None, *, workers: int | None = None,
+                        seeds: Sequence[int] = SPREAD_SEEDS) -> list[CellResult]:
+    """A learned-ID sweep's cells (seed 0) with its tier finalists' cells on ``seeds``, each run
+    where it is missing from ``sweeps_dir``: what chapter 6 ran, read again by chapters 7 and 8."""
+    seed0 = sweep_results(sweep, sweeps_dir, workers=workers)
+    spread = sweep_results(sweep.with_cells(tier_spread_params(seed0, resolved, source, seeds)), sweeps_dir,
+                           workers=workers)
+    return [*seed0, *spread]
 
 
 def json_key(params: Mapping[str, Any]) -> str:

@@ -512,7 +512,7 @@ def _id_split(p: dict, study, directory: Path, split: str) -> dict:
 def id_baseline(p: dict) -> dict:
     if p["split"] not in ("val", "test"):
         raise ParamsError(f"split must be 'val' or 'test', got {p['split']!r}")
-    study, directory, _ = _study_data(p)
+    study, directory, models = _study_data(p)
     robot = study.robot
     train = _first(_id_split(p, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"],
                    None, p["stride"])
@@ -523,7 +523,11 @@ def id_baseline(p: dict) -> dict:
         raise ParamsError(f"learner must be one of {', '.join(BASELINE_OPTIONS)}, got {learner!r}")
     options = {k: p[k] for k in BASELINE_OPTIONS[learner] if p[k] is not None}
     # The validation trajectories stop the MLP early, as they stop the ANFIS (the other learners ignore them).
-    model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"]).fit(robot, train, val)
+    # Trained once for its options and data (fit_cached): chapter 7's test cell reads the model its validation cell made.
+    model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"])
+    where = _options_dir(models, "id_baselines", {**json.loads(json.dumps(model.get_params(), default=str)),
+                                                  "torques": p["torques"], "fraction": p["fraction"], "stride": p["stride"]})
+    model = fit_cached(model, robot, train, val, where)[0]
     start = time.perf_counter()
     predicted = model.predict(judged["q"], judged["qd"], judged["qdd"])
     seconds = time.perf_counter() - start

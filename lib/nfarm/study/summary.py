@@ -35,6 +35,7 @@ from ..learning.baselines import label as baseline_label
 from ..model.robot import Robot
 from ..presentation.tables import Table, shown
 from ..presentation.wording import times
+from .contest import with_tier_finalists
 from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums, resolved_joints
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
@@ -391,20 +392,25 @@ def wide_table(rows: Sequence[Row], task: str, *, floors: Mapping[str, float] | 
 def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None,
                      resolved=None):
     """The best scikit-learn baseline of a baselines sweep (``params/sweeps/id_baselines.yaml``,
-    restricted to one arm): each learner's best configuration by its mean worst-joint NRMSE
-    over the seeds on validation (over the ``resolved`` joints, :func:`with_resolved_worst`;
-    ``None``: every joint), the best of those (least squares on ``q, q̇, q̈``, the floor,
-    left out), and that configuration's run on the test split with ``seed`` (run now if it is
-    not in ``sweeps_dir``). Returns ``(name, validation Replicates, test CellResult)``, or
-    ``None`` if the sweep holds no learner but the floor."""
+    restricted to one arm), as chapter 6.5 chooses it: each learner's best configuration by its
+    worst-joint NRMSE on validation with seed 0, where every configuration ran (over the
+    ``resolved`` joints, :func:`with_resolved_worst`; ``None``: every joint), the best of those
+    (least squares on ``q, q̇, q̈``, the floor, left out), over its seeds (each tier's best ran on
+    more, :func:`nfarm.study.contest.with_tier_finalists`), and that configuration's run on the
+    test split with ``seed`` (run now if it is not in ``sweeps_dir``). Returns ``(name,
+    validation Replicates, test CellResult)``, or ``None`` if the sweep holds no learner but the
+    floor."""
     unseeded = lambda p: {k: v for k, v in p.items() if k != "seed"}          # noqa: E731
-    val = by_configuration(sweep_results(sweep, sweeps_dir, workers=workers))
-    if resolved is not None:
-        val = with_resolved_worst(val, resolved, "nrmse")
-    learners = [g for learner, g in best_by(val, "learner", "worst_nrmse").items() if learner != "linear"]
+    seed0 = sweep_results(sweep, sweeps_dir, workers=workers)
+    if not seed0:
+        return None
+    joints = np.ones(len(seed0[0].metrics["nrmse"]), bool) if resolved is None else np.asarray(resolved, bool)
+    val = with_resolved_worst(by_configuration(with_tier_finalists(sweep, joints, "nrmse", sweeps_dir, workers=workers)),
+                              joints, "nrmse")
+    learners = [g for learner, g in best_by(val, "learner", "worst_nrmse", seed=0).items() if learner != "linear"]
     if not learners:
         return None
-    best = min(learners, key=lambda g: g.metrics["worst_nrmse"])
+    best = min(learners, key=lambda g: g.values("worst_nrmse")[0])
     config = unseeded(best.cell.params)
     test = sweep_results(sweep.select(lambda p: unseeded(p) == config).restrict(split="test", seed=seed),
                          sweeps_dir, workers=workers)

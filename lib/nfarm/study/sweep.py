@@ -152,13 +152,24 @@ def by_configuration(results: Iterable[CellResult]) -> list[Replicates]:
             for runs in groups.values()]
 
 
-def best_by(groups: Iterable[Replicates], parameter: str, metric: str) -> dict[Any, Replicates]:
+def best_by(groups: Iterable[Replicates], parameter: str, metric: str, *,
+            seed: int | None = None) -> dict[Any, Replicates]:
     """For each value of ``parameter`` (a learner, an input set), the configuration of least
-    mean ``metric`` over its seeds: the choice made on validation results."""
+    mean ``metric`` over its seeds — or, given ``seed``, of least ``metric`` on that seed (a
+    sweep whose configurations were pruned after seed 0 compares them where all of them ran):
+    the choice made on validation results."""
+    def value_of(g: Replicates) -> float:
+        if seed is None:
+            return g.metrics[metric]
+        run = next((r for r in g.runs if r.cell.params.get("seed", 0) == seed), None)
+        if run is None:
+            raise ValueError(f"best_by: a configuration has no cell of seed {seed} (its seeds: {g.seeds})")
+        return run.metrics[metric]
+
     best: dict[Any, Replicates] = {}
     for g in groups:
         value = g.cell.params[parameter]
-        if value not in best or g.metrics[metric] < best[value].metrics[metric]:
+        if value not in best or value_of(g) < value_of(best[value]):
             best[value] = g
     return best
 
