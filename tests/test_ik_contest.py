@@ -249,11 +249,12 @@ def test_successive_halving_promotes_each_contestants_best_two_to_all_the_poses(
 
     rung = [_result("anfis", "arm_plane", 0, p95, n_rules=n) for n, p95 in ((8, 4.0), (16, 2.0), (32, 3.0), (64, 1.0))]
     rung += [_result("rbf", "arm_plane", 0, 1.0, neighbors=32), _result("knn", "arm_plane", 1, 0.5, neighbors=3)]
-    promoted = contest.promoted_params(rung)
+    promoted = contest.promoted_params(rung, keep=2)
     assert [(contest.family(p), p["options"], p["fraction"]) for p in promoted] == \
         [("anfis:arm_plane", {"n_rules": 16}, 1.0), ("anfis:arm_plane", {"n_rules": 64}, 1.0),
          ("rbf", {"neighbors": 32}, 1.0)]                # seed 1 is not a choice; a lone configuration goes on
     assert [p["options"] for p in contest.promoted_params(rung, keep=1)][:1] == [{"n_rules": 64}]
+    assert len(contest.promoted_params(rung)) == 2 * contest.PROMOTED      # the two contestants of seed 0
     # The budget counts configurations, not rungs: a promoted configuration is one tried, its seconds added
     from nfarm.study.sweep import CellResult
     from nfarm.study.sweep_files import Cell

@@ -50,6 +50,16 @@ def check_page(notebook, executed, where):
     prose = " ".join(re.sub(r"<[^>]+>", " ", m) for m in re.findall(
         r'<div class="jp-RenderedHTMLCommon jp-RenderedMarkdown[^"]*"[^>]*>(.*?)</div>', text, flags=re.S))
     assert not re.search(r"(?<![\d.,])[01] times\b", prose), re.search(r".{60}(?<![\d.,])[01] times\b.{20}", prose)
+    # Prose for a reader (the markdown, without its code and tables): chapters and sections by their plain numbers,
+    # no file stem where a figure or table is meant, no log of the build that made the page
+    words = " ".join(re.sub(r"<[^>]+>", " ", re.sub(r"<code>.*?</code>|<table.*?</table>", " ", m, flags=re.S))
+                     for m in re.findall(r'<div class="jp-RenderedHTMLCommon jp-RenderedMarkdown[^"]*"[^>]*>(.*?)</div>',
+                                         text, flags=re.S))
+    for kind, pattern in (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ections?|[Ff]igures?|[Tt]ables?)\s+0\d"),
+                          ("a file stem", r"\b0\d_[a-z]\w+"),
+                          ("a build log", r"\bran in this run\b|\bfiles? made and\b|\bwere read from\b")):
+        found = re.search(f".{{0,50}}(?:{pattern}).{{0,30}}", words)
+        assert not found, f"{kind} in the prose: {found.group(0)!r}"
     for number in re.findall(r"(?<![\w.,])\d[\d,]*\.\d+|(?<![\w.,])\d{1,3}(?:,\d{3}){2,}", prose):
         digits = number.replace(",", "").replace(".", "").lstrip("0").rstrip("0" if "." not in number else "")
         assert len(digits) <= (5 if "." in number else 6), f"false precision in prose: {number}"

@@ -80,3 +80,49 @@ def test_the_error_maps_colour_bar_reads_plain_numbers():
     labels = [t.get_text() for t in fig.axes[1].get_yticklabels() if t.get_text()]
     assert "10" in labels and not any("×" in s or "$" in s for s in labels), labels
     plt.close(fig)
+
+
+def test_coinciding_series_stay_visible_each_narrower_than_the_one_under_it():
+    """Three series that coincide (a model that is exact): the reference a wide band, the others
+    narrower the later they come and drawn over it — none hides another."""
+    from nfarm.presentation.plotting import plot_per_joint, plot_profiles
+    t = np.linspace(0, 1, 20)
+    a = np.column_stack([t, 2 * t])
+    fig = plot_per_joint(t, {"truth": a, "exact": a, "also exact": a}, ["j1", "j2"], ylabel="τ [N·m]")
+    try:
+        lines = fig.axes[0].get_lines()
+        widths, layers = [line.get_linewidth() for line in lines], [line.get_zorder() for line in lines]
+        assert widths == sorted(widths, reverse=True) and len(set(widths)) == 3 and layers == sorted(layers)
+        assert len({str(line.get_linestyle()) for line in lines}) == 3
+    finally:
+        plt.close(fig)
+    fig = plot_profiles(t, {"position [deg]": np.column_stack([t, 0.5 * t, t])}, ["a", "b", "c"])
+    try:
+        widths = [line.get_linewidth() for line in fig.axes[0].get_lines()]
+        assert widths[0] > widths[2], "the first of two coinciding joints is wider, so it shows around the second"
+    finally:
+        plt.close(fig)
+
+
+def test_each_joints_torque_spread_has_its_own_axis():
+    """Torques of 3 N·m and of 1e-4 N·m: on one shared axis the small ones would be a flat line."""
+    from nfarm.presentation.plotting import plot_torque_distributions
+    rng = np.random.default_rng(0)
+    fig = plot_torque_distributions(rng.normal(size=(500, 3)) * [3.0, 0.1, 1e-4], ["a", "b", "c"])
+    try:
+        spans = [np.ptp(ax.get_ylim()) for ax in fig.axes]
+        assert len(spans) == 3 and spans[2] < 1e-2 < spans[1] < 1 < spans[0]
+    finally:
+        plt.close(fig)
+
+
+def test_the_workspace_outline_drops_specks_but_keeps_real_holes():
+    from nfarm.presentation.plotting import _without_specks
+    reached = np.zeros((40, 40), bool)
+    reached[5:35, 5:35] = True
+    reached[15:25, 15:25] = False          # a real hole (a tenth of the area)
+    reached[8, 8] = False                  # a speck of a hole: the sampling's gap
+    reached[1, 38] = True                  # a stray island
+    clean = _without_specks(reached)
+    assert clean[8, 8] and not clean[1, 38] and not clean[20, 20]
+    assert (clean != reached).sum() == 2

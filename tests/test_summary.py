@@ -286,9 +286,9 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
     said = conclusion(rows)
     assert len(said) <= 5
     assert said[0] == ("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
-                       "inverse kinematics (arm A).")
+                       "inverse kinematics (arm A, by 4 mm of position p95).")
     assert said[1] == ("Another method is better than ANFIS, beyond the paired interval, on rigid-body inverse dynamics "
-                       "(arm A: ridge).")
+                       f"(arm A: ridge, by 2.5 % of {WORST_ID}).")
     assert said[2] == ("ANFIS and its best rival are no different within the paired interval on measured arm, generic "
                        "(arm B: MLP).")                          # the tier's name not repeated before the learner's
     assert said[3] == ("The study's targets the ANFIS meets on the whole interval: inverse kinematics (arm A) 3 of 3.")

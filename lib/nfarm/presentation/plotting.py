@@ -132,6 +132,8 @@ def plot_arm_poses(robot: Robot, poses: Mapping[str, np.ndarray]) -> Figure:
         ax.set_ylabel("y [m]", fontsize=9)
         ax.set_zlabel("z [m]", fontsize=9)
         ax.tick_params(labelsize=8)
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):     # four ticks an axis: their labels do not run together
+            axis.set_major_locator(mticker.MaxNLocator(4))
         ax.view_init(elev=20, azim=-60)
     handles = [plt.Line2D([], [], color=c, lw=1.5, label=f"tool {a} axis")
                for c, a in zip(("r", "g", "b"), "xyz")]
@@ -167,7 +169,8 @@ def plot_planar_subproblem(robot: Robot, solutions: Mapping[str, np.ndarray]) ->
     ax.text(*(0.5 * first["wrist pitch"]), "  Q", color="0.35", fontsize=11)
     for label, key in (("shoulder (joint 2)", "shoulder"), ("elbow (joint 3)", "elbow"),
                        ("wrist pitch (joint 4)", "wrist pitch")):
-        ax.annotate(label, first[key], xytext=(6, -14), textcoords="offset points", fontsize=9)
+        ax.annotate(label, first[key], xytext=(6, -14), textcoords="offset points", fontsize=9,
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
     ax.axvline(first["base axis x"], color="k", lw=0.8, ls="-.", label="base axis (joint 1)")
     ax.set(xlabel="x₁ [m] (frame 1)", ylabel="y₁ [m] (frame 1)" if first["y1 up"] else
            "y₁ [m] (frame 1, pointing down: drawn reversed so that up is up)",
@@ -175,7 +178,8 @@ def plot_planar_subproblem(robot: Robot, solutions: Mapping[str, np.ndarray]) ->
     if not first["y1 up"]:
         ax.invert_yaxis()
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8.5)
+    # Below the axes: inside, "best" put it over the roll axis's far end
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.11), ncols=2, fontsize=8.5, frameon=False)
     return fig
 
 
@@ -246,13 +250,19 @@ def plot_joint_paths(s: np.ndarray, paths: Mapping[str, np.ndarray], joint_names
 
     A joint that every solution holds within ``floor`` [deg] along the path is drawn on a ±1°
     axis and titled "constant": autoscaled, its panel would magnify the solver's rounding
-    (10⁻⁷°) into spikes that look like motion."""
+    (10⁻⁷°) into spikes that look like motion.
+
+    The first solution is drawn as a wide pale band and the others as points on thin lines over
+    it, so that solutions that coincide stay visible: the points on the band."""
     n = len(joint_names)
     fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 3.0), layout="constrained", sharex=True)
     for k, (label, q) in enumerate(paths.items()):
         for j, ax in enumerate(axes):
-            ax.plot(s, np.degrees(q[:, j]), ".-" if k else "-", color=f"C{k}", label=label,
-                    ms=3, lw=1.2)
+            if k == 0:
+                ax.plot(s, np.degrees(q[:, j]), "-", color="C0", label=label, lw=6, alpha=0.35,
+                        solid_capstyle="butt")
+            else:
+                ax.plot(s, np.degrees(q[:, j]), ".-", color=f"C{k}", label=label, ms=3, lw=0.8, zorder=2 + k)
     for j, (ax, name) in enumerate(zip(axes, joint_names)):
         values = np.concatenate([np.degrees(np.asarray(q)[:, j]) for q in paths.values()])
         held = np.ptp(values) < floor
@@ -273,10 +283,11 @@ def plot_profiles(t: np.ndarray, profiles: Mapping[str, np.ndarray], joint_names
     fig, axes = plt.subplots(1, len(profiles), figsize=(4.2 * len(profiles), 3.4),
                              layout="constrained", squeeze=False)
     dashes = ["-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (8, 2))]
+    widths = np.linspace(4.0, 1.2, len(joint_names))   # narrower on top: coinciding joints stay visible
     for ax, (label, values) in zip(axes[0], profiles.items()):
-        for j, name in enumerate(joint_names):      # own dashes: coinciding joints stay visible
+        for j, name in enumerate(joint_names):      # own dashes and width
             ax.plot(t, np.degrees(values[:, j]), ls=dashes[j % len(dashes)], marker=".", ms=3,
-                    lw=1.4, label=name)
+                    lw=widths[j], alpha=0.55 if j == 0 else 0.9, label=name, zorder=2 + j)
         ax.set(xlabel="t [s]", ylabel=label, title=label.split(" [")[0])
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
@@ -290,14 +301,20 @@ def plot_per_joint(t: np.ndarray, series: Mapping[str, np.ndarray], joint_names,
 
     ``focus``: each panel's y range is the first series' (the reference's) range widened
     ``focus`` times about its middle, so that a prediction far off does not flatten the others;
-    a series that leaves a panel's range is named so in the legend."""
+    a series that leaves a panel's range is named so in the legend.
+
+    The reference is a wide pale band, the others narrower the later they come, each with its
+    own dashes and drawn over the ones before: a series that coincides with another stays
+    visible."""
     n = len(joint_names)
     fig, axes = plt.subplots(1, n, figsize=(2.9 * n, 3.3), layout="constrained", sharex=True)
     axes = np.atleast_1d(axes)
+    dashes = ["--", "-.", ":", (0, (5, 1, 1, 1)), (0, (8, 2))]
     for k, (label, values) in enumerate(series.items()):
+        style = dict(lw=5, alpha=0.35, ls="-", solid_capstyle="butt") if k == 0 else \
+            dict(lw=max(2.6 - 0.5 * (k - 1), 1.0), ls=dashes[(k - 1) % len(dashes)])
         for j, ax in enumerate(axes):
-            ax.plot(t, values[:, j], color=f"C{k}", lw=1.5 if k else 2.2, label=label,
-                    ls="-" if k == 0 else "--")
+            ax.plot(t, values[:, j], color=f"C{k}", label=label, zorder=2 + k, **style)
     leaves = set()
     if focus is not None:
         reference = np.asarray(next(iter(series.values())))
@@ -461,15 +478,20 @@ def plot_id_trajectories(trajectories: list[Mapping[str, np.ndarray]], joint_nam
 
 
 def plot_torque_distributions(tau: np.ndarray, joint_names) -> Figure:
-    """The distribution of each joint's torque ``tau (N, n)`` [N·m] (violins with quartiles)."""
+    """The distribution of each joint's torque ``tau (N, n)`` [N·m] (violins with the median and
+    the extremes), one panel per joint on its own axis: the joints' torques differ by orders of
+    magnitude, and one shared axis would flatten the small ones to a line."""
     n = len(joint_names)
-    fig, ax = plt.subplots(figsize=(1.6 * n + 2, 3.6), layout="constrained")
-    parts = ax.violinplot([tau[:, j] for j in range(n)], showextrema=True, showmedians=True)
-    for body in parts["bodies"]:
-        body.set_alpha(0.5)
-    ax.set_xticks(range(1, n + 1), joint_names, fontsize=8)
-    ax.set(ylabel="τ [N·m]", title="joint torques over all training samples")
-    ax.grid(alpha=0.3, axis="y")
+    fig, axes = plt.subplots(1, n, figsize=(2.0 * n + 1, 3.6), layout="constrained", squeeze=False)
+    for j, (ax, name) in enumerate(zip(axes[0], joint_names)):
+        parts = ax.violinplot([tau[:, j]], showextrema=True, showmedians=True)
+        for body in parts["bodies"]:
+            body.set_alpha(0.5)
+        ax.set_xticks([1], [name], fontsize=8)
+        ax.grid(alpha=0.3, axis="y")
+        ax.yaxis.set_major_locator(mticker.MaxNLocator(6))
+    axes[0, 0].set_ylabel("τ [N·m]")
+    fig.suptitle("joint torques over all training samples (each joint on its own axis)", fontsize=11)
     return fig
 
 
@@ -732,6 +754,26 @@ def _readable_log_axis(axis) -> None:
     axis.set_minor_formatter(mticker.NullFormatter())
 
 
+def _without_specks(reached: np.ndarray, share: float = 0.02) -> np.ndarray:
+    """An occupancy grid ``(nx, nz)`` without its specks: islands of reached cells, and holes of
+    unreached cells enclosed by reached ones, smaller than ``share`` of the reached cells — the
+    sampling's gaps and strays, which a contour would draw as fragments of outline."""
+    import scipy.ndimage as ndimage
+
+    reached = np.asarray(reached, bool).copy()
+    least = share * max(int(reached.sum()), 1)
+    for value in (True, False):
+        labels, count = ndimage.label(reached == value)
+        sizes = np.bincount(labels.ravel(), minlength=count + 1)
+        border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+        for component in range(1, count + 1):
+            small = sizes[component] < least
+            enclosed = value or component not in border        # a hole: unreached, off the border
+            if small and enclosed:
+                reached[labels == component] = not value
+    return reached
+
+
 def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mapping[str, np.ndarray],
                        *, targets_mm: tuple[float, float] = (2.0, 10.0), bins: int = 60) -> Figure:
     """Two arms side by side. Left, the side view of each workspace: the outline of the cells
@@ -749,7 +791,7 @@ def plot_arms_compared(side: Mapping[str, np.ndarray], position_error_mm: Mappin
     centres = [(e[1:] + e[:-1]) / 2 for e in edges]
     for k, (name, p) in enumerate(side.items()):
         counts, _, _ = np.histogram2d(p[:, 0], p[:, 1], bins=edges)
-        left.contour(centres[0], centres[1], (counts > 0).T.astype(float), levels=[0.5],
+        left.contour(centres[0], centres[1], _without_specks(counts > 0).T.astype(float), levels=[0.5],
                      colors=[f"C{k}"], linewidths=2)
         left.plot([], [], color=f"C{k}", lw=2, label=f"{name}: where its tool reaches")
     left.plot(0, 0, "k+", ms=10, label="first joint's origin")

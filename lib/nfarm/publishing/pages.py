@@ -297,13 +297,15 @@ ABSTRACT_QUESTION = (
     "the closed form, Newton–Euler) and with strong baselines given the same inputs and tuning budget?")
 ABSTRACT_LIMITS = (
     "The learned inverse kinematics covers one declared region of each arm, where the inverse map is "
-    "single-valued (chapter 05); over the full joint ranges it is many-valued and not learnable as one "
+    "single-valued (chapter 5); over the full joint ranges it is many-valued and not learnable as one "
     "function. The data are simulated: the rigid-body torques are exact, and the measured arm is a model — "
     "links off their nominal parameters, friction whose law no learner assumes, torques read from a "
     "simulated motor current — not a real arm. The dissertation's text does not give its robot's numbers, data "
     "settings, rule bases or budgets: those designs are assumed and labelled so (the deviations table of "
-    "chapter 05). The spreads are over the sweep files' seeds (data draws) for the comparisons made on "
-    "validation data and bootstrap intervals over the held-out poses or trajectories for the results.")
+    "chapter 5). Comparisons made on validation data are spread over the seeds (draws of the data and of the "
+    "initialisation) of every finalist; results on held-out data carry bootstrap intervals over the held-out poses "
+    "or trajectories, and the verdict's pool every seed's model, resampled with the held-out units (a two-level "
+    "bootstrap).")
 
 
 def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
@@ -319,7 +321,7 @@ def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
             try:
                 answers += abstract_lines(edition.name, read_long_table(path))
             except (ValueError, KeyError) as exc:
-                answers.append(f"{edition.name}: no answers ({exc}); rerun chapter 07.")
+                answers.append(f"{edition.name}: no answers ({exc}); rerun chapter 7.")
     return answers
 
 
@@ -345,7 +347,7 @@ def _verdict_html(rows: list[dict[str, str]]) -> list[str]:
     from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
 
     if not rows:
-        return ["<p><b>Verdict.</b> Not yet computed: chapter 07 has not published its verdict table.</p>"]
+        return ["<p><b>Verdict.</b> Not yet computed: chapter 7 has not published its verdict table.</p>"]
     head, body = VERDICT_HEAD, verdict_display(rows)
     table = ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr></thead><tbody>"
              + "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in body)
@@ -372,7 +374,7 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
         parts += [f"<li>{html.escape(line)}</li>" for line in answers]
         parts.append("</ul>")
     else:
-        parts.append("<p><b>Answers.</b> Not yet computed: chapter 07 has not published its summary table.</p>")
+        parts.append("<p><b>Answers.</b> Not yet computed: chapter 7 has not published its summary table.</p>")
     parts.append(f"<p><b>Limits.</b> {html.escape(ABSTRACT_LIMITS)}</p>")
     return parts
 

@@ -182,7 +182,7 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
 
     rows = verdict_rows(figures_dir, arms)
     if not rows:
-        return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 07 has not published its verdict table."
+        return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 7 has not published its verdict table."
     lines = ["| " + " | ".join(VERDICT_HEAD) + " |", "|" + "---|" * len(VERDICT_HEAD)]
     lines += ["| " + " | ".join(_escape(cell) for cell in row) + " |" for row in verdict_display(rows)]
     return ("# Verdict {.unnumbered}\n\n" + "\n".join(lines)

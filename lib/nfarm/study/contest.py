@@ -9,7 +9,7 @@ how each contestant's configuration is chosen, with what budget, and how they ar
   by **successive halving** (Jamieson & Talwalkar 2016) with seed 0: every configuration trains
   on a share of the training poses (:data:`RUNG_FRACTION`), and each contestant's
   :data:`PROMOTED` best of them on validation (:func:`promoted_params`) train again on all of
-  them — the deployment size, where the choice is made; :func:`budgets` reports what each spent
+  them — the deployment size, where the contestants are ranked; :func:`budgets` reports what each spent
   (configurations and seconds of training), so a reader sees that no one got more.
 * **Choice**, on validation only (:func:`choose`, given the cells trained on all the poses): the
   configuration of least 95th-percentile tool position error, ties broken by the
@@ -62,8 +62,9 @@ __all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDConte
 RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
 #: Successive halving's first rung: the share of the training poses every configuration trains on.
 RUNG_FRACTION = 0.25
-#: Successive halving's second rung: each contestant's configurations trained again on all the poses.
-PROMOTED = 2
+#: Successive halving's second rung: each contestant's configurations trained again on all the poses
+#: (one: its best of the first rung; the rung's cost is the expensive configurations', which win).
+PROMOTED = 1
 #: The draws each chosen configuration is trained on besides seed 0.
 SPREAD_SEEDS = (1, 2, 3, 4)
 #: A contestant stays in contention within this factor of the best seed-0 95th percentile.

@@ -754,7 +754,7 @@ def read_verdicts(path) -> list[dict[str, str]]:
 def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
     """At most five plain sentences from the verdict rows of every arm (:data:`VERDICT_COLUMNS`,
     as read back from the published tables): where the ANFIS wins beyond the paired interval,
-    where another method wins and which, where no difference is shown, the study's targets the
+    where another method wins and which (each by its paired gap, in the metric's unit), where no difference is shown, the study's targets the
     ANFIS meets, and what to use for each task. A task ending in "every tier" sums up the tasks of
     its tiers: it gives the targets and what to use, the tiers the wins and losses."""
     def plain(task: str, name: str) -> str:          # "generic: multilayer perceptron" in "…, generic": the learner
@@ -773,9 +773,15 @@ def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
                 out.append(f"{task} ({'; '.join(say(r) for r in rows)})")
         return out
 
+    def by(r: Mapping[str, str]) -> str:             # the paired gap's size, in the metric's unit
+        gap = r.get("gap", "")
+        if not gap or gap.startswith("<"):
+            return ""
+        return f", by {gap.lstrip('-')} {r['unit']} of {r['metric']}"
+
     sentences = []
-    won = grouped("ANFIS better", lambda r: r["arm"])
-    lost = grouped("rival better", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}")
+    won = grouped("ANFIS better", lambda r: r["arm"] + by(r))
+    lost = grouped("rival better", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}{by(r)}")
     tied = grouped("no difference", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}")
     if won:
         sentences.append("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
