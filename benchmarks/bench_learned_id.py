@@ -1,6 +1,8 @@
 """Learned ID (chapters 06–07): training time of the model-free, the dissertation's, the
 identification and the residual models, and prediction time per sample against the
-Newton–Euler recursion (``rnea``) in the same run.
+Newton–Euler recursion (``rnea``) in the same run; and the boosted-trees baseline's prediction
+(chapters 06–07's residual and rival) by scikit-learn's compiled traversal, which the library
+uses, against the NumPy traversal it used before (:func:`numpy_forest`), bit for bit.
 
 Targets (issue 12): training of each model ≤ 5 min on 2 cores; prediction time per sample
 reported against ``rnea``. The options are chapter 06's (``id_identified``, ``id_dissertation``,
@@ -19,6 +21,7 @@ import papermill
 from common import best_of
 from nfarm.study import datasets, study_files
 from nfarm.model.dynamics import regressor, rnea
+from nfarm.learning.baselines import BaselineID
 from nfarm.learning.learned_id import LearnedID
 from nfarm.infra.paths import NOTEBOOKS, PARAMS
 from nfarm.presentation.tables import Table
@@ -36,6 +39,48 @@ def chapter_options() -> dict[str, dict]:
                for key in ("id_identified", "id_dissertation", "id_residual")}
     epochs = ast.literal_eval(declared["id_final_epochs"]["default"])
     return {"id_model_free": {**MODEL_FREE, "epochs": epochs, "random_state": seed}, **options}
+
+
+N_BOOSTING = 20_000
+
+
+def numpy_forest(state: dict, X: np.ndarray) -> np.ndarray:
+    """The boosted trees' prediction ``(N, n)`` by a traversal in NumPy (the library's before
+    scikit-learn's compiled predictor replaced it): one level of every tree at a time."""
+    out = np.empty((len(X), len(state["joints"])))
+    for j, joint in enumerate(state["joints"]):
+        raw = np.zeros(len(X))
+        raw += joint["baseline"]
+        for tree in joint["trees"]:
+            node = np.zeros(len(X), dtype=int)
+            while True:
+                inner = ~tree["leaf"][node].astype(bool)
+                if not inner.any():
+                    break
+                rows, at = np.flatnonzero(inner), node[inner]
+                x = X[rows, tree["feature"][at]]
+                left = np.where(np.isnan(x), tree["missing_left"][at].astype(bool), x <= tree["threshold"][at])
+                node[rows] = np.where(left, tree["left"][at], tree["right"][at])
+            raw += tree["value"][node]
+        out[:, j] = raw
+    return out
+
+
+def boosting_rows(robot, train, test) -> list[list]:
+    """Chapter 06's residual boosting (300 trees a joint) predicting ``N_BOOSTING`` states both ways."""
+    model = BaselineID("boosting", {"max_iter": 300, "learning_rate": 0.1, "max_leaf_nodes": 31},
+                       residual=True, random_state=0).fit(robot, {**{k: train[k][::16] for k in ("q", "qd", "qdd")},
+                                                                  "tau": train["tau_measured"][::16]})
+    X = model._features(*(np.resize(test[k], (N_BOOSTING, robot.n)) for k in ("q", "qd", "qdd")))
+    from nfarm.learning.baselines import _predict_state
+    before, after = numpy_forest(model.state_, X), _predict_state("boosting", model.state_, X)
+    same = "bit-identical" if np.array_equal(before, after) else f"DIFFER by {np.abs(before - after).max():.3g}"
+    s_before = best_of(lambda: numpy_forest(model.state_, X)) / N_BOOSTING
+    s_after = best_of(lambda: _predict_state("boosting", model.state_, X)) / N_BOOSTING
+    return [["boosting trees, NumPy traversal (before)", f"{N_BOOSTING:,} samples", s_before * N_BOOSTING,
+             s_before * 1e6, "peer"],
+            ["boosting trees, scikit-learn's traversal (now)", f"{N_BOOSTING:,} samples", s_after * N_BOOSTING,
+             s_after * 1e6, f"{s_before / s_after:.2g}× faster, {same}"]]
 
 
 def main() -> None:
@@ -63,6 +108,7 @@ def main() -> None:
         s = best_of(lambda: model.predict(*X)) / N_PREDICT
         rows.append([f"LearnedID.predict, {name}", f"{N_PREDICT:,} samples", s * N_PREDICT, s * 1e6,
                      f"{s / base:.3g}× rnea"])
+    rows += boosting_rows(robot, train, test)
     print(Table(["what", "size", "seconds", "µs per sample", "note"], rows,
                 floatfmt=["", "", ".3g", ".3g", ""]).to_markdown())
 

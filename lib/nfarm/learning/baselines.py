@@ -400,19 +400,36 @@ def _state_of(learner: str, model) -> dict:
     return {**state, "weights": list(last.coefs_), "biases": list(last.intercepts_)}         # mlp
 
 
-def _tree_values(tree: dict, X: np.ndarray) -> np.ndarray:
-    """A regression tree's leaf value for each row of ``X`` (scikit-learn's rule: ``x <= threshold``
-    goes left, a missing value where ``missing_left`` says)."""
-    node = np.zeros(len(X), dtype=int)
-    for _ in range(len(tree["leaf"])):                     # children follow their parents: depth < nodes
-        inner = ~tree["leaf"][node].astype(bool)
-        if not inner.any():
-            break
-        rows, at = np.flatnonzero(inner), node[inner]
-        x = X[rows, tree["feature"][at]]
-        left = np.where(np.isnan(x), tree["missing_left"][at].astype(bool), x <= tree["threshold"][at])
-        node[rows] = np.where(left, tree["left"][at], tree["right"][at])
-    return tree["value"][node]
+def _forest(trees: list[dict]) -> list:
+    """scikit-learn's compiled tree predictors (``TreePredictor``, the class its
+    ``HistGradientBoostingRegressor`` predicts with) rebuilt from the saved node arrays: numerical
+    splits only (``x <= threshold`` goes left, a missing value where ``missing_left`` says)."""
+    from sklearn.ensemble._hist_gradient_boosting.common import PREDICTOR_RECORD_DTYPE, X_BITSET_INNER_DTYPE
+    from sklearn.ensemble._hist_gradient_boosting.predictor import TreePredictor
+
+    no_bitsets = np.zeros((0, 8), dtype=X_BITSET_INNER_DTYPE)
+    forest = []
+    for tree in trees:
+        nodes = np.zeros(len(tree["leaf"]), dtype=PREDICTOR_RECORD_DTYPE)
+        nodes["feature_idx"], nodes["num_threshold"], nodes["value"] = tree["feature"], tree["threshold"], tree["value"]
+        nodes["left"], nodes["right"] = tree["left"], tree["right"]
+        nodes["is_leaf"], nodes["missing_go_to_left"] = tree["leaf"], tree["missing_left"]
+        forest.append(TreePredictor(nodes, no_bitsets, no_bitsets))
+    return forest
+
+
+def _forest_values(trees: list[dict], baseline: float, X: np.ndarray) -> np.ndarray:
+    """One joint's boosted prediction for each row of ``X (N, k)``: the baseline plus every tree's
+    leaf value, added in the trees' order as scikit-learn's ``predict`` adds them (its compiled
+    traversal, one thread; about 40× faster than a traversal in NumPy, which costs ~0.2 ms a
+    state for 300 trees)."""
+    X = np.ascontiguousarray(X, dtype=float)
+    no_categories, feature_map = np.zeros((0, 8), dtype=np.uint32), np.zeros(X.shape[1], dtype=np.uint32)
+    raw = np.zeros(len(X))
+    raw += baseline
+    for predictor in _forest(trees):
+        raw += predictor.predict(X, no_categories, feature_map, 1)
+    return raw
 
 
 def _predict_state(learner: str, state: dict, X: np.ndarray) -> np.ndarray:
@@ -425,14 +442,7 @@ def _predict_state(learner: str, state: dict, X: np.ndarray) -> np.ndarray:
     if learner == "linear":
         return X @ state["coef"].T + state["intercept"]
     if learner == "boosting":
-        out = np.empty((len(X), len(state["joints"])))
-        for j, joint in enumerate(state["joints"]):
-            raw = np.zeros(len(X))
-            raw += joint["baseline"]
-            for tree in joint["trees"]:
-                raw += _tree_values(tree, X)
-            out[:, j] = raw
-        return out
+        return np.column_stack([_forest_values(joint["trees"], joint["baseline"], X) for joint in state["joints"]])
     Xs = (X - state["mean"]) / state["scale"]
     if learner == "ridge":
         return Xs @ state["coef"].T + state["intercept"]
