@@ -11,7 +11,7 @@ import pytest
 
 from nfarm.infra.paths import FIGURES, NOTEBOOKS, ROOT
 from nfarm.infra.notebook_runs import chapters, run_notebook
-from nfarm.publishing.pages import COURSE_TAGS, chapter_title, export_html
+from nfarm.publishing.pages import COURSE_TAGS, chapter_title, export_html, numbered_outputs
 
 NOTEBOOK_FILES = chapters(NOTEBOOKS)
 
@@ -23,6 +23,37 @@ def run_chapter(notebook, output, parameters):
 
 
 REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
+
+
+#: Tables of every row saved for machines (nfarm.study.summary.long_table); their pages show reading copies.
+LONG_TABLES = {"07_summary", "08_learned"}
+
+#: What a page's prose (its markdown, code and tables left out) must not hold, each a kind and a pattern.
+PROSE_DEFECTS = (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ections?|[Ff]igures?|[Tt]ables?)\s+0\d"),
+                 ("a file stem", r"\b0\d_[a-z]\w+"),
+                 ("a build log", r"\bran in this run\b|\bfiles? made and\b|\bwere read from\b"),
+                 ("a number that is not finite", r"(?<![\w-])-?(?:inf|nan)(?!\w)"))     # as Python prints one
+
+
+def prose_defect(words: str) -> tuple[str, str] | None:
+    """The first of :data:`PROSE_DEFECTS` in ``words``: its kind and the text around it."""
+    for kind, pattern in PROSE_DEFECTS:
+        found = re.search(f".{{0,50}}(?:{pattern}).{{0,30}}", words)
+        if found:
+            return kind, found.group(0)
+    return None
+
+
+@pytest.mark.parametrize("words, kind", [
+    ("as chapter 06 shows", "a zero-padded chapter number"),
+    ("its credit, in 07_ik_credit, says", "a file stem"),
+    ("0 files made and 9 reused", "a build log"),
+    ("LM needs -inf% fewer iterations", "a number that is not finite"),
+    ("an error of nan mm", "a number that is not finite"),
+    ("as chapter 6 shows, 0.9 mm in Figure 6.2; an infinite line; nanometres; no exception, no NaN", None)])
+def test_the_prose_check_fails_on_each_defect(words, kind):
+    found = prose_defect(words)
+    assert (found[0] if found else None) == kind
 
 
 def check_page(notebook, executed, where):
@@ -55,11 +86,8 @@ def check_page(notebook, executed, where):
     words = " ".join(re.sub(r"<[^>]+>", " ", re.sub(r"<code>.*?</code>|<table.*?</table>", " ", m, flags=re.S))
                      for m in re.findall(r'<div class="jp-RenderedHTMLCommon jp-RenderedMarkdown[^"]*"[^>]*>(.*?)</div>',
                                          text, flags=re.S))
-    for kind, pattern in (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ections?|[Ff]igures?|[Tt]ables?)\s+0\d"),
-                          ("a file stem", r"\b0\d_[a-z]\w+"),
-                          ("a build log", r"\bran in this run\b|\bfiles? made and\b|\bwere read from\b")):
-        found = re.search(f".{{0,50}}(?:{pattern}).{{0,30}}", words)
-        assert not found, f"{kind} in the prose: {found.group(0)!r}"
+    found = prose_defect(words)
+    assert not found, f"{found[0]} in the prose: {found[1]!r}"
     for number in re.findall(r"(?<![\w.,])\d[\d,]*\.\d+|(?<![\w.,])\d{1,3}(?:,\d{3}){2,}", prose):
         digits = number.replace(",", "").replace(".", "").lstrip("0").rstrip("0" if "." not in number else "")
         assert len(digits) <= (5 if "." in number else 6), f"false precision in prose: {number}"
@@ -151,6 +179,11 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     figures = sorted(out.glob("*.png"))
     tables = sorted((out / "tables").glob("*.csv"))
     assert figures and tables
+    # What a chapter saves, its page shows, numbered (the long tables of every row are for machines: their
+    # reading copies are shown)
+    shown = {name for _, name in numbered_outputs(executed)}
+    unshown = {p.stem for p in figures + tables} - shown - LONG_TABLES
+    assert not unshown, f"saved but not shown on the page: {sorted(unshown)}"
     for path in figures + tables:
         assert path.name.startswith(f"{prefix}_") and path.stat().st_size > 0
     for table in tables:

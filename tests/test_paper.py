@@ -33,7 +33,11 @@ out = project_path(out_dir)
 fig, ax = plt.subplots()
 ax.plot([0, 1], [0, 1])
 save_figure(fig, out, "{p}_line", caption="A line of chapter {p}")
-Table(["smoke", "value"], [[smoke, 1.5]], caption="Was chapter {p} a smoke run?").save(out, "{p}_params")"""
+from IPython.display import display
+display(Table(["x"], [[1]], caption="Shown, not saved: no number"))
+display(Table(["smoke", "value"], [[smoke, 1.5]], caption="Was chapter {p} a smoke run?").save(out, "{p}_params"))
+from IPython.display import Markdown, display
+display(Markdown("Its parameters are in {{numref}}`{p}_params`."))"""
 
 PROSE = 'from IPython.display import Markdown, display\ndisplay(Markdown(f"The answer is {6 * 7}."))'
 
@@ -57,7 +61,7 @@ def smoke_report(tmp_path_factory):
     notebooks = root / "notebooks"
     notebooks.mkdir()
     chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"', FIGURE_AND_TABLE.format(p="01"),
-            prose="This chapter draws a line.")
+            prose="This chapter draws a line ({numref}`01_line`).")
     chapter(notebooks / "02_shared.ipynb", "seed = 0", FIGURE_AND_TABLE.format(p="02"))
     chapter(notebooks / "03_compare.ipynb", 'study_files = ["sa.yaml"]', FIGURE_AND_TABLE.format(p="03"))
     arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
@@ -82,6 +86,11 @@ def test_the_smoke_report_builds_one_pdf_of_the_whole_study(smoke_report):
     assert "Table 1.1:" in flat and "Table 2.1:" in flat and "Table 3.1:" in flat, "tables numbered per chapter"
     assert "Figure B1.1:" in flat, "the other arm's chapters numbered apart"
     assert "Was chapter 02 a smoke run?" in flat
+    assert "Table 1.1: Was chapter 01 a smoke run?" in flat, "numbered as its page numbers it: a table not saved is not"
+    assert "Shown, not saved: no number" in flat and "Table 1.2" not in flat
+    assert "draws a line (Figure 1.1)" in flat and "draws a line (Figure B1.1)" in flat, "citations resolved per edition"
+    assert "Its parameters are in Table 1.1." in flat and "Its parameters are in Table B1.1." in flat
+    assert "Its parameters are in Table 2.1." in flat and "numref" not in flat
     assert "??" not in text and not re.search(r"\(\w+\?\)", text), "no unresolved reference"
     assert "References" in text
     refs = flat[flat.rindex("References"):]
@@ -132,6 +141,11 @@ def test_pages_fold_their_code_and_load_nothing_from_the_internet(smoke_report):
     folded = re.findall(r"<details class=\"nfarm-code\">.*?</details>", first, re.S)
     assert any("save_figure" in block for block in folded), "the code is there, folded"
     assert "save_figure" not in re.sub(r"<details class=\"nfarm-code\">.*?</details>", "", first, flags=re.S)
+    # The parameters the page was made with, as a small table above the folded code (the smoke run's own values)
+    table = re.search(r'<table class="nfarm-parameters">.*?</table>', first, re.S)
+    import html as html_
+    assert table and '<code>robot_file</code></td><td><code>"ra.yaml"</code>' in html_.unescape(table.group(0)), table
+    assert "<code>smoke</code></td><td><code>True</code>" in table.group(0), "the run's value, not the default"
 
 
 @pytest.mark.notebook
@@ -218,6 +232,39 @@ def test_the_pdf_is_built_again_only_when_what_it_is_made_of_changes(smoke_repor
     (smoke_report / "again" / ".paper.sha256").write_text("0" * 64 + "\n")   # a stamp that does not match
     paper.write_paper(pages, commit="abd")
     assert len(compiled) == 3
+
+
+@pytest.mark.notebook
+def test_a_citation_of_a_figure_or_table_no_chapter_shows_stops_the_pdf_in_one_line():
+    from nfarm.infra.notebook_runs import ReportError
+
+    assert paper._prose("as {numref}`01_line` shows", {"01_line": "fig-a-01_line"}, "01_robot.ipynb") == \
+        "as `@fig-a-01_line`{=typst} shows"
+    with pytest.raises(ReportError, match=r"^01_robot.ipynb: cites 01_lnie, which no chapter of this edition shows"):
+        paper._prose("as {numref}`01_lnie` shows", {"01_line": "fig-a-01_line"}, "01_robot.ipynb")
+
+
+def test_a_page_citing_what_its_edition_does_not_show_is_refused_in_one_line():
+    from nfarm.infra.notebook_runs import ReportError
+    from nfarm.publishing.pages import resolve_citations
+
+    refs = {"06_ik_curves": ("Figure S6.2", "06_anfis_training.html#06_ik_curves")}
+    assert resolve_citations("as {numref}<code>06_ik_curves</code> shows", refs, "06.ipynb") == \
+        'as <a href="06_anfis_training.html#06_ik_curves">Figure S6.2</a> shows'
+    with pytest.raises(ReportError, match=r"^06.ipynb: cites 06_ik_curvse, which no chapter of this edition shows"):
+        resolve_citations("as {numref}<code>06_ik_curvse</code> shows", refs, "06.ipynb")
+
+
+@pytest.mark.notebook
+def test_each_edition_s_html_cites_its_figures_and_tables_by_number_and_links_them(smoke_report):
+    page = (smoke_report / "01_robot.html").read_text()
+    assert '<figure class="nfarm-figure" id="fig-01_line"' in page and '<a id="tbl-01_params"></a>' in page
+    assert '(<a href="01_robot.html#fig-01_line">Figure 1.1</a>)' in page
+    assert '<a href="01_robot.html#tbl-01_params">Table 1.1</a>' in page and "<strong>Table 1.1.</strong>" in page
+    other = (smoke_report / "b" / "01_robot.html").read_text()
+    assert '<a href="01_robot.html#fig-01_line">Figure B1.1</a>' in other and "<strong>Table B1.1.</strong>" in other
+    unfolded = lambda text: re.sub(r'<details class="nfarm-code">.*?</details>', "", text, flags=re.S)   # noqa: E731
+    assert "numref" not in unfolded(page) and "numref" not in unfolded(other), "every citation resolved"
 
 
 @pytest.mark.notebook

@@ -62,7 +62,8 @@ def test_the_arms_figure_keeps_its_legends_off_the_data():
 
 def test_figures_are_numbered_by_chapter_in_the_order_shown(tmp_path):
     from nfarm.presentation import plotting
-    plotting._NUMBERS.clear()
+    from nfarm.presentation import numbering
+    numbering.clear()
     assert plotting.figure_number(str(tmp_path / "06_ik_curves.png")) == "Figure 6.1."
     assert plotting.figure_number(str(tmp_path / "06_ik_sizes.png")) == "Figure 6.2."
     assert plotting.figure_number(str(tmp_path / "06_ik_curves.png")) == "Figure 6.1."    # shown again

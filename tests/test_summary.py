@@ -266,7 +266,7 @@ def test_the_abstract_says_what_the_measured_arm_gives_each_tier(tmp_path):
 
 
 def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
-    from nfarm.study.summary import conclusion, read_verdicts, targets_met, task_verdict, verdict_table
+    from nfarm.study.summary import conclusion, read_verdicts, read_warm_starts, targets_met, task_verdict, verdict_table
 
     ik = task_verdict("arm A", "inverse kinematics", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
                  (-4.0, -4.2, -3.8), {"ANFIS": "3 of 3", "RBF": "2 of 3"}, exact="the closed form")
@@ -283,17 +283,31 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
     rows = read_verdicts(tmp_path / "tables" / "07_verdict.csv")
     assert [r["verdict"] for r in rows] == ["ANFIS better", "rival better", "no difference"]
     assert rows[1]["best"] == "ridge" and rows[1]["best_value"] == "< 1e-6"       # noise level, shown as such
-    said = conclusion(rows)
-    assert len(said) <= 5
+    warm = [{"start": "home (the dissertation's)", "targets": "2000", "mean iterations": "5.99", "max iterations": "9"},
+            {"start": "ANFIS prediction", "targets": "2000", "mean iterations": "2.07", "max iterations": "3"},
+            {"start": "RBF interpolation (contest) prediction", "targets": "2000", "mean iterations": "2.24",
+             "max iterations": "4"},
+            {"start": "closed form (the region's solution)", "targets": "2000", "mean iterations": "0.00",
+             "max iterations": "0"}]
+    said = conclusion(rows, {"arm A": warm})
+    assert len(said) == 5 and all(s.count(". ") == 0 for s in said), said        # five sentences at most
     assert said[0] == ("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
                        "inverse kinematics (arm A, by 4 mm of position p95).")
     assert said[1] == ("Another method is better than ANFIS, beyond the paired interval, on rigid-body inverse dynamics "
-                       f"(arm A: ridge, by 2.5 % of {WORST_ID}).")
-    assert said[2] == ("ANFIS and its best rival are no different within the paired interval on measured arm, generic "
-                       "(arm B: MLP).")                          # the tier's name not repeated before the learner's
+                       f"(arm A: ridge, by 2.5 % of {WORST_ID}); and ANFIS and its best rival are no different within "
+                       "the paired interval on measured arm, generic (arm B: MLP).")    # the tier not repeated
+    assert said[2] == ("What the ANFIS gives the exact solver, as measured: started from its prediction, "
+                       "Levenberg–Marquardt needs on average 2.07 (at most 3) iterations against 5.99 (at most 9) from "
+                       "the home pose and 2.24 (at most 4) from the prediction of RBF interpolation (arm A); from the "
+                       "closed form's solution, none; whether such a start saves seconds depends on what the "
+                       "prediction costs, which chapter 7 times on the reader's machine."), said[2]
     assert said[3] == ("The study's targets the ANFIS meets on the whole interval: inverse kinematics (arm A) 3 of 3.")
     assert said[4] == ("What to use, by the held-out data: inverse kinematics, the closed form (exact; of the learned "
                        "methods, ANFIS); rigid-body inverse dynamics, ridge.")
+    assert conclusion(rows)[2] == said[3]                   # without chapter 7's starts, no such sentence
+    (tmp_path / "starts.csv").write_text("start,targets\nhome,10\n")
+    with pytest.raises(ValueError, match="starts.csv: not a table of LM's starts: columns mean iterations missing"):
+        read_warm_starts(tmp_path / "starts.csv")
     (tmp_path / "bad.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match="bad.csv: not a verdict table: columns arm, task"):
         read_verdicts(tmp_path / "bad.csv")

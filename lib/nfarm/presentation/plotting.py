@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 from ..infra.paths import atomic_path
 from ..model.kinematics import fk, fk_all
 from ..model.robot import Robot
+from .numbering import anchor, number
 
 __all__ = ["save_figure", "draw_arm", "plot_arm_poses", "plot_workspace", "plot_map",
            "plot_region", "plot_histograms", "plot_id_trajectories", "plot_torque_distributions",
@@ -59,21 +60,12 @@ def _in_kernel() -> bool:
     return getattr(get_ipython(), "kernel", None) is not None
 
 
-_NUMBERS: dict[str, list[str]] = {}     # chapter → its figures' names, in the order first shown
-
-
 def figure_number(path: str) -> str:
     """"Figure 6.3." for the third figure a chapter shows (its file named ``06_…``), in the order
-    they are first shown in this process; a figure shown again keeps its number; "Figure." for
-    a file not named after a chapter."""
-    name = os.path.splitext(os.path.basename(path))[0]
-    chapter = name[:2]
-    if not (chapter.isdigit() and name[2:3] == "_"):
-        return "Figure."
-    names = _NUMBERS.setdefault(chapter, [])
-    if name not in names:
-        names.append(name)
-    return f"Figure {int(chapter)}.{names.index(name) + 1}."
+    they are first shown in this process (:func:`nfarm.presentation.numbering.number`); a figure
+    shown again keeps its number; "Figure." for a file not named after a chapter."""
+    found = number("Figure", os.path.splitext(os.path.basename(path))[0])
+    return f"Figure {found}." if found else "Figure."
 
 
 def _display_figure(path: str, caption: str) -> None:
@@ -87,7 +79,8 @@ def _display_figure(path: str, caption: str) -> None:
     with open(path, "rb") as f:
         data = base64.b64encode(f.read()).decode("ascii")
     text = html.escape(caption or os.path.basename(path), quote=True)
-    figure = (f'<figure class="nfarm-figure" style="margin:.5em 0 1.5em">'
+    name = html.escape(anchor("Figure", os.path.splitext(os.path.basename(path))[0]), quote=True)  # citations link here
+    figure = (f'<figure class="nfarm-figure" id="{name}" style="margin:.5em 0 1.5em">'
               f'<img src="data:image/png;base64,{data}" alt="{text}" style="max-width:100%">'
               f'<figcaption style="color:#444;font-size:.9em;margin-top:.3em"><b>{figure_number(path)}</b> {text}'
               f'</figcaption></figure>')
@@ -766,11 +759,10 @@ def _without_specks(reached: np.ndarray, share: float = 0.02) -> np.ndarray:
         labels, count = ndimage.label(reached == value)
         sizes = np.bincount(labels.ravel(), minlength=count + 1)
         border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-        for component in range(1, count + 1):
-            small = sizes[component] < least
-            enclosed = value or component not in border        # a hole: unreached, off the border
-            if small and enclosed:
-                reached[labels == component] = not value
+        components = np.arange(1, count + 1)
+        enclosed = np.ones(count, bool) if value else ~np.isin(components, border)   # a hole: off the border
+        specks = components[(sizes[1:] < least) & enclosed]
+        reached[np.isin(labels, specks)] = not value
     return reached
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..infra.paths import atomic_path, shown_path
+from .numbering import anchor, number
 
 __all__ = ["Table", "shown", "markdown_section", "DOCUMENTS"]
 
@@ -66,6 +67,7 @@ class Table:
     floatfmt: str | Sequence[str] = ".6g"
     caption: str = ""
     _text: list[list[str]] = field(init=False, repr=False)
+    _name: str = field(init=False, repr=False, default="")
 
     def __post_init__(self):
         for k, row in enumerate(self.rows):
@@ -85,23 +87,35 @@ class Table:
         writer.writerows(self._text)
         return buffer.getvalue()
 
-    def to_markdown(self) -> str:
+    def _lines(self) -> list[str]:
         escape = lambda s: s.replace("|", "\\|")  # noqa: E731
         lines = ["| " + " | ".join(map(escape, self.columns)) + " |",
                  "|" + "|".join("---" for _ in self.columns) + "|"]
-        lines += ["| " + " | ".join(map(escape, row)) + " |" for row in self._text]
+        return lines + ["| " + " | ".join(map(escape, row)) + " |" for row in self._text]
+
+    def to_markdown(self) -> str:
+        lines = self._lines()
         if self.caption:
             lines = [f"*{self.caption}*", ""] + lines
         return "\n".join(lines) + "\n"
 
     def _repr_markdown_(self) -> str:
-        return self.to_markdown()
+        """The table as a chapter shows it: a saved table with a caption is numbered in its chapter
+        (**Table 6.2.**, :mod:`nfarm.presentation.numbering`) under an anchor of its name, which
+        citations link to; any other as :meth:`to_markdown` writes it."""
+        found = number("Table", self._name) if self._name and self.caption else None
+        if not found:
+            return self.to_markdown()
+        return "\n".join([f'<a id="{anchor("Table", self._name)}"></a>', "", f"**Table {found}.** *{self.caption}*", "",
+                          *self._lines()]) + "\n"
 
     def save(self, out_dir: str | os.PathLike, name: str) -> "Table":
-        """Write ``out_dir/tables/name.csv`` and ``.md`` atomically; return ``self`` (for display)."""
+        """Write ``out_dir/tables/name.csv`` and ``.md`` atomically; return ``self`` (for display,
+        numbered under ``name``)."""
         for suffix, text in ((".csv", self.to_csv()), (".md", self.to_markdown())):
             with atomic_path(Path(out_dir) / "tables" / f"{name}{suffix}") as tmp:
                 tmp.write_text(text, encoding="utf-8")
+        self._name = name
         return self
 
 

@@ -18,8 +18,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..infra.notebook_runs import DropMessage
+from ..infra.notebook_runs import DropMessage, ReportError
 from ..infra.paths import ROOT, atomic_path, shown_path
+from ..presentation.numbering import anchor
 from .editions import Edition
 from .manifest import chapter_files
 
@@ -106,6 +107,30 @@ def _merge_parameters(nb) -> None:
     del nb.cells[injected[0]]
 
 
+def _parameters_table(nb) -> None:
+    """The parameters cell's values as rows (name, value, its comment) in the cell's metadata
+    (``nfarm_parameters``), which the study edition's page shows as a small table above the
+    folded code: a reader sees the values the page was made with without opening the code."""
+    import ast
+
+    for cell in nb.cells:
+        if cell.cell_type != "code" or "parameters" not in cell.metadata.get("tags", []):
+            continue
+        try:
+            tree = ast.parse(cell.source)
+        except SyntaxError:
+            return
+        lines = cell.source.split("\n")
+        rows = []
+        for node in tree.body:
+            if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+                rest = lines[node.end_lineno - 1][node.end_col_offset:].strip()
+                note = rest[1:].strip() if rest.startswith("#") else ""
+                rows.append([node.targets[0].id, ast.get_source_segment(cell.source, node.value), note])
+        cell.metadata["nfarm_parameters"] = rows
+        return
+
+
 def _name_the_arm(nb, arm: str) -> None:
     """The chapter's heading names the arm its page is for (an edition's pages look alike)."""
     for cell in nb.cells:
@@ -127,6 +152,14 @@ PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
 {%- block html_head_js_requirejs -%}{%- endblock html_head_js_requirejs -%}
 {% block input_group -%}
 {%- if resources.nfarm_fold_code and cell.cell_type == 'code' -%}
+{%- if cell.metadata.nfarm_parameters -%}
+<table class="nfarm-parameters"><caption>The parameters of this run</caption>
+<thead><tr><th>parameter</th><th>value</th><th>what it sets</th></tr></thead><tbody>
+{%- for row in cell.metadata.nfarm_parameters -%}
+<tr><td><code>{{ row[0] | e }}</code></td><td><code>{{ row[1] | e }}</code></td><td>{{ row[2] | e }}</td></tr>
+{%- endfor -%}
+</tbody></table>
+{%- endif -%}
 <details class="nfarm-code"><summary>show code</summary>
 {{ super() }}
 </details>
@@ -137,7 +170,10 @@ PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
 {% block extra_css %}
 <style>details.nfarm-code>summary{cursor:pointer;color:#666;font:0.85em sans-serif;margin:.2em 0 .2em 1em}
 nav.nfarm-toc{font:0.9em sans-serif;margin:1em 0 2em;padding:.5em 1em;border-left:3px solid #ccd}
-nav.nfarm-toc ul{list-style:none;margin:.3em 0;padding:0}nav.nfarm-toc li.toc3{margin-left:1.5em}</style>
+nav.nfarm-toc ul{list-style:none;margin:.3em 0;padding:0}nav.nfarm-toc li.toc3{margin-left:1.5em}
+table.nfarm-parameters{font-size:.85em;margin:.5em 0 .5em 1em;border-collapse:collapse}
+table.nfarm-parameters caption{text-align:left;color:#444}
+table.nfarm-parameters td,table.nfarm-parameters th{padding:.1em .6em;text-align:left;vertical-align:top}</style>
 {% endblock extra_css %}
 """
 
@@ -149,6 +185,54 @@ def edition_letter(edition: Edition) -> str:
 
 
 _FIGURE_NUMBER = re.compile(r"<b>Figure (\d+\.\d+)\.</b>")
+_TABLE_NUMBER = re.compile(r"<strong>Table (\d+\.\d+)\.</strong>")
+# A chapter's numbered outputs (nfarm.presentation.numbering): a figure's HTML, a table's Markdown.
+_NUMBERED_FIGURE = re.compile(r'<figure class="nfarm-figure" id="fig-(?P<name>[^"]+)".*?<b>Figure (?P<number>\d+\.\d+)\.</b>', re.S)
+_NUMBERED_TABLE = re.compile(r'\A<a id="tbl-(?P<name>[^"]+)"></a>\s*\*\*Table (?P<number>\d+\.\d+)\.\*\*')
+
+
+def numbered_outputs(executed: Path) -> dict[tuple[str, str], str]:
+    """The figures and tables an executed chapter numbers, by kind and the name each is saved
+    under: ``{("Figure", "06_ik_curves"): "6.2", …}`` (:mod:`nfarm.presentation.numbering`)."""
+    import nbformat
+
+    found = {}
+    for cell in nbformat.read(executed, 4).cells:
+        for output in cell.get("outputs", []) if cell.cell_type == "code" else []:
+            data = output.get("data", {})
+            for kind, pattern, text in (("Figure", _NUMBERED_FIGURE, data.get("text/html", "")),
+                                        ("Table", _NUMBERED_TABLE, data.get("text/markdown", ""))):
+                match = pattern.search(text) if isinstance(text, str) else None
+                if match:
+                    found.setdefault((kind, html.unescape(match.group("name"))), match.group("number"))
+    return found
+
+
+def citable(numbered: Mapping[tuple[str, str], tuple[str, str]]) -> dict[str, tuple[str, str]]:
+    """Each citation key prose may write (:func:`nfarm.presentation.numbering.citation_keys`) ->
+    the text and address of what it names, from ``numbered``: ``(kind, name)`` -> (text, address)."""
+    from ..presentation.numbering import citation_keys
+
+    return {key: numbered[item] for key, item in citation_keys(numbered).items()}
+
+
+def resolve_citations(body: str, refs: Mapping[str, tuple[str, str]], where: str) -> str:
+    """``body`` (a page) with each citation :data:`nfarm.presentation.numbering.CITATION_HTML` made a
+    link: ``refs`` maps a name to its text ("Figure S6.2") and address ("06_….html#06_ik_curves").
+
+    Raises:
+        ReportError: ``"<where>: cites <name>, which no chapter of this edition shows"``.
+    """
+    from ..presentation.numbering import CITATION_HTML
+
+    def link(match: re.Match) -> str:
+        name = html.unescape(match.group("name"))
+        if name not in refs:
+            raise ReportError(f"{where}: cites {name}, which no chapter of this edition shows as a numbered "
+                              f"figure or table")
+        text, href = refs[name]
+        return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
+    return CITATION_HTML.sub(link, body)
 _SECTION = re.compile(r'<h([23]) id="([^"]+)">(.*?)<a class="anchor-link"', re.S)
 
 
@@ -166,14 +250,16 @@ def _contents(body: str) -> str:
 
 def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATHJAX,
                 title: str = "", arm: str = "", fold_code: bool = False, letter: str = "",
-                contents: bool = False) -> None:
+                contents: bool = False, refs: Mapping[str, tuple[str, str]] | None = None) -> None:
     """The executed notebook as an HTML page: cells tagged ``remove-input`` show only their
     output (prose computed in code), ``remove-cell`` nothing; MathJax from the report
     directory; a navigation bar between chapters; one parameters cell with the run's values
     (:func:`_merge_parameters`); the heading naming ``arm`` when given; with ``fold_code``,
     every code cell's input folded under "show code" (:data:`PAGE_TEMPLATE`); the figures'
     numbers after ``letter`` (:func:`edition_letter`), as the PDF numbers them; with ``contents``,
-    a table of contents under the title (:func:`_contents`). Nothing is loaded from elsewhere."""
+    a table of contents under the title (:func:`_contents`); tables numbered after ``letter`` too,
+    and citations of figures and tables (:mod:`nfarm.presentation.numbering`) resolved by ``refs``
+    (:func:`resolve_citations`; default: this page's own). Nothing is loaded from elsewhere."""
     import nbformat
     from jinja2 import DictLoader
     from nbconvert import HTMLExporter
@@ -199,6 +285,8 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     try:
         nb = nbformat.read(executed, 4)
         _merge_parameters(nb)
+        if fold_code:
+            _parameters_table(nb)
         if arm:
             _name_the_arm(nb, arm)
         body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title or executed.stem},
@@ -208,6 +296,11 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     body = body.replace('<script src=""></script>', "")       # the URLs switched off above
     if letter:
         body = _FIGURE_NUMBER.sub(lambda m: f"<b>Figure {letter}{m.group(1)}.</b>", body)
+        body = _TABLE_NUMBER.sub(lambda m: f"<strong>Table {letter}{m.group(1)}.</strong>", body)
+    if refs is None:                 # the page's own figures and tables
+        refs = citable({(kind, name): (f"{kind} {letter}{number}", f"#{anchor(kind, name)}")
+                        for (kind, name), number in numbered_outputs(executed).items()})
+    body = resolve_citations(body, refs, executed.name)
     if contents:
         body = _contents(body)
     if nav:
@@ -342,7 +435,23 @@ def verdict_rows(figures_dir: Path, arms: list[Edition]) -> list[dict[str, str]]
     return rows
 
 
-def _verdict_html(rows: list[dict[str, str]]) -> list[str]:
+def warm_start_rows(figures_dir: Path, arms: list[Edition]) -> dict[str, list[dict[str, str]]]:
+    """Every arm's table of LM from each start (chapter 07's ``07_ik_warm_start.csv``), by the
+    arm's name, for :func:`nfarm.study.summary.conclusion`; an arm without one adds none."""
+    from ..study.summary import read_warm_starts
+
+    out = {}
+    for edition in arms:
+        path = figures_dir / edition.subdir / "tables" / "07_ik_warm_start.csv"
+        if path.is_file():
+            try:
+                out[edition.name] = read_warm_starts(path)
+            except ValueError:
+                continue
+    return out
+
+
+def _verdict_html(rows: list[dict[str, str]], warm: dict[str, list[dict[str, str]]] | None = None) -> list[str]:
     """The verdict table and the conclusion (:func:`nfarm.study.summary.conclusion`) as HTML."""
     from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
 
@@ -358,13 +467,13 @@ def _verdict_html(rows: list[dict[str, str]]) -> list[str]:
             "difference; each value pooled over the seeds of its training and the test units, the interval a two-level "
             "bootstrap over both) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
             "<code>docs/STUDY.md</code>).</p>", table,
-            "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows)) + "</p>"]
+            "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows, warm)) + "</p>"]
 
 
 def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     """The verdict (:func:`verdict_rows`), then the abstract: the study's question, each arm's
     answers (:func:`abstract_answers`) and the study's limits."""
-    parts = _verdict_html(verdict_rows(figures_dir, arms))
+    parts = _verdict_html(verdict_rows(figures_dir, arms), warm_start_rows(figures_dir, arms))
     parts += ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
     answers = abstract_answers(figures_dir, arms)
     if answers:
@@ -591,6 +700,14 @@ def write_pages(report: ReportPages) -> None:
     for arm in arms:
         own, here = pages[arm.name], copies(arm)
         up = "../" if arm.subdir else ""      # an edition's pages are one directory down
+        numbered = {}                         # what the edition's prose may cite, and where it is
+        for (prefix, _, source), shown_at in zip(own, here):
+            executed = report.executed_dir / source.replace(".html", ".ipynb")
+            letter = edition_letter(arm) if prefix in per_arm else ""
+            for (kind, name), number in (numbered_outputs(executed) if executed.exists() else {}).items():
+                numbered.setdefault((kind, name), (f"{kind} {letter}{number}",
+                                                   f"{Path(shown_at).name}#{anchor(kind, name)}"))
+        refs = citable(numbered)
         for k, (prefix, title, page) in enumerate(own):
             # An edition's last chapter leads on to the chapter that compares the arms (one page,
             # the primary's), which the reader of every edition meets last; that page leads back
@@ -619,7 +736,7 @@ def write_pages(report: ReportPages) -> None:
                         title=f"{title} · {arm.name}" if prefix in per_arm else
                         f"{title} · the same for every arm" if same_for_all else title,
                         arm=arm.name if prefix in per_arm else "",
-                        letter=edition_letter(arm) if prefix in per_arm else "")
+                        letter=edition_letter(arm) if prefix in per_arm else "", refs=refs)
     _write_index(report_dir, report.figures_dir, {a.name: pages.get(a.name, []) for a in arms}, list(arms),
                  compared, parameters=dict(report.parameters), smoke=report.smoke,
                  recordings_dir=report.recordings_dir)

@@ -8,7 +8,11 @@ The chapters are written as one Markdown document (:func:`paper_markdown`); pand
 formatted, and Typst (the ``typst`` wheel's compiler and fonts) sets the PDF. Neither needs the
 network. Typst numbers the figures and tables: a chapter's label (``6`` for the primary
 edition's chapter 6, ``S6`` for the so101 edition's) followed by the figure's number within it
-("Figure 6.2", "Table S7.1").
+("Figure 6.2", "Table S7.1"). It numbers what the chapter's page numbers
+(:mod:`nfarm.presentation.numbering`): the saved figures and tables, each labelled by its edition
+and name; a table the page shows without a number (not saved, or prose's own) is set without a
+caption and not counted. A citation in the prose is a Typst reference, which prints the number of
+the chapter the figure is in, wherever it is cited.
 """
 
 from __future__ import annotations
@@ -25,9 +29,11 @@ from pathlib import Path
 
 from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
+from ..presentation.numbering import citation_keys
 from .editions import Edition
 from .pages import (ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
-                    _git, abstract_answers, chapter_title, edition_letter, verdict_rows)
+                    _git, abstract_answers, chapter_title, edition_letter, numbered_outputs, verdict_rows,
+                    warm_start_rows)
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
@@ -62,6 +68,14 @@ _TYPST_PREAMBLE = r"""
 #show figure.caption: set text(size: 9pt)
 #show table: set text(size: 7pt)
 #show raw.where(block: true): set text(size: 7pt)
+#show figure.where(kind: table): it => { if it.caption == none { counter(figure.where(kind: table)).update(n => n - 1) }; it }
+#show ref: it => {
+  let el = it.element
+  if el != none and el.func() == figure {
+    let loc = el.location()
+    link(loc)[#el.supplement~#chap.at(loc).#counter(figure.where(kind: el.kind)).at(loc).first()]
+  } else { it }
+}
 #show heading.where(level: 1): it => { pagebreak(weak: true); it }
 #show heading.where(level: 2): it => { pagebreak(weak: true); it }
 """
@@ -91,9 +105,15 @@ _HEADING = re.compile(r"^(#{1,5})(\s)", re.M)
 _CITATION_LIKE = re.compile(r"(^|[\s\[(;-])@(?=[\w])")
 
 
-def _prose(markdown: str) -> str:
+def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "") -> str:
     """A notebook's Markdown in the PDF: its headings one level down (a chapter is level 2 in
-    its part) and no ``@`` read as a citation (the notebooks cite nothing)."""
+    its part), no ``@`` read as a bibliography citation (the notebooks cite none), and each
+    citation of a figure or table (:data:`nfarm.presentation.numbering.CITATION`) a Typst
+    reference to its label in ``labels`` (name -> label).
+
+    Raises:
+        ReportError: a citation of a name ``labels`` lacks (``where`` names the chapter).
+    """
     out, fenced = [], False
     for line in markdown.split("\n"):
         if line.lstrip().startswith("```"):
@@ -101,8 +121,27 @@ def _prose(markdown: str) -> str:
         elif not fenced:
             line = _HEADING.sub(lambda m: "#" + m.group(1) + m.group(2), line)
             line = _CITATION_LIKE.sub(lambda m: m.group(1) + "\\@", line)
+            line = _cite(line, labels, where)
         out.append(line)
     return "\n".join(out)
+
+
+def _cite(text: str, labels: dict[str, str] | None, where: str) -> str:
+    """``text`` with each citation of a figure or table a Typst reference to its label (:func:`_prose`)."""
+    from ..presentation.numbering import CITATION
+
+    def reference(match: re.Match) -> str:
+        name = match.group("name")
+        if labels is None or name not in labels:
+            raise ReportError(f"{where}: cites {name}, which no chapter of this edition shows as a numbered "
+                              f"figure or table")
+        return f"`@{labels[name]}`{{=typst}}"
+    return CITATION.sub(reference, text)
+
+
+def _label(edition: str, kind: str, name: str) -> str:
+    """The PDF's label of a numbered figure or table: unique over the editions."""
+    return f"{'fig' if kind == 'Figure' else 'tbl'}-{edition}-{name}"
 
 
 def _image_width(png: Path, *, widest: int = 90, tallest_cm: float = 11.5, text_cm: float = 16.6) -> int:
@@ -115,13 +154,16 @@ def _image_width(png: Path, *, widest: int = 90, tallest_cm: float = 11.5, text_
     return max(30, min(widest, int(100 * tallest_cm * width / height / text_cm)))
 
 
-_TABLE = re.compile(r"\A\s*\*(?P<caption>[^\n]+)\*\s*\n\s*\n(?P<table>\|.*)\Z", re.S)
+_TABLE = re.compile(r'\A\s*(?:<a id="tbl-(?P<name>[^"]+)"></a>\s*\*\*Table [^*\n]+\*\*\s*)?'
+                    r"\*(?P<caption>[^\n]+)\*\s*\n\s*\n(?P<table>\|.*)\Z", re.S)
+_FIGURE_NAME = re.compile(r'<figure class="nfarm-figure" id="fig-(?P<name>[^"]+)"')
 
 
-def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
+def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str] | None = None) -> str:
     """The chapter's prose and outputs, without code: its first level-1 heading replaced by the
-    chapter's; tables (``*caption*`` over a pipe table, :class:`nfarm.presentation.tables.Table`)
-    and figures (a PNG whose plain text is ``Figure: caption``) captioned for numbering."""
+    chapter's; the figures and tables the chapter numbers (:mod:`nfarm.presentation.numbering`)
+    captioned and labelled for Typst to number them alike, other tables' captions as text; the
+    citations of figures and tables resolved by ``labels`` (name -> label, :func:`_prose`)."""
     import nbformat
 
     nb = nbformat.read(chapter.executed, 4)
@@ -130,7 +172,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
              _raw(f'#chap.update("{chapter.label}")\n'
                   "#counter(figure.where(kind: image)).update(0)\n"
                   "#counter(figure.where(kind: table)).update(0)")]
-    titled = False
+    titled, shown = False, set()
     for k, cell in enumerate(nb.cells):
         tags = set(cell.metadata.get("tags", []))
         if "remove-cell" in tags:
@@ -140,7 +182,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
             if not titled:
                 text, n = re.subn(r"^# [^\n]*\n?", "", text, count=1, flags=re.M)
                 titled = bool(n)
-            parts.append(_prose(text))
+            parts.append(_prose(text, labels, chapter.executed.name))
             continue
         if cell.cell_type != "code":
             continue
@@ -162,17 +204,28 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path) -> str:
                 plain = data.get("text/plain", "")
                 caption = plain[len("Figure: "):] if plain.startswith("Figure: ") else ""
                 width = _image_width(assets / name)
+                figure = _FIGURE_NAME.search(data.get("text/html", "") or "")
+                label = f"#{_label(chapter.edition, 'Figure', figure.group('name'))} " if figure else ""
+                if label and label in shown:            # shown again: its number once (as on the page)
+                    caption = ""
+                shown.add(label)
                 if caption:
-                    parts.append(f"![{_escape(caption.strip())}](assets/{name}){{width={width}%}}")
+                    parts.append(f"![{_escape(caption.strip())}](assets/{name}){{{label}width={width}%}}")
                 else:                                   # no caption: an image, not a numbered figure
                     parts.append(f"![](assets/{name}){{width={width}%}}\\")
             elif "text/markdown" in data:
                 text = data["text/markdown"]
                 table = _TABLE.match(text)
-                if table:
-                    parts.append(table.group("table").rstrip() + "\n\n: " + table.group("caption").strip())
+                if table and table.group("name") and table.group("name") not in shown:   # numbered: labelled
+                    shown.add(table.group("name"))
+                    parts.append(table.group("table").rstrip() + "\n\n: "
+                                 + _cite(table.group("caption").strip(), labels, chapter.executed.name)
+                                 + f" {{#{_label(chapter.edition, 'Table', table.group('name'))}}}")
+                elif table:                               # not numbered on the page: not in the PDF either
+                    parts.append(f"*{_cite(table.group('caption').strip(), labels, chapter.executed.name)}*\n\n"
+                                 + table.group("table").rstrip())
                 else:
-                    parts.append(_prose(text))
+                    parts.append(_prose(text, labels, chapter.executed.name))
     return "\n\n".join(parts) + "\n"
 
 
@@ -186,8 +239,8 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
     lines = ["| " + " | ".join(VERDICT_HEAD) + " |", "|" + "---|" * len(VERDICT_HEAD)]
     lines += ["| " + " | ".join(_escape(cell) for cell in row) + " |" for row in verdict_display(rows)]
     return ("# Verdict {.unnumbered}\n\n" + "\n".join(lines)
-            + "\n\n: The verdict on held-out data, per task and arm (each arm's 07_verdict table)\n\n"
-            + " ".join(_escape(sentence) for sentence in conclusion(rows)))
+            + "\n\n: The verdict on held-out data, per task and arm (each arm's verdict table, chapter 7)\n\n"
+            + " ".join(_escape(sentence) for sentence in conclusion(rows, warm_start_rows(figures_dir, arms))))
 
 
 def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
@@ -261,11 +314,21 @@ def paper_markdown(report: ReportPages, assets: Path, *, commit: str = "", built
 """)
     body = [title, f"This study reproduces the dissertation of @{DISSERTATION} and extends it with a second arm.",
             _abstract(report.figures_dir, list(report.arms))]
-    for part, note, chapters in paper_chapters(report):
+    parts = paper_chapters(report)
+    # What each edition's prose may cite: its own chapters' figures and tables, then the shared chapters'
+    numbered: dict[str, list[tuple[str, str]]] = {}
+    for _, _, chapters in parts:
+        for c in chapters:
+            numbered.setdefault(c.edition, []).extend(numbered_outputs(c.executed))
+    labels = {edition: {key: _label(edition, kind, name) for key, (kind, name) in citation_keys(items).items()}
+              for edition, items in numbered.items()}
+    primary = report.arms[0].name if report.arms else ""
+    for part, note, chapters in parts:
         body.append(f"# {_escape(part)}")
         if note:
             body.append(_escape(note))
-        body += [_chapter_markdown(c, assets) for c in chapters]
+        body += [_chapter_markdown(c, assets, {**labels.get(primary, {}), **labels.get(c.edition, {})})
+                 for c in chapters]
     body.append("# References {.unnumbered}\n\n::: {#refs}\n:::")
     return "\n\n".join(body) + "\n"
 

@@ -347,10 +347,11 @@ def tier_spread_params(results: Iterable[CellResult], resolved, source: str,
 
 
 def with_tier_finalists(sweep: Sweep, resolved, source: str, sweeps_dir=None, *, workers: int | None = None,
-                        seeds: Sequence[int] = SPREAD_SEEDS) -> list[CellResult]:
+                        seeds: Sequence[int] = SPREAD_SEEDS, seed0: Sequence[CellResult] | None = None) -> list[CellResult]:
     """A learned-ID sweep's cells (seed 0) with its tier finalists' cells on ``seeds``, each run
-    where it is missing from ``sweeps_dir``: what chapter 6 ran, read again by chapters 7 and 8."""
-    seed0 = sweep_results(sweep, sweeps_dir, workers=workers)
+    where it is missing from ``sweeps_dir``: what chapter 6 ran, read again by chapters 7 and 8
+    (``seed0``: the sweep's results when the caller has read them already)."""
+    seed0 = sweep_results(sweep, sweeps_dir, workers=workers) if seed0 is None else list(seed0)
     spread = sweep_results(sweep.with_cells(tier_spread_params(seed0, resolved, source, seeds)), sweeps_dir,
                            workers=workers)
     return [*seed0, *spread]

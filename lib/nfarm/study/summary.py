@@ -405,8 +405,8 @@ def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: i
     if not seed0:
         return None
     joints = np.ones(len(seed0[0].metrics["nrmse"]), bool) if resolved is None else np.asarray(resolved, bool)
-    val = with_resolved_worst(by_configuration(with_tier_finalists(sweep, joints, "nrmse", sweeps_dir, workers=workers)),
-                              joints, "nrmse")
+    val = with_resolved_worst(by_configuration(with_tier_finalists(sweep, joints, "nrmse", sweeps_dir, workers=workers,
+                                                                   seed0=seed0)), joints, "nrmse")
     learners = [g for learner, g in best_by(val, "learner", "worst_nrmse", seed=0).items() if learner != "linear"]
     if not learners:
         return None
@@ -751,12 +751,66 @@ def read_verdicts(path) -> list[dict[str, str]]:
     return rows
 
 
-def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
+#: The columns of chapter 7's table of Levenberg–Marquardt from each start (``07_ik_warm_start.csv``).
+WARM_START_COLUMNS = ("start", "targets", "mean iterations")
+#: Its rows' names of the starts the conclusion compares (the rival's is "<rival> prediction").
+WARM_HOME, WARM_ANFIS, WARM_CLOSED = "home (the dissertation's)", "ANFIS prediction", "closed form (the region's solution)"
+
+
+def read_warm_starts(path) -> list[dict[str, str]]:
+    """The rows of chapter 7's table of LM from each start (``07_ik_warm_start.csv``), as dicts of
+    its columns' text; a file without its columns is refused with a one-line error."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as f:
+        rows = list(csv.DictReader(f))
+    missing = [c for c in WARM_START_COLUMNS if not rows or c not in rows[0]]
+    if missing:
+        raise ValueError(f"{path}: not a table of LM's starts: columns {', '.join(missing)} missing")
+    return rows
+
+
+def contribution(warm_starts: Mapping[str, Sequence[Mapping[str, str]]]) -> str | None:
+    """One sentence on what the ANFIS gives the exact solver, as measured: Levenberg–Marquardt's
+    mean (and largest) iterations from the ANFIS's prediction, from the home pose and from the
+    best rival's prediction, per arm (``warm_starts``: arm -> the rows of
+    :func:`read_warm_starts`), the numbers side by side and no comparison the table's means
+    cannot carry; ``None`` without an arm that measured both the ANFIS's start and the home pose's."""
+    said, closed = [], False
+    for arm, rows in warm_starts.items():
+        by = {r["start"]: r for r in rows}
+        rivals = [s for s in by if s.endswith(" prediction") and s != WARM_ANFIS]
+        if WARM_ANFIS not in by or WARM_HOME not in by:
+            continue
+        closed = closed or WARM_CLOSED in by
+
+        def iterations(start: str) -> str:
+            most = by[start].get("max iterations", "")
+            return by[start]["mean iterations"] + (f" (at most {most})" if most else "")
+        rival = "".join(f" and {iterations(s)} from the prediction of "
+                        f"{reader_label(s[:-len(' prediction')].replace(' (contest)', ''))}" for s in rivals[:1])
+        said.append(f"{iterations(WARM_ANFIS)}{' iterations' if not said else ''} against {iterations(WARM_HOME)} "
+                    f"from the home pose{rival} ({arm})")
+    if not said:
+        return None
+    return ("What the ANFIS gives the exact solver, as measured: started from its prediction, Levenberg–Marquardt "
+            "needs on average " + "; ".join(said)
+            + ("; from the closed form's solution, none" if closed else "")
+            + "; whether such a start saves seconds depends on what the prediction costs, which chapter 7 times on "
+              "the reader's machine.")
+
+
+def conclusion(verdicts: Sequence[Mapping[str, str]],
+               warm_starts: Mapping[str, Sequence[Mapping[str, str]]] | None = None) -> list[str]:
     """At most five plain sentences from the verdict rows of every arm (:data:`VERDICT_COLUMNS`,
     as read back from the published tables): where the ANFIS wins beyond the paired interval,
-    where another method wins and which (each by its paired gap, in the metric's unit), where no difference is shown, the study's targets the
-    ANFIS meets, and what to use for each task. A task ending in "every tier" sums up the tasks of
-    its tiers: it gives the targets and what to use, the tiers the wins and losses."""
+    where another method wins and which (each by its paired gap, in the metric's unit) and where
+    no difference is shown, what the ANFIS gives beside the winners (:func:`contribution`, from
+    ``warm_starts``, arm -> chapter 7's table of LM's starts), the study's targets the ANFIS
+    meets, and what to use for each task. A task ending in "every tier" sums up the tasks of its
+    tiers: it gives the targets and what to use, the tiers the wins and losses."""
     def plain(task: str, name: str) -> str:          # "generic: multilayer perceptron" in "…, generic": the learner
         tier, name = task.rsplit(", ", 1)[-1], reader_label(name)
         return name.split(": ", 1)[1] if name.startswith(tier + ": ") else name
@@ -786,10 +840,14 @@ def conclusion(verdicts: Sequence[Mapping[str, str]]) -> list[str]:
     if won:
         sentences.append("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
                          + "; ".join(won) + ".")
-    if lost:
-        sentences.append("Another method is better than ANFIS, beyond the paired interval, on " + "; ".join(lost) + ".")
-    if tied:
-        sentences.append("ANFIS and its best rival are no different within the paired interval on " + "; ".join(tied) + ".")
+    if lost or tied:                                 # one sentence: five at most
+        sentences.append("; and ".join(
+            ([f"Another method is better than ANFIS, beyond the paired interval, on {'; '.join(lost)}"] if lost else [])
+            + ([f"ANFIS and its best rival are no different within the paired interval on "
+                f"{'; '.join(tied)}"] if tied else [])) + ".")
+    gives = contribution(warm_starts or {})
+    if gives:
+        sentences.append(gives)
     headline = [r for r in verdicts if r["anfis_targets"] and (r in summed or not r["task"].startswith("measured arm"))]
     if headline:
         sentences.append("The study's targets the ANFIS meets on the whole interval: " + "; ".join(

@@ -1,0 +1,86 @@
+"""Figures and tables numbered by chapter, and prose that cites them by number.
+
+A chapter's saved figures and tables (:func:`nfarm.presentation.plotting.save_figure`,
+:meth:`nfarm.presentation.tables.Table.save`) are numbered in the order a reader first meets
+them, figures and tables apart: the third figure chapter 6 shows is "Figure 6.3", its second
+table "Table 6.2"; an edition's letter goes before the chapter's number in its pages and in
+the PDF ("Figure S6.3", :func:`nfarm.publishing.pages.edition_letter`). A figure or table shown
+again keeps its number.
+
+Prose cites one by the name it is saved under, in MyST's role syntax; a name saved both as a
+figure and as a table is cited with its kind, ``fig:`` or ``tbl:``::
+
+    The contest's ranking ({numref}`tbl:06_ik_contest`) puts the ANFIS first.
+
+The report resolves the citation to "Table 6.2", linked to the table, in the HTML pages
+(:func:`nfarm.publishing.pages.export_html`) and as a Typst reference in the PDF
+(:mod:`nfarm.publishing.paper`); a citation of a name no chapter of the edition shows stops the
+report with a one-line error. A chapter run by hand shows the citation as written.
+
+Example:
+    >>> clear()
+    >>> number("Figure", "06_ik_curves"), number("Figure", "06_ik_rules"), number("Table", "06_ik_models")
+    ('6.1', '6.2', '6.1')
+    >>> number("Figure", "06_ik_curves"), number("Figure", "arm")      # shown again; no chapter
+    ('6.1', None)
+    >>> [m.group("name") for m in CITATION.finditer("as {numref}`06_ik_rules` shows")]
+    ['06_ik_rules']
+    >>> sorted(citation_keys([("Figure", "06_ik_contest"), ("Table", "06_ik_contest"), ("Figure", "06_ik_rules")]))
+    ['06_ik_rules', 'fig:06_ik_contest', 'fig:06_ik_rules', 'tbl:06_ik_contest']
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["number", "clear", "chapter_of", "citation_keys", "anchor", "CITATION", "CITATION_HTML", "KINDS"]
+
+#: What is numbered: figures and tables, each counted apart within a chapter; the prefix of each
+#: kind's anchors and citations.
+KINDS = {"Figure": "fig", "Table": "tbl"}
+#: A citation in Markdown: {numref}`<name>`.
+CITATION = re.compile(r"\{numref\}`(?P<name>[^`\s]+)`")
+#: The same citation as nbconvert renders it in a page.
+CITATION_HTML = re.compile(r"\{numref\}<code>(?P<name>[^<\s]+)</code>")
+
+_SEEN: dict[tuple[str, str], list[str]] = {}       # (kind, chapter) → names, in the order first shown
+
+
+def chapter_of(name: str) -> str | None:
+    """The chapter a saved name belongs to (``"06"`` for ``"06_ik_curves"``), or ``None``."""
+    return name[:2] if name[:2].isdigit() and name[2:3] == "_" else None
+
+
+def number(kind: str, name: str) -> str | None:
+    """The number (``"6.3"``) of the figure or table ``name`` in its chapter, in the order first
+    shown in this process (an IPython kernel runs one chapter); ``None`` for a name that is not
+    a chapter's (``"NN_…"``)."""
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    chapter = chapter_of(name)
+    if chapter is None:
+        return None
+    names = _SEEN.setdefault((kind, chapter), [])
+    if name not in names:
+        names.append(name)
+    return f"{int(chapter)}.{names.index(name) + 1}"
+
+
+def clear() -> None:
+    """Forget every number given (a new chapter in the same process)."""
+    _SEEN.clear()
+
+
+def anchor(kind: str, name: str) -> str:
+    """The anchor of a numbered figure or table on its page: ``"fig-06_ik_curves"``."""
+    return f"{KINDS[kind]}-{name}"
+
+
+def citation_keys(items) -> dict[str, tuple[str, str]]:
+    """What prose may write in a citation for each ``(kind, name)`` of ``items``: ``"fig:<name>"``
+    or ``"tbl:<name>"``, and the bare name where one kind alone has it."""
+    items = list(dict.fromkeys(items))
+    keys = {f"{KINDS[kind]}:{name}": (kind, name) for kind, name in items}
+    bare = [name for _, name in items]
+    keys.update({name: (kind, name) for kind, name in items if bare.count(name) == 1})
+    return keys
