@@ -67,7 +67,7 @@ class Table:
     floatfmt: str | Sequence[str] = ".6g"
     caption: str = ""
     _text: list[list[str]] = field(init=False, repr=False)
-    _name: str = field(init=False, repr=False, default="")
+    _name: str = field(init=False, repr=False, compare=False, default="")     # the name it is saved under
 
     def __post_init__(self):
         for k, row in enumerate(self.rows):

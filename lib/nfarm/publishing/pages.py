@@ -218,7 +218,8 @@ def citable(numbered: Mapping[tuple[str, str], tuple[str, str]]) -> dict[str, tu
 
 def resolve_citations(body: str, refs: Mapping[str, tuple[str, str]], where: str) -> str:
     """``body`` (a page) with each citation :data:`nfarm.presentation.numbering.CITATION_HTML` made a
-    link: ``refs`` maps a name to its text ("Figure S6.2") and address ("06_….html#06_ik_curves").
+    link: ``refs`` maps a citation key to its text ("Figure S6.2") and address
+    ("06_anfis_training.html#fig-06_ik_curves"), as :func:`citable` makes it.
 
     Raises:
         ReportError: ``"<where>: cites <name>, which no chapter of this edition shows"``.
@@ -233,6 +234,8 @@ def resolve_citations(body: str, refs: Mapping[str, tuple[str, str]], where: str
         text, href = refs[name]
         return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
     return CITATION_HTML.sub(link, body)
+
+
 _SECTION = re.compile(r'<h([23]) id="([^"]+)">(.*?)<a class="anchor-link"', re.S)
 
 
