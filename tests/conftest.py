@@ -58,7 +58,8 @@ def _length():
 
 @st.composite
 def random_chains(draw, min_joints: int = 1, max_joints: int = 7) -> Robot:
-    """A random revolute chain of either DH convention, with a random tool and inertias."""
+    """A random revolute chain of either DH convention, with a random tool and inertias (and,
+    for some standard chains, fixed transforms after some rows)."""
     n = draw(st.integers(min_joints, max_joints))
     convention = draw(st.sampled_from(["standard", "modified"]))
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
@@ -75,6 +76,15 @@ def random_chains(draw, min_joints: int = 1, max_joints: int = 7) -> Robot:
             "inertia": [inertia[0, 0], inertia[1, 1], inertia[2, 2],
                         inertia[0, 1], inertia[1, 2], inertia[0, 2]],
         })
+    if convention == "standard" and draw(st.booleans()):
+        # Fixed transforms after some rows (a URDF's nearly parallel axes; any placement):
+        # a tilt of 1e-12 to 0.1 rad about a random axis and a shift of up to 5 cm.
+        for joint in joints:
+            if rng.random() < 0.5:
+                E = np.eye(4)
+                E[:3, :3] = quat_to_matrix(np.r_[1.0, rng.normal(size=3) * 10 ** rng.uniform(-12, -1)])
+                E[:3, 3] = rng.uniform(-0.05, 0.05, 3) * (rng.random() < 0.5)
+                joint["fixed"] = E.tolist()
     tool = np.eye(4)
     if draw(st.booleans()):
         tool[:3, :3] = quat_to_matrix(rng.normal(size=4))

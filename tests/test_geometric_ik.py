@@ -290,7 +290,8 @@ def test_elbow_up_holds_for_links_of_either_sign_and_without_gravity(robot, seed
     q = sample_configurations(robot, 300, seed)
     result = closed_form(robot, fk(robot, q))
     checked = 0
-    for k in (0, 1):                                 # the front branches' own geometry
+    front = (0, 1) if check_class(robot).forward > 0 else (2, 3)   # the columns ahead along x1
+    for k in front:                                  # the front branches' own geometry
         qk = result.q[:, k]
         F = fk_all(robot, qk)
         if robot.convention == "modified":           # the standard frames 1–3
@@ -305,7 +306,7 @@ def test_elbow_up_holds_for_links_of_either_sign_and_without_gravity(robot, seed
         side = np.einsum("mi,mi->m", elbow - shoulder, normal)
         ahead = np.einsum("mi,mi->m", line, x1)
         clear = (np.abs(side) > 1e-6) & (ahead > 1e-3) & (np.abs(line[:, 2]) < 0.9 * np.linalg.norm(line, axis=1))
-        assert ((side > 0) == (k == 0))[clear].all()
+        assert ((side > 0) == (k == front[0]))[clear].all()
         checked += clear.sum()
     # Most front solutions are clear of the edges (at least 162 of 600 in every example drawn):
     # a mask that kept a handful would check nothing.
@@ -494,3 +495,112 @@ def test_empty_batches_and_nested_lists(intelbot5):
     T = fk(intelbot5, np.zeros(5))
     from_list = closed_form(intelbot5, T.tolist())
     np.testing.assert_array_equal(from_list.q, closed_form(intelbot5, T).q)
+
+
+# -- near the class: pitch axes a rounded π apart ---------------------------------------------
+
+
+NEAR = """<robot name="rounded">
+  <link name="base"/>
+  <joint name="yaw" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="2" velocity="3"/></joint>
+  <link name="l1"/>
+  <joint name="shoulder" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0 0 0.05" rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="2" velocity="3"/></joint>
+  <link name="l2"/>
+  <joint name="elbow" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.2 0 0" rpy="0 0 0.3"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="2" velocity="3"/></joint>
+  <link name="l3"/>
+  <joint name="pitch" type="revolute"><parent link="l3"/><child link="l4"/>
+    <origin xyz="0.18 0 0" rpy="{rpy}"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="2" velocity="3"/></joint>
+  <link name="l4"/>
+  <joint name="roll" type="revolute"><parent link="l4"/><child link="hand"/>
+    <origin xyz="0.05 0 0" rpy="0 1.5707963267948966 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="2" velocity="3"/></joint>
+  <link name="hand"/>
+</robot>"""
+
+
+def near_arm(tmp_path, rpy: str) -> Robot:
+    """The arm with its pitch joint's origin turned by ``rpy`` (nearly parallel axes are named
+    in a warning, checked by tests/test_urdf_hardening.py)."""
+    import warnings
+
+    from nfarm.infra.reading import ParamsWarning
+    from nfarm.model.urdf import from_urdf
+    path = tmp_path / f"near_{rpy.replace(' ', '_')}.urdf"
+    path.write_text(NEAR.format(rpy=rpy))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ParamsWarning)
+        return from_urdf(path)
+
+
+@pytest.mark.parametrize("rpy, how", [
+    (f"0 {3.1416 - np.pi!r} 0", "fixed"),     # the axes meet 25 km away: DH rows and a fixed tilt
+    (f"{3.1416 - np.pi!r} 0 0", "alpha"),     # their normal is the link: alpha3 = 7.3e-6 rad
+])
+def test_an_arm_near_the_class_is_solved_on_the_arm_itself(tmp_path, rpy, how):
+    """The parallel arm's branches seed LM on the arm itself: the branch a target came from is
+    found to rounding; the other branches reach the nearest pose, micrometres off (on a 5-joint
+    arm, tilted pitch axes move the other branches' poses), as many of them as the exact arm has."""
+    robot, exact = near_arm(tmp_path, rpy), near_arm(tmp_path, "0 0 0")
+    assert (robot.fixed is not None) == (how == "fixed") and exact.fixed is None
+    assert in_class(robot)
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-2.5, 2.5, (200, 5))
+    result = closed_form(robot, fk(robot, q), tol_pos=1e-10, tol_rot=1e-10)
+    assert result.refined.all()
+    assert result.valid.any(axis=1).all()
+    nearest = np.argmin(np.abs(np.remainder(result.q - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(-1), axis=1)
+    found = result.q[np.arange(200), nearest]
+    assert np.abs(np.remainder(found - q + np.pi, 2 * np.pi) - np.pi).max() < 1e-8
+    assert result.pos_error.max() < 2e-5 and result.rot_error.max() < 2e-4     # [m], [rad]
+    counted = closed_form(exact, fk(exact, q), tol_pos=1e-10, tol_rot=1e-10)
+    near = (result.pos_error < 2e-5) & result.within_limits
+    assert (near.sum(1) == counted.valid.sum(1)).mean() > 0.95
+
+
+def test_an_arm_beyond_the_near_class_is_refused_naming_the_joint_and_the_angle(tmp_path):
+    robot = near_arm(tmp_path, "0 0.001 0")          # 0.057°: beyond NEAR_TOL
+    with pytest.raises(ValueError, match=r"joint 3's fixed transform after its DH row turns 0\.0573° "
+                                         r"and shifts .* m \(the closed form seeds LM through at most"):
+        closed_form(robot, np.eye(4))
+    tilted = chain(alpha_2=1e-3)
+    with pytest.raises(ValueError, match=r"joints 3 and 4 are not parallel \(standard-DH alpha3 = "
+                                         r"0\.0572958°; the class needs 0° or 180°, within 0\.00573°\)"):
+        closed_form(tilted, np.eye(4))
+
+
+def test_front_is_where_the_arm_reaches_at_home_whatever_frame_0_faces(tmp_path):
+    """An arm reaching along the world's x at home, its pitch axes written as +y or −y: for one
+    sense the converter's frame 0 faces backwards (x1 points behind the arm); "front" still
+    names the side the arm reaches to at home, in the labels and in the columns."""
+    import warnings
+
+    from nfarm.model.urdf import from_urdf
+    from test_add_arm import write_arm
+    arms = {}
+    for axis in ("0 1 0", "0 -1 0"):
+        text = (write_arm(tmp_path / "arm.urdf").read_text().replace('<axis xyz="0 1 0"/>', f'<axis xyz="{axis}"/>')
+                .replace('xyz="0 0 0.2"', 'xyz="0.2 0 0"').replace('xyz="0 0 0.18"', 'xyz="0.18 0 0"'))
+        (tmp_path / f"arm{axis[2]}.urdf").write_text(text)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            arms[axis] = from_urdf(tmp_path / f"arm{axis[2]}.urdf", tip="tool_link")
+    assert sorted(check_class(arm).forward for arm in arms.values()) == [-1.0, 1.0]
+    backward = next(arm for arm in arms.values() if check_class(arm).forward < 0)
+    for arm in arms.values():
+        assert fk(arm, np.zeros(5))[0, 3] > 0.3                        # home: reaching along +x [m]
+        assert BRANCHES[branch_of(arm, np.zeros(5))].startswith("front")
+    q = np.array([[0.3, 0.4, 0.6, -0.5, 0.2], [0.3, 0.4, -0.6, 0.5, 0.2]])
+    result = closed_form(backward, fk(backward, q))
+    assert result.reaches.all()                        # (the back branches lie beyond ±2 rad)
+    np.testing.assert_array_equal(branch_of(backward, result.q), np.broadcast_to(np.arange(4), (2, 4)))
+    # In the arm's own frames: at home the wrist-pitch axis lies behind the base axis along x1
+    # (frame 0 faces backwards); the front columns' wrists lie on that side, the back ones' not.
+    def side(q_k):
+        F = fk_all(backward, q_k)
+        return np.sign(np.einsum("...i,...i->...", F[..., 3, :3, 3] - F[..., 1, :3, 3], F[..., 1, :3, 0]))
+    assert side(np.zeros(5)) < 0
+    np.testing.assert_array_equal(side(result.q), np.broadcast_to([-1, -1, 1, 1], (2, 4)))

@@ -505,6 +505,31 @@ def test_the_arm_chart_describes_an_arm_whose_tool_is_off_its_roll_axis(tmp_path
         LearnedIK(**{**SMALL, "epochs": 2}).fit(so101, data)
 
 
+def test_a_tool_frame_in_ros_convention_gets_a_rigid_chart(tmp_path):
+    """ROS tool frames put x along the approach axis (here intelbot5's tool turned so): the chart
+    takes the tool axis along the roll axis and the tool's y across it, is rigid, keeps the arm's
+    plane, and a model fitted with it saves and loads (it failed with "chart[1]: must be a rigid
+    transform": the tool's x made perpendicular to itself)."""
+    import dataclasses
+    from nfarm.learning.learned import arm_chart
+    Ry = np.array([[0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    ros = dataclasses.replace(ROBOT, tool=ROBOT.tool @ Ry)       # x' = z: the approach
+    chart = arm_chart(ros)
+    for T in chart:
+        np.testing.assert_allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-12)
+        assert np.linalg.det(T[:3, :3]) > 0
+    region = dataclasses.replace(STUDY.ik_region, robot=ros)
+    data = ik_samples(region, 400, 5)
+    assert np.degrees(out_of_plane(data["T"], chart).max()) < 1e-6
+    model = LearnedIK(**{**SMALL, "epochs": 2}).fit(ros, data)
+    model.save(tmp_path)
+    again = LearnedIK.load(tmp_path, ros)
+    np.testing.assert_array_equal(again.predict(data["T"]), model.predict(data["T"]))
+    # The same arm with either tool frame: the same inputs up to the encoder's own scaling.
+    plain = LearnedIK(**{**SMALL, "epochs": 2}).fit(ROBOT, ik_samples(STUDY.ik_region, 400, 5))
+    np.testing.assert_allclose(model.predict(data["T"]), plain.predict(fk(ROBOT, data["q"])), atol=1e-9)
+
+
 # -- inputs that cannot be right ---------------------------------------------------------------
 
 

@@ -112,6 +112,11 @@ BAD = {
     "tool not orthonormal": (set_top("tool", [[1, 0.1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), r"tool: rotation part must be orthonormal"),
     "tool reflection": (set_top("tool", [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), r"tool: rotation part must have determinant \+1"),
     "empty name": (set_top("name", " "), r"name: must be 1-64 letters, digits"),
+    "fixed not rigid": (set_joint(1, "fixed", [[1, 0.1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]),
+                        r"joints\[1\]\.fixed: rotation part must be orthonormal"),
+    "fixed on modified DH": (lambda d: (d.__setitem__("convention", "modified"),
+                                        d["joints"][2].__setitem__("fixed", np.eye(4).tolist())),
+                             r"joints\[2\]\.fixed: a fixed transform after the DH row needs the standard convention"),
     "not a mapping": (lambda d: d.clear(), r"name: required field is missing"),
 }
 
@@ -200,3 +205,24 @@ def test_a_robot_name_that_could_not_name_a_directory_is_refused_in_one_line(nam
     data["name"] = name
     with pytest.raises(ParamsError, match=r"name: must be 1-64 letters, digits, '_', '-' or '\.'"):
         robot_from_dict(data)
+
+
+def test_a_fixed_transform_after_a_row_is_kept_and_hashed_and_an_identity_one_is_not():
+    """``fixed`` moves the chain (fk changes by the transform), survives the file round trip,
+    and changes the hash; a file without it, or with identities, is the plain DH robot."""
+    from nfarm.model.kinematics import fk
+    from nfarm.model.robot import robot_hash
+    data = robot_to_dict(load_robot(ROBOT_FILES[0]))
+    plain = robot_from_dict(data)
+    E = np.eye(4)
+    E[:3, 3] = [0.0, 0.0, 0.01]                        # 1 cm along joint 3's axis
+    data["joints"][1]["fixed"] = E.tolist()
+    moved = robot_from_dict(data)
+    np.testing.assert_array_equal(moved.fixed[1], E)
+    q = np.zeros(plain.n)
+    assert not np.allclose(fk(moved, q), fk(plain, q))
+    assert robot_hash(moved) != robot_hash(plain)
+    assert robot_from_dict(robot_to_dict(moved)).fixed.tolist() == moved.fixed.tolist()
+    data["joints"][1]["fixed"] = np.eye(4).tolist()
+    identity = robot_from_dict(data)
+    assert robot_hash(identity) == robot_hash(plain) and "fixed" not in robot_to_dict(identity)["joints"][1]

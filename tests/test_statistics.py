@@ -197,3 +197,41 @@ def test_two_level_bootstrap_covers_the_seeds_spread_and_pairs_methods():
 def test_two_level_bootstrap_refuses_bad_input(values, kwargs, message):
     with pytest.raises(ValueError, match=message):
         bootstrap_seeds(values, _mean, **kwargs)
+
+
+@pytest.mark.parametrize("n", [2, 7, 10, 1000])
+@pytest.mark.parametrize("q", [0.0, 0.05, 0.5, 0.95, 1.0])
+def test_a_quantile_read_through_counts_is_numpys_of_the_resample(n, q):
+    """Order statistics from the times each row is drawn equal NumPy's on the resampled rows
+    themselves (ties included), bit for bit."""
+    from nfarm.study.statistics import resampled_quantile
+    rng = np.random.default_rng(n)
+    x = np.round(rng.normal(size=n), 1)                   # ties
+    drawn = rng.integers(0, n, size=(50, n))
+    counts = np.stack([np.bincount(d, minlength=n) for d in drawn])
+    order = np.argsort(x, kind="stable")
+    got = resampled_quantile(x[order], np.cumsum(counts[:, order], axis=1), q)
+    expected = np.median(x[drawn], axis=1) if q == 0.5 else np.percentile(x[drawn], 100 * q, axis=1)
+    np.testing.assert_array_equal(got, expected)
+
+
+def test_bootstrap_counts_is_bootstrap_rows_for_a_statistic_of_counts():
+    """The same statistic through counts and through the resampled rows: the same value, and
+    intervals that agree to the resampling's own noise (different draws)."""
+    from nfarm.study.statistics import bootstrap_counts, resampled_quantile
+    rng = np.random.default_rng(3)
+    x = rng.exponential(size=2000)
+    order = np.argsort(x)
+    p95 = lambda counts: resampled_quantile(x[order], np.cumsum(counts[:, order], axis=1), 0.95)  # noqa: E731
+    by_counts = bootstrap_counts(len(x), p95, draws=2000, seed=1)
+    by_rows = bootstrap_rows(x, lambda X: np.percentile(X[..., 0], 95, axis=-1), draws=2000, seed=1)
+    assert by_counts.value == by_rows.value == np.percentile(x, 95)
+    width = by_rows.high - by_rows.low
+    assert abs(by_counts.low - by_rows.low) < 0.1 * width and abs(by_counts.high - by_rows.high) < 0.1 * width
+    again = bootstrap_counts(len(x), p95, draws=2000, seed=1)
+    assert (again.low, again.high) == (by_counts.low, by_counts.high)          # seeded
+    for bad, message in (({"draws": 10}, "draws must be"), ({"level": 1.0}, "level must be")):
+        with pytest.raises(ValueError, match=message):
+            bootstrap_counts(len(x), p95, **bad)
+    with pytest.raises(ValueError, match="n_rows must be a whole number >= 2"):
+        bootstrap_counts(1, p95)

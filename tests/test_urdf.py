@@ -155,8 +155,8 @@ def _inertial(rng):
 
 
 def random_urdf(seed: int, n: int) -> tuple[str, dict[str, float]]:
-    """A random tree: a chain of n revolute joints about random axes (some parallel to or
-    intersecting the previous one), fixed joints on it, and side branches on revolute joints
+    """A random tree: a chain of n revolute joints about random axes (some parallel, nearly
+    parallel or intersecting the previous one), fixed joints on it, and side branches on revolute joints
     locked at random angles. Returns the URDF and the side joints' lock positions."""
     rng = np.random.default_rng(seed)
     lines = ['<robot name="random">', f'<link name="root">{_inertial(rng)}</link>']
@@ -170,6 +170,11 @@ def random_urdf(seed: int, n: int) -> tuple[str, dict[str, float]]:
         origin = _origin(rng)
         if kind < 0.25:     # same axis as the joint frame's z, no rotation: parallel axes
             origin = f'<origin xyz="{float(rng.uniform(-0.3, 0.3))!r} {float(rng.uniform(-0.3, 0.3))!r} 0"/>'
+            axis = np.array([0.0, 0.0, 1.0]) if i == 0 else axis
+        elif kind < 0.4:    # the same, turned by 1e-12 to 1e-2 rad: nearly parallel axes
+            tilt = float(10 ** rng.uniform(-12, -2) * rng.choice([-1, 1]))
+            origin = (f'<origin xyz="{float(rng.uniform(-0.3, 0.3))!r} {float(rng.uniform(-0.3, 0.3))!r} '
+                      f'{float(rng.uniform(-0.05, 0.05))!r}" rpy="{tilt!r} 0 0"/>')
             axis = np.array([0.0, 0.0, 1.0]) if i == 0 else axis
         else:
             axis = rng.normal(size=3)
@@ -195,8 +200,11 @@ def test_random_urdfs_agree_with_pinocchios_own_parse(tmp_path_factory, seed, n)
     text, locks = random_urdf(seed, n)
     path = tmp_path_factory.mktemp("urdf") / "random.urdf"
     path.write_text(text)
-    robot = from_urdf(path, tip="tip", lock=locks)
+    with warnings.catch_warnings():     # nearly parallel axes are named: checked elsewhere
+        warnings.simplefilter("ignore", ParamsWarning)
+        robot = from_urdf(path, tip="tip", lock=locks)
     assert robot.n == n
+    assert np.abs(robot.a).max() < 10 and np.abs(robot.d).max() < 10    # frames near the arm [m]
     check_against_pinocchio(robot, path, "tip", locks, seed)
 
 

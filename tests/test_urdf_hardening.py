@@ -16,6 +16,7 @@ import pytest
 from nfarm.infra.reading import ParamsError, ParamsWarning
 from nfarm.model import urdf as urdf_module
 from nfarm.model.robot import load_robot, robot_from_dict, robot_to_dict
+from nfarm.model.rotations import log_so3
 from nfarm.model.urdf import from_urdf, to_urdf
 from test_urdf import GOOD, check_against_pinocchio
 
@@ -310,28 +311,52 @@ PARALLEL = """<robot name="pitch">
 """
 
 
-def test_nearly_parallel_axes_give_one_warning_naming_them_and_their_angle(tmp_path):
-    """Pitch axes 3.1416 − π apart (a CAD export's rounded π) put the common normal kilometres
-    away: one warning naming the joints and the angle, not one per length "in millimetres?"."""
-    tilt = 3.1416 - np.pi                       # rad, about 4.3e-6 (0.000419°)
+@pytest.mark.parametrize("tilt", [3.1416 - np.pi, 1.5708 - np.pi / 2, 1e-3, -2e-2])
+def test_nearly_parallel_axes_are_converted_exactly_and_named_in_one_line(tmp_path, tilt):
+    """Pitch axes a rounded π apart (a CAD export writes 3.1416) have their common normal
+    kilometres away: the pair is written as parallel DH axes with the tilt in a fixed transform
+    after the row, so the DH table stays at the arm's size and the robot is Pinocchio's own parse
+    of the file to 1e-10; one warning names the joints, the angle and where the tilt went."""
+    text = PARALLEL.format(tilt=tilt)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        robot = read(tmp_path, PARALLEL.format(tilt=tilt), "tilted.urdf")
+        robot = read(tmp_path, text, "tilted.urdf")
     messages = [str(w.message) for w in caught if issubclass(w.category, ParamsWarning)]
     assert len(messages) == 1, messages
     assert messages[0].startswith(f"{tmp_path / 'tilted.urdf'}: joints 'shoulder' and 'elbow': "
-                                  f"axes nearly parallel, {np.degrees(tilt):.3g}° apart: ")
+                                  f"axes nearly parallel, {abs(np.degrees(tilt)):.3g}° apart: "
+                                  f"written as parallel DH axes with the tilt in joints[0].fixed ")
     assert "millimetres" not in messages[0] and "\n" not in messages[0]
-    assert np.abs(robot.d).max() > 10                          # the lengths it warns of
     assert caught[0].filename == __file__                      # pointing at the caller
+    assert np.abs(robot.a).max() < 1 and np.abs(robot.d).max() < 1          # [m]
+    assert robot.alpha[0] == 0.0 and robot.fixed is not None
+    E = robot.fixed[0]
+    np.testing.assert_allclose(np.linalg.norm(log_so3(E[:3, :3])), abs(tilt), rtol=1e-6)
+    np.testing.assert_array_equal(robot.fixed[1:], np.broadcast_to(np.eye(4), (2, 4, 4)))
+    check_against_pinocchio(robot, tmp_path / "tilted.urdf", "hand", {})
+    again = robot_from_dict(robot_to_dict(robot))                # the robot file holds it
+    np.testing.assert_array_equal(again.fixed, robot.fixed)
+
+
+def test_parallel_and_clearly_skew_axes_need_no_fixed_transform(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        read(tmp_path, PARALLEL.format(tilt=0), "parallel.urdf")          # exactly parallel: quiet
-        read(tmp_path, PARALLEL.format(tilt=0.3), "skew.urdf")            # well apart: quiet
+        for tilt in (0, 1e-13, 0.3):                   # parallel, parallel to rounding, skew
+            robot = read(tmp_path, PARALLEL.format(tilt=tilt), "plain.urdf")
+            assert robot.fixed is None
+            check_against_pinocchio(robot, tmp_path / "plain.urdf", "hand", {})
+
+
+def test_the_bound_on_nearly_parallel_axes_is_a_keyword(tmp_path):
+    """Below ``near_parallel_deg`` only: with a bound under the tilt, the pair is plain DH, its
+    common normal kilometres away (a length in millimetres? warns) and still exact."""
+    tilt = 3.1416 - np.pi
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        read(tmp_path, PARALLEL.format(tilt=tilt), "tilted.urdf", near_parallel_deg=1e-4)
-    assert {"millimetres?" in str(w.message) for w in caught} == {True}     # the keyword's bound
+        robot = read(tmp_path, PARALLEL.format(tilt=tilt), "tilted.urdf", near_parallel_deg=1e-4)
+    assert {"millimetres?" in str(w.message) for w in caught} == {True}
+    assert robot.fixed is None and np.abs(robot.d).max() > 1000
+    check_against_pinocchio(robot, tmp_path / "tilted.urdf", "hand", {})   # the normal found exactly
 
 
 def test_a_length_in_millimetres_still_warns_where_axes_are_not_nearly_parallel(tmp_path):

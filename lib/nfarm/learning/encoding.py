@@ -79,9 +79,11 @@ def arm_chart(robot: Robot) -> np.ndarray | None:
 
     ``B = base⁻¹`` moves the world into DH frame 0, whose z axis is the base axis. ``W`` is, in
     the tool frame, the frame on the last joint's axis nearest the tool point, its z along that
-    axis (on the side of the tool's z) and its x the tool's x made perpendicular to it. For an
-    arm whose tool point lies off its roll axis (the SO-101's, by 7.9 mm) the tool point leaves
-    the arm's vertical plane as the wrist rolls, the point on the roll axis does not.
+    axis (on the side of the tool axis nearest it: z for a tool frame whose z is the approach,
+    x for one in ROS's convention, x along the approach) and its x the tool's x made
+    perpendicular to it (the tool's y when its x lies within 26° of the axis). For an arm whose
+    tool point lies off its roll axis (the SO-101's, by 7.9 mm) the tool point leaves the arm's
+    vertical plane as the wrist rolls, the point on the roll axis does not.
     """
     F = fk_all(robot, np.zeros(robot.n))
     axis_frame = F[-2] if robot.convention == "standard" else F[-1]
@@ -89,9 +91,11 @@ def arm_chart(robot: Robot) -> np.ndarray | None:
     Rt = tool[:3, :3].T                                          # world → tool frame
     c = Rt @ (axis_frame[:3, 3] - tool[:3, 3])                   # a point on the axis
     u = Rt @ axis_frame[:3, 2]
-    u = u if u[2] >= 0 else -u
+    nearest = int(np.argmax(np.abs(u)))                          # the tool axis along the roll axis
+    u = u if u[nearest] >= 0 else -u
     w = c - np.dot(c, u) * u
-    x = np.array([1.0, 0.0, 0.0]) - u[0] * u
+    k = 0 if abs(u[0]) < 0.9 else 1                              # the tool's x, or its y
+    x = np.eye(3)[k] - u[k] * u
     x /= np.linalg.norm(x)
     W = np.eye(4)
     W[:3, :3], W[:3, 3] = np.column_stack([x, np.cross(u, x), u]), w

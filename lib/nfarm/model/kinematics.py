@@ -55,8 +55,9 @@ def joint_placements(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:
 
     Returns:
         ``(J, B)``: ``J[i]`` is the 4×4 placement of joint i+1 in the frame of the body moved
-        by joint i (the base for i = 0); ``B[i]`` is the placement of DH frame i+1 in the body
-        moved by joint i+1. Then ``T_0k = J_0 Rz(q_1) B_0 · B_0⁻¹ J_1 Rz(q_2) B_1 ···``.
+        by joint i (the base for i = 0); ``B[i]`` is the placement of link frame i+1 (the DH
+        frame and its fixed transform, :class:`~nfarm.model.robot.Robot`) in the body moved by
+        joint i+1. Then ``T_0k = J_0 Rz(q_1) B_0 · B_0⁻¹ J_1 Rz(q_2) B_1 ···``.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -70,9 +71,11 @@ def joint_placements(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """
     J, B = [], []
     previous = np.eye(4)
-    for a, alpha, d, offset in zip(robot.a, robot.alpha, robot.d, robot.offset):
+    for i, (a, alpha, d, offset) in enumerate(zip(robot.a, robot.alpha, robot.d, robot.offset)):
         if robot.convention == "standard":
             F = _Rz(offset) @ _Tr(0, 0, d) @ _Tr(a, 0, 0) @ _Rx(alpha)
+            if robot.fixed is not None:
+                F = F @ robot.fixed[i]
             J.append(previous)
             B.append(F)
             previous = F
@@ -143,6 +146,9 @@ class _Chain:
         self.a, self.d, self.offset = robot.a.tolist(), robot.d.tolist(), robot.offset
         self.ca, self.sa = snap_right_angles(np.cos(robot.alpha)).tolist(), snap_right_angles(np.sin(robot.alpha)).tolist()
         self.tool = snap_right_angles(robot.tool).tolist()
+        # The fixed transforms after the rows (None where a joint has none): applied as the tool is.
+        self.fixed = [None] * robot.n if robot.fixed is None else [
+            None if np.array_equal(E, np.eye(4)) else snap_right_angles(E).tolist() for E in robot.fixed]
         self.n = robot.n
         base = snap_right_angles(robot.base)
         self.base = None if np.array_equal(base, np.eye(4)) else (base[:3, :3], base[:3, 3:])
@@ -169,6 +175,8 @@ class _Chain:
             X[0] = Y[1] = Z[2] = 1.0
             yield 0, X, Y, Z, p
         X, Y, Z, p = self._first_frame(ct[0], st[0])
+        if self.fixed[0] is not None:
+            X, Y, Z, p = _transformed(self.fixed[0], X, Y, Z, p)
         if every or self.n == 1:
             yield 1, X, Y, Z, p
         for i in range(1, self.n):
@@ -184,6 +192,8 @@ class _Chain:
                 Y, Z = _comb((ca, Y), (sa, Z)), _comb((ca, Z), (-sa, Y))
                 p = _comb((1, p), (d, Z))
                 X, Y = c * X + s * Y, c * Y - s * X
+            if self.fixed[i] is not None:
+                X, Y, Z, p = _transformed(self.fixed[i], X, Y, Z, p)
             if every or i == self.n - 1:
                 yield i + 1, X, Y, Z, p
 
@@ -210,9 +220,14 @@ class _Chain:
 
     def tool_frame(self, X, Y, Z, p):
         """Columns and origin of ``T_n · tool``."""
-        t = self.tool
-        cols = [_comb((t[0][j], X), (t[1][j], Y), (t[2][j], Z)) for j in range(3)]
-        return (*cols, _comb((1, p), (t[0][3], X), (t[1][3], Y), (t[2][3], Z)))
+        return _transformed(self.tool, X, Y, Z, p)
+
+
+def _transformed(t: list, X, Y, Z, p):
+    """Columns and origin of ``T · t`` from those of ``T`` (``X, Y, Z, p`` each ``(3, N)``) and
+    a constant pose ``t`` (4×4 nested list)."""
+    cols = [_comb((t[0][j], X), (t[1][j], Y), (t[2][j], Z)) for j in range(3)]
+    return (*cols, _comb((1, p), (t[0][3], X), (t[1][3], Y), (t[2][3], Z)))
 
 
 @functools.lru_cache(maxsize=64)

@@ -18,6 +18,13 @@ Conventions (SI units, radians):
 ``com`` and ``inertia`` of link i are about the link's centre of mass, expressed in DH frame i.
 The chain hangs from the world frame at ``base`` (DH frame 0 in the world; default identity) and
 carries the ``tool``: ``T_0e = base · A_1 ··· A_n · tool``.
+
+A standard-DH joint may carry a ``fixed`` transform ``E_i`` after its row, ``A_i = Rz(q_i +
+offset_i) · Tz(d_i) · Tx(a_i) · Rx(alpha_i) · E_i`` (default identity): the joint placements DH
+cannot hold exactly, such as nearly parallel axes of a URDF written with a rounded π (DH would
+put their common normal kilometres away; :func:`nfarm.model.urdf.from_urdf` writes the pair as
+parallel with the small tilt in ``E_i``). Link i's frame is then the DH frame followed by
+``E_i``: its z axis is joint i+1's axis, and ``com`` and ``inertia`` are in it.
 """
 
 from __future__ import annotations
@@ -39,6 +46,7 @@ from ..infra.paths import project_path, shown_path
 from ..infra.reading import ParamsError, ParamsWarning, Validator, load_yaml, show
 from ..infra.reading import read_bytes as _read_bytes
 from ..infra.typed import TEXT, Range, ReadBy, read_typed
+from .rotations import log_so3
 
 __all__ = [
     "ParamsError",
@@ -90,6 +98,8 @@ class Robot:
             [N·m·s/rad] and Coulomb [N·m] friction, the Coulomb smoothing speed [rad/s], the
             reflected rotor inertia [kg·m²]); zero friction and armature unless the file gives
             them. Used only where asked (``rnea(..., drive=True)``).
+        fixed: ``(n, 4, 4)`` the fixed transform ``E_i`` after each standard-DH row (module
+            docstring), or ``None``: identity for every joint, a pure DH chain.
         effort, velocity: ``(n,)`` the joints' torque [N·m] and speed [rad/s] limits (a URDF's
             ``<limit effort velocity>``; ``inf`` unless given). Informative: no solver
             enforces them.
@@ -133,6 +143,7 @@ class Robot:
     base: np.ndarray | None = None
     effort: np.ndarray | None = None
     velocity: np.ndarray | None = None
+    fixed: np.ndarray | None = None
     poses: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
     provenance: tuple[str, str] | None = dataclasses.field(default=None, repr=False)
 
@@ -151,6 +162,10 @@ class Robot:
                 value.setflags(write=False)
         for value in self.poses.values():
             value.setflags(write=False)
+        if self.fixed is not None:
+            if self.convention != "standard" or self.fixed.shape != (self.a.shape[0], 4, 4):
+                raise ValueError(f"{self.name}: fixed must be (n, 4, 4) on a standard-DH chain, "
+                                 f"got shape {self.fixed.shape} on a {self.convention} one")
 
     @property
     def n(self) -> int:
@@ -323,8 +338,9 @@ def _joints(v: Validator, value: Any, at: str) -> list[JointSection]:
 class JointSection:
     """``joints[i]``: one revolute joint as written: DH parameters [m, rad], limits [rad], the
     link's mass [kg], centre of mass [m] and inertia [kg·m², the 3×3 matrix read from ``[Ixx,
-    Iyy, Izz, Ixy, Iyz, Ixz]``] about it in DH frame i, the drive terms (:data:`DRIVE_DEFAULTS`)
-    and the effort [N·m] and speed [rad/s] limits (``inf``: none)."""
+    Iyy, Izz, Ixy, Iyz, Ixz]``] about it in link frame i, the drive terms (:data:`DRIVE_DEFAULTS`),
+    the effort [N·m] and speed [rad/s] limits (``inf``: none) and the ``fixed`` 4×4 transform
+    after the DH row (``None``: identity; standard DH only)."""
 
     a: float
     alpha: float
@@ -341,6 +357,7 @@ class JointSection:
     armature: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["armature"]
     effort: Annotated[float, Range(lo=0.0, lo_open=True)] = math.inf
     velocity: Annotated[float, Range(lo=0.0, lo_open=True)] = math.inf
+    fixed: Annotated[Optional[np.ndarray], ReadBy(_pose)] = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -392,6 +409,14 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         for k, c in enumerate(joint.com):
             v.plausible(c, f"{at}.com[{k}]", "length")
         v.triangle(joint.inertia, f"{at}.inertia")
+        if joint.fixed is not None:
+            if file.convention != "standard":
+                v.fail(f"{at}.fixed", "a fixed transform after the DH row needs the standard convention")
+            for k in range(3):
+                v.plausible(float(joint.fixed[k, 3]), f"{at}.fixed[{k}][3]", "length")
+    fixed = None
+    if any(joint.fixed is not None for joint in joints):
+        fixed = np.array([np.eye(4) if joint.fixed is None else joint.fixed for joint in joints])
 
     def column(key: str) -> np.ndarray:
         return np.array([getattr(joint, key) for joint in joints], dtype=float)
@@ -404,7 +429,7 @@ def robot_from_dict(data: Any, source: str = "<dict>") -> Robot:
         gravity=np.array(file.gravity), tool=tool, base=base,
         joint_names=tuple(joint.name or f"q{i + 1}" for i, joint in enumerate(joints)), source=source,
         description=file.description, **{key: column(key) for key in DRIVE_DEFAULTS},
-        effort=column("effort"), velocity=column("velocity"),
+        effort=column("effort"), velocity=column("velocity"), fixed=fixed,
     )
     if file.poses_deg is not None:
         robot = dataclasses.replace(robot, poses=v.poses(file.poses_deg, "poses_deg", robot))
@@ -443,6 +468,8 @@ def robot_to_dict(robot: Robot) -> dict:
                            DRIVE_DEFAULTS.items() if getattr(robot, key)[i] != default})
         joints[-1].update({key: float(getattr(robot, key)[i]) for key in ("effort", "velocity")
                            if np.isfinite(getattr(robot, key)[i])})
+        if robot.fixed is not None and not np.array_equal(robot.fixed[i], np.eye(4)):
+            joints[-1]["fixed"] = robot.fixed[i].tolist()
     out = {"name": robot.name, "convention": robot.convention,
            "gravity": robot.gravity.tolist(), "tool": robot.tool.tolist(), "joints": joints}
     if not np.array_equal(robot.base, np.eye(4)):     # as the drive terms: old hashes kept
@@ -594,7 +621,8 @@ def poses_for(robot: Robot, poses_deg: dict[str, Sequence[float]] | None = None,
 
 
 def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
-    """The DH table for people: column names and one row per joint, angles in degrees.
+    """The DH table for people: column names and one row per joint, angles in degrees (and,
+    for a chain with fixed transforms after its rows, each one's rotation angle and shift).
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -613,6 +641,11 @@ def dh_rows(robot: Robot) -> tuple[list[str], list[list]]:
     rows = [[i + 1, robot.joint_names[i], robot.a[i], deg(robot.alpha[i]), robot.d[i],
              deg(robot.offset[i]), deg(robot.qlim[i, 0]), deg(robot.qlim[i, 1]), robot.mass[i]]
             for i in range(robot.n)]
+    if robot.fixed is not None:         # the transforms after the rows: how far and how much
+        columns += ["fixed turn [deg]", "fixed shift [m]"]
+        for i, row in enumerate(rows):
+            E = robot.fixed[i]
+            row += [deg(float(np.linalg.norm(log_so3(E[:3, :3])))), float(np.linalg.norm(E[:3, 3]))]
     return columns, rows
 
 

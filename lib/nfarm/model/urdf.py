@@ -18,14 +18,13 @@ the links' common normals and offsets.
 from __future__ import annotations
 
 import codecs
-import contextlib
 import dataclasses
 import json
 import math
 import os
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import escape
@@ -231,6 +230,11 @@ _SPACE = re.compile(r"[ \t\n\r]+")
 #: ``_NEAR`` metres intersect.
 _PARALLEL = 1e-9
 _NEAR = 1e-12
+#: The conversion's version, part of a converted robot's hash (:func:`~nfarm.model.robot.robot_hash`
+#: hashes a URDF robot by its sources): a conversion that changes makes another robot, whose data
+#: sets and models are made anew. 2: nearly parallel axes with fixed transforms, the common
+#: normal without cancellation.
+CONVERTER_VERSION = 2
 
 
 def _rpy_matrix(r: float, p: float, y: float) -> np.ndarray:
@@ -460,14 +464,17 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
         name: the robot's name (default the URDF's).
         max_bytes: the largest file read [bytes] (checked before reading it).
         near_parallel_deg: consecutive joint axes closer than this [deg] (but not parallel)
-            whose common normal puts DH lengths beyond 10 m get one warning naming them and
-            their angle, instead of a warning per length.
+            whose common normal lies beyond 10 m are written as parallel DH axes with the tilt
+            in a fixed transform after the row (``Robot.fixed``), with one warning naming them.
 
     The chain holds revolute and fixed joints. At ``q = 0`` each joint axis is a line in the
     world; DH frame i sits on axis i+1 (standard DH, ``z_i`` along it), at the foot of the
     common normal from axis i, ``x_i`` along that normal: for intersecting axes at the
     intersection with ``x_i = z_{i−1} × z_i``, for parallel axes where the normal through the
-    previous origin meets it (``d_i = 0``), for one line continuing the previous frame. Frame 0
+    previous origin meets it (``d_i = 0``), for one line continuing the previous frame. Nearly
+    parallel axes (``near_parallel_deg``) whose normal lies far away are placed as parallel
+    ones, the DH row parallel (``alpha_i`` 0 or π) and the tilt in ``fixed[i]``, so the robot
+    is the URDF's chain exactly (to rounding) and its DH table stays at the arm's size. Frame 0
     sits on axis 1 where it passes nearest the root's origin, with ``x_0`` along ``x_1`` (so
     ``offset_1 = 0``); frame n at the tip's origin with ``z_n`` along axis n. Every DH row is
     then read off consecutive frames; ``base`` is frame 0 in the root's frame, ``tool`` the tip
@@ -489,8 +496,8 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
             a negative effort…).
 
     Warns:
-        ParamsWarning: nearly parallel consecutive axes (``near_parallel_deg``) that put the
-            DH table's lengths beyond 10 m, once per pair, naming the joints and the angle.
+        ParamsWarning: nearly parallel consecutive axes (``near_parallel_deg``) written with a
+            fixed transform, once per pair, naming the joints, the angle and the transform.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -509,12 +516,14 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     lock = _locks(r, chain, lock)
     pose = _world_poses(r, tree, chain, _mimic_positions(r, chain, lock))
     axes = _joint_axes(r, pose, moving)
-    frames = _dh_frames(axes, pose[tip][:3, 3])
-    rows, bodies = _dh_rows(frames), _link_bodies(r, tree, pose, frames, moving)
-    quiet = _near_parallel(r.v.source, moving, axes, rows, near_parallel_deg)
+    frames, near = _dh_frames(axes, pose[tip][:3, 3], near_parallel_deg)
+    rows = _dh_rows(frames, [pair.k for pair in near])
+    bodies = _link_bodies(r, tree, pose, frames, moving)
+    _near_parallel(r.v.source, moving, near)
     robot = _build_robot(str(path), name or r.name, f"from {path.name}, chain {tree.root} → {tip}",
-                         frames, pose[tip], rows, bodies, quiet)
-    how = json.dumps({"tip": tip, "lock": lock, "name": name}, sort_keys=True).encode("utf-8")
+                         frames, pose[tip], rows, bodies, _fixed_transforms(frames, rows))
+    how = json.dumps({"tip": tip, "lock": lock, "name": name, "converter": CONVERTER_VERSION},
+                     sort_keys=True).encode("utf-8")
     return with_provenance(robot, raw, how)
 
 
@@ -676,21 +685,46 @@ def _joint_axes(r: _Reader, pose: Mapping[str, np.ndarray], moving: list[str]
     return axes
 
 
-def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> list[np.ndarray]:
-    """The DH frames ``F_0..F_n`` (each ``(4, 4)``, in the root's frame) from the ``n`` joint axes
-    at ``q = 0`` (a point ``(3,)`` [m] and a unit direction ``(3,)`` each) and the tip's origin
-    ``(3,)`` [m], by :func:`from_urdf`'s rule: ``z_i`` along axis i+1; frame i (0 < i < n) at
-    the foot of the common normal from axis i (:func:`_common_normal`), ``x_i`` along it, any
-    perpendicular when axes 1 and 2 are one line; frame n at the tip with ``x_n`` along the
-    tip's offset from axis n (else ``x_{n−1}``); frame 0 on axis 1 nearest the root's origin
-    with ``x_0`` the component of ``x_1`` across ``z_0``, made exactly orthonormal."""
+@dataclass(frozen=True)
+class _NearParallel:
+    """Consecutive axes ``k`` and ``k + 1`` (0-based) nearly parallel: ``angle`` [deg] apart,
+    their common normal ``distance`` [m] from the previous frame's origin."""
+
+    k: int
+    angle: float
+    distance: float
+
+
+def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray,
+               near_parallel_deg: float = 5.0) -> tuple[list[np.ndarray], list[_NearParallel]]:
+    """The link frames ``F_0..F_n`` (each ``(4, 4)``, in the root's frame) from the ``n`` joint
+    axes at ``q = 0`` (a point ``(3,)`` [m] and a unit direction ``(3,)`` each) and the tip's
+    origin ``(3,)`` [m], by :func:`from_urdf`'s rule: ``z_i`` along axis i+1; frame i
+    (0 < i < n) at the foot of the common normal from axis i (:func:`_common_normal`), ``x_i``
+    along it, any perpendicular when axes 1 and 2 are one line; frame n at the tip with ``x_n``
+    along the tip's offset from axis n (else ``x_{n−1}``); frame 0 on axis 1 nearest the root's
+    origin with ``x_0`` the component of ``x_1`` across ``z_0``, made exactly orthonormal.
+
+    Axes less than ``near_parallel_deg`` apart whose common normal lies beyond
+    :data:`MAX_PLAUSIBLE_LENGTH` from the previous origin are placed as parallel ones are:
+    frame i where the normal through the previous origin meets axis i+1 (:func:`_beside`);
+    those pairs are returned too (their DH rows are parallel, the tilt in a fixed transform)."""
     n = len(axes)
     z_0 = axes[0][1]
     o_0 = axes[0][0] - np.dot(axes[0][0], z_0) * z_0          # on axis 1, nearest the origin
     frames = [None] * (n + 1)
+    near = []
     o, x = o_0, np.zeros(3)
+    limit = math.sin(math.radians(min(near_parallel_deg, 90.0)))
     for i in range(1, n):
-        o, x = _common_normal(o, axes[i - 1][1], *axes[i], x)
+        z0, (p1, z1) = axes[i - 1][1], axes[i]
+        sine = float(np.linalg.norm(np.cross(z0, z1)))
+        o_next, x_next = _common_normal(o, z0, p1, z1, x)
+        far = float(np.linalg.norm(o_next - o))
+        if _PARALLEL <= sine < limit and far > MAX_PLAUSIBLE_LENGTH:
+            near.append(_NearParallel(i - 1, math.degrees(math.atan2(sine, abs(float(z0 @ z1)))), far))
+            o_next, x_next = _beside(o, p1, z1, x)
+        o, x = o_next, x_next
         if not x.any():                                        # axes 1 and 2 the same line
             x = _perpendicular(axes[0][1])
         frames[i] = _frame(x, axes[i][1], o)
@@ -708,40 +742,48 @@ def _dh_frames(axes: list[tuple[np.ndarray, np.ndarray]], p_tip: np.ndarray) -> 
     x_1 = frames[1][:3, 0]
     frames[0] = _frame(x_1 - np.dot(x_1, z_0) * z_0, z_0, o_0)
     frames[0][:3, :3] = _orthonormal(frames[0][:3, :3])
-    return frames
+    return frames, near
+
+
+def _beside(o0: np.ndarray, p1: np.ndarray, z1: np.ndarray, x_prev: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """The frame origin on the line ``(p1, z1)`` nearest ``o0`` and its x axis, along the
+    normal from ``o0`` (``x_prev`` made across ``z1`` when ``o0`` is on the line): for parallel
+    axes, and for nearly parallel ones placed as parallel ones are, so that the DH frames stay
+    near the arm (the origin is on the line itself, the tilt left to a fixed transform)."""
+    foot = p1 + np.dot(o0 - p1, z1) * z1
+    gap = foot - o0
+    gap -= np.dot(gap, z1) * z1
+    distance = float(np.linalg.norm(gap))
+    if distance < _NEAR * max(1.0, float(np.linalg.norm(o0)), float(np.linalg.norm(foot))):
+        x = x_prev - np.dot(x_prev, z1) * z1
+        return foot, x / np.linalg.norm(x) if x.any() else x
+    return foot, gap / distance
 
 
 def _common_normal(o0: np.ndarray, z0: np.ndarray, p1: np.ndarray, z1: np.ndarray,
                    x_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """DH frame origin on the line ``(p1, z1)`` and its x axis, from the line ``(o0, z0)``:
-    the foot of their common normal and its direction (skew lines); the intersection and
-    ``z0 × z1`` (intersecting); the foot of the normal through ``o0`` (parallel, so that
-    ``d = 0``); ``o0`` and ``x_prev`` (the same line)."""
+    the foot of their common normal and its direction ``±n``, ``n = z0 × z1 / |z0 × z1|``
+    (skew lines); the intersection and ``n`` (intersecting); the foot of the normal through
+    ``o0`` (parallel, so that ``d = 0``; :func:`_beside`); ``o0`` and ``x_prev`` (the same line).
+
+    The normal's signed length is ``δ = (p1 − o0)·n`` and its foot on the second line
+    ``p1 + t1 z1`` with ``t1 = ((p1 − o0) × z0)·n / |z0 × z1|``: no ``1 − (z0·z1)²``, whose
+    cancellation for nearly parallel axes would put the foot metres off and tilt ``x`` off
+    the axes."""
     cross = np.cross(z0, z1)
     sine = float(np.linalg.norm(cross))
     if sine < _PARALLEL:                                         # parallel or the same line
-        foot = p1 + np.dot(o0 - p1, z1) * z1
-        gap = foot - o0
-        gap -= np.dot(gap, z0) * z0
-        distance = float(np.linalg.norm(gap))
-        # Rounding grows with the points' distance from the origin (far off when the axes
-        # before were nearly parallel): below it, the lines are one.
-        if distance < _NEAR * max(1.0, float(np.linalg.norm(o0)), float(np.linalg.norm(foot))):
-            return o0.copy(), x_prev.copy()
-        return o0 + gap, gap / distance
+        return _beside(o0, p1, z1, x_prev)
     n = cross / sine
-    # Closest points o0 + t0 z0 and p1 + t1 z1.
-    w = o0 - p1
-    b = np.dot(z0, z1)
-    denom = 1 - b * b
-    t0 = (b * np.dot(z1, w) - np.dot(z0, w)) / denom
-    t1 = (np.dot(z1, w) - b * np.dot(z0, w)) / denom
-    f0, f1 = o0 + t0 * z0, p1 + t1 * z1
-    gap = f1 - f0
-    distance = float(np.linalg.norm(gap))
-    if distance < _NEAR:
-        return f1, n
-    return f1, gap / distance
+    w = p1 - o0
+    delta = float(np.dot(w, n))
+    foot = p1 + (float(np.dot(np.cross(w, z0), n)) / sine) * z1
+    # Rounding grows with the points' distance from the origin: below it, the lines meet.
+    if abs(delta) < _NEAR * max(1.0, float(np.linalg.norm(o0)), float(np.linalg.norm(foot))):
+        return foot, n
+    return foot, n if delta > 0 else -n
 
 
 def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
@@ -768,20 +810,49 @@ def _orthonormal(R: np.ndarray) -> np.ndarray:
     return U @ Vt
 
 
-def _dh_rows(frames: list[np.ndarray]) -> list[dict[str, float]]:
+def _dh_rows(frames: list[np.ndarray], near: Sequence[int] = ()) -> list[dict[str, float]]:
     """Standard DH rows read off consecutive frames ``F_{i−1}, F_i`` (``n + 1`` frames):
     ``a = (o_i − o_{i−1})·x_i``, ``d = (o_i − o_{i−1})·z_{i−1}``, ``offset`` the angle from
     ``x_{i−1}`` to ``x_i`` about ``z_{i−1}``, ``alpha`` from ``z_{i−1}`` to ``z_i`` about ``x_i``;
-    values within 1e-12 of a round number snapped to it."""
+    values within 1e-12 of a round number snapped to it. The rows ``near`` (0-based: nearly
+    parallel axes, :func:`_dh_frames`) get ``alpha`` 0 or π, the parallel axes nearest them
+    (:func:`_fixed_transforms` keeps the rest)."""
     rows = []
     for i in range(1, len(frames)):
         F0, F1 = frames[i - 1], frames[i]
         z0, x0, x1, z1 = F0[:3, 2], F0[:3, 0], F1[:3, 0], F1[:3, 2]
         step = F1[:3, 3] - F0[:3, 3]
+        alpha = (0.0 if np.dot(z0, z1) > 0 else math.pi) if i - 1 in near else \
+            _snap(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))
         rows.append({"a": _snap(np.dot(step, x1)), "d": _snap(np.dot(step, z0)),
                      "offset": _snap(np.arctan2(np.dot(np.cross(x0, x1), z0), np.dot(x0, x1))),
-                     "alpha": _snap(np.arctan2(np.dot(np.cross(z0, z1), x1), np.dot(z0, z1)))})
+                     "alpha": alpha})
     return rows
+
+
+def _fixed_transforms(frames: list[np.ndarray], rows: list[dict[str, float]],
+                      tol: float = 1e-12) -> list[np.ndarray] | None:
+    """The transform ``E_i = (F_{i−1} · A_i(0))⁻¹ · F_i`` ``(4, 4)`` each joint's DH row
+    leaves between its frame and the next (:class:`~nfarm.model.robot.Robot`'s ``fixed``):
+    a small rotation for nearly parallel axes written as parallel, rounding elsewhere. ``None``
+    when every one is the identity within ``tol`` (rotation) and ``tol`` times the arm's size
+    (translation [m]): a pure DH chain."""
+    scale = max([1.0] + [float(np.linalg.norm(F[:3, 3])) for F in frames])
+    out, exact = [], True
+    for i, row in enumerate(rows):
+        c, s = math.cos(row["offset"]), math.sin(row["offset"])
+        ca, sa = math.cos(row["alpha"]), math.sin(row["alpha"])
+        A = np.array([[c, -s * ca, s * sa, row["a"] * c], [s, c * ca, -c * sa, row["a"] * s],
+                      [0.0, sa, ca, row["d"]], [0.0, 0.0, 0.0, 1.0]])
+        E = np.linalg.solve(frames[i] @ A, frames[i + 1])
+        if (np.abs(E[:3, :3] - np.eye(3)).max() <= tol and np.abs(E[:3, 3]).max() <= tol * scale):
+            E = np.eye(4)
+        else:
+            E[:3, :3] = _orthonormal(E[:3, :3])
+            E[3] = [0.0, 0.0, 0.0, 1.0]
+            exact = False
+        out.append(E)
+    return None if exact else out
 
 
 def _snap(x: float, tol: float = 1e-12) -> float:
@@ -836,62 +907,40 @@ def _lump(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np
     return m, com, I
 
 
-def _near_parallel(source: str, moving: list[str], axes: list[tuple[np.ndarray, np.ndarray]],
-                   rows: list[dict], near_parallel_deg: float) -> list[int]:
-    """Warn once for each pair of consecutive axes less than ``near_parallel_deg`` [deg] apart
-    (but not parallel, :data:`_PARALLEL`) that puts a DH length beyond 10 m into the rows
-    they shape: DH frame k lies at the foot of their common normal, far away, and so do the
-    frames on the parallel axes after it. Return the rows (0-based) whose "a length in
-    millimetres?" warnings this one replaces."""
-    def sine(i: int) -> float:              # of the angle between axes i and i+1
-        return float(np.linalg.norm(np.cross(axes[i][1], axes[i + 1][1])))
-
-    quiet = []
-    for k in range(1, len(axes)):
-        z0, z1 = axes[k - 1][1], axes[k][1]
-        angle = math.degrees(math.atan2(sine(k - 1), abs(float(np.dot(z0, z1)))))
-        if not (sine(k - 1) >= _PARALLEL and angle < near_parallel_deg):
-            continue
-        last = k                            # the run of axes parallel to axis k
-        while last + 1 < len(axes) and sine(last) < _PARALLEL:
-            last += 1
-        shaped = range(k - 1, last + 1)
-        longest = max(abs(rows[i][key]) for i in shaped for key in ("a", "d"))
-        if longest > MAX_PLAUSIBLE_LENGTH:
-            where = f"joints[{k - 1}]" + (f" and joints[{k}]" if last == k else f" to joints[{last}]")
-            warnings.warn(ParamsWarning(
-                f"{source}: joints {moving[k - 1]!r} and {moving[k]!r}: axes nearly parallel, "
-                f"{angle:.3g}° apart: their common normal puts DH lengths up to {longest:.4g} m "
-                f"into {where}; make the axes exactly parallel if they are meant to be"),
-                stacklevel=3)
-            quiet += shaped
-    return quiet
+def _near_parallel(source: str, moving: list[str], near: list[_NearParallel]) -> None:
+    """Warn once, in one line, for each pair of nearly parallel consecutive axes
+    (:func:`_dh_frames`) written as parallel DH axes with the tilt in a fixed transform."""
+    for pair in near:
+        k = pair.k
+        warnings.warn(ParamsWarning(
+            f"{source}: joints {moving[k]!r} and {moving[k + 1]!r}: axes nearly parallel, "
+            f"{pair.angle:.3g}° apart: written as parallel DH axes with the tilt in "
+            f"joints[{k}].fixed (their common normal lies {pair.distance:.4g} m away); make the "
+            f"axes exactly parallel if they are meant to be"), stacklevel=3)
 
 
 def _build_robot(source: str, name: str, description: str, frames: list[np.ndarray],
-                 T_tip: np.ndarray, rows: list[dict], bodies: list[dict], quiet: list[int] = ()
-                 ) -> Robot:
-    """The standard-DH :class:`Robot` from DH frames ``F_0..F_n`` (each ``(4, 4)``, in the root's
-    frame), the tip's pose ``T_tip`` ``(4, 4)`` and each joint's DH row and body: ``base = F_0``,
-    ``tool = F_n⁻¹ · T_tip`` (by a linear solve), gravity ``[0, 0, −9.81]`` m/s² in the root's
-    frame. A robot file's checks apply; their errors say the robot was converted. The rows
-    ``quiet`` (0-based) skip their "a length in millimetres?" warnings (nearly parallel axes
-    were named instead)."""
+                 T_tip: np.ndarray, rows: list[dict], bodies: list[dict],
+                 fixed: list[np.ndarray] | None = None) -> Robot:
+    """The standard-DH :class:`Robot` from link frames ``F_0..F_n`` (each ``(4, 4)``, in the
+    root's frame), the tip's pose ``T_tip`` ``(4, 4)``, each joint's DH row and body and the
+    fixed transforms after the rows (``None``: none): ``base = F_0``, ``tool = F_n⁻¹ · T_tip``
+    (by a linear solve), gravity ``[0, 0, −9.81]`` m/s² in the root's frame. A robot file's
+    checks apply; their errors say the robot was converted."""
     tool = np.linalg.solve(frames[-1], T_tip)
     joints = [{**row, **body} for row, body in zip(rows, bodies)]
+    if fixed is not None:
+        for joint, E in zip(joints, fixed):
+            if not np.array_equal(E, np.eye(4)):
+                joint["fixed"] = E.tolist()
     try:
-        with warnings.catch_warnings() if quiet else contextlib.nullcontext():
-            for i in sorted(set(quiet)):
-                warnings.filterwarnings(
-                    "ignore", re.escape(f"{source}: joints[{i}].") + r"(?:a|d|com\[\d\]): .*millimetres\?",
-                    ParamsWarning)
-            # A URDF's name is any text; a robot file's must name directories (ROBOT_NAME): the
-            # file's checks run under a plain name, and the robot keeps its URDF's.
-            robot = robot_from_dict({"name": "urdf", "convention": "standard",
-                                     "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
-                                     "tool": tool.tolist(), "joints": joints,
-                                     "description": description}, source=source)
-            return dataclasses.replace(robot, name=name)
+        # A URDF's name is any text; a robot file's must name directories (ROBOT_NAME): the
+        # file's checks run under a plain name, and the robot keeps its URDF's.
+        robot = robot_from_dict({"name": "urdf", "convention": "standard",
+                                 "gravity": [0.0, 0.0, -9.81], "base": frames[0].tolist(),
+                                 "tool": tool.tolist(), "joints": joints,
+                                 "description": description}, source=source)
+        return dataclasses.replace(robot, name=name)
     except ParamsError as exc:
         raise ParamsError(f"{exc} (converted from the URDF)") from None
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..model.kinematics import snap_right_angles
 from ..model.robot import Robot, joint_array
+from ..model.rotations import log_so3
 
 __all__ = ["BRANCHES", "ArmConstants", "check_class", "in_class", "class_refusal", "branch_of"]
 
@@ -26,6 +27,11 @@ BRANCHES = ("front, elbow up", "front, elbow down", "back, elbow up", "back, elb
 #: The base and roll axes must be this far from parallel to the pitch axes (sin of the angle):
 #: the base and roll angles are determined to the rounding of the pose divided by it.
 _MIN_SIN = 1e-6
+#: Near the class [rad]: pitch axes this close to parallel (sin α2, sin α3), and fixed
+#: transforms after the rows (:class:`~nfarm.model.robot.Robot`) turning this little and shifting
+#: this times the arm's length, are solved through the parallel arm, whose branches seed LM
+#: on the arm itself.
+NEAR_TOL = 1e-4
 
 
 @dataclass(frozen=True)
@@ -66,6 +72,8 @@ class ArmConstants:
     reach: float                 # a length scale [m]: |a| + |d| summed
     lo: np.ndarray
     hi: np.ndarray
+    exact: bool = True           # False: the DH rows' arm, the robot's fixed transforms left out
+    forward: float = 1.0         # +1 / −1: "front" is ahead of the base axis along x1 / behind it
 
 
 def _Rx(t: float) -> np.ndarray:
@@ -93,15 +101,33 @@ def _standard_chain(robot: Robot):
 
 
 def _reason(robot: Robot, axis_tol: float):
-    """``(arm, None)`` for a robot of the class, else ``(None, reason)``."""
+    """``(arm, None)`` for a robot of the class, else ``(None, reason)``. A robot near the
+    class (:data:`NEAR_TOL`: pitch axes a little off parallel, or small fixed transforms after
+    its rows) gets the constants of the parallel arm and ``arm.exact`` False: the closed form
+    then seeds LM on the arm itself."""
     if robot.n != 5:
         return None, f"it has {robot.n} joints (the class has 5)"
     base, a, alpha, d, offset, tool = _standard_chain(robot)
     deg = np.degrees
+    scale = float(np.abs(a).sum() + np.abs(d).sum())
+    if robot.fixed is not None:
+        for i, E in enumerate(robot.fixed):
+            turn = float(np.linalg.norm(log_so3(E[:3, :3])))
+            shift = float(np.linalg.norm(E[:3, 3]))
+            if turn > NEAR_TOL or shift > NEAR_TOL * max(scale, 1e-3):
+                return None, (f"joint {i + 1}'s fixed transform after its DH row turns "
+                              f"{deg(turn):.3g}° and shifts {shift:.3g} m (the closed form seeds "
+                              f"LM through at most {deg(NEAR_TOL):.3g}° and {NEAR_TOL:g} of the "
+                              f"arm's length)")
+    exact = robot.fixed is None
+    alpha = np.array(alpha, dtype=float)
     for i in (1, 2):
-        if abs(math.sin(alpha[i])) > axis_tol:
+        if abs(math.sin(alpha[i])) > NEAR_TOL:
             return None, (f"joints {i + 1} and {i + 2} are not parallel (standard-DH alpha{i + 1} = "
-                          f"{deg(alpha[i]):.6g}°; the class needs 0° or 180°)")
+                          f"{deg(alpha[i]):.6g}°; the class needs 0° or 180°, within "
+                          f"{deg(NEAR_TOL):.3g}°)")
+        if abs(math.sin(alpha[i])) > axis_tol:         # near: the parallel arm's, then LM
+            alpha[i], exact = math.pi * round(alpha[i] / math.pi), False
     if abs(math.sin(alpha[0])) < _MIN_SIN:
         return None, (f"joint 1 is parallel to joints 2-4 (standard-DH alpha1 = "
                       f"{deg(alpha[0]):.6g}°): no base joint")
@@ -109,7 +135,6 @@ def _reason(robot: Robot, axis_tol: float):
     if abs(math.sin(beta)) < _MIN_SIN:
         return None, (f"joint 5 is parallel to joints 2-4 (alpha2 + alpha3 + alpha4 = "
                       f"{deg(beta):.6g}°): no roll joint")
-    scale = float(np.abs(a).sum() + np.abs(d).sum())
     for i in (1, 2):
         if abs(a[i]) <= 1e-9 * max(scale, 1e-300):
             return None, (f"standard-DH a{i + 1} = {a[i]:g} m: joints 2-4 need two links between "
@@ -122,6 +147,13 @@ def _reason(robot: Robot, axis_tol: float):
     plain = np.array_equal(Rb, np.eye(3)) and np.array_equal(C, np.eye(3))
     # "Elbow up": frame 1's y axis has the up-component sin α1 · (z0 · up) (z0 the base axis),
     # and the elbow lies on the side of the shoulder-wrist line given by −a2 a3 sin γ.
+    # "Front": where the wrist point lies at the arm's home (q = 0 within its limits), ahead of
+    # the base axis along x1 or behind it (a URDF's converted frame 0 may face backwards).
+    home = np.clip(0.0, robot.qlim[:, 0], robot.qlim[:, 1]) + offset
+    gamma = sigma2 * home[2]
+    phi = home[1] + gamma + sigma * home[3]
+    ahead = a[0] + a[1] * math.cos(home[1]) + a[2] * math.cos(home[1] + gamma) + a[3] * math.cos(phi)
+    forward = -1.0 if ahead < 0 else 1.0
     g = robot.gravity
     up_world = -g / np.linalg.norm(g) if np.any(g) else Rb[:, 2]
     vertical = float(Rb[:, 2] @ up_world)
@@ -136,7 +168,7 @@ def _reason(robot: Robot, axis_tol: float):
         v=tuple(float(x) for x in np.array([a[4], 0.0, d[4]]) + _Rx(alpha[4]) @ tool[:3, 3]),
         offset=np.asarray(offset, dtype=float), up=up,
         elbow_up=up * math.copysign(1.0, a[1] * a[2]), reach=max(scale, 1e-3),
-        lo=robot.qlim[:, 0], hi=robot.qlim[:, 1]), None
+        lo=robot.qlim[:, 0], hi=robot.qlim[:, 1], exact=exact, forward=forward), None
 
 
 def check_class(robot: Robot, axis_tol: float = 1e-10) -> ArmConstants:
@@ -146,6 +178,8 @@ def check_class(robot: Robot, axis_tol: float = 1e-10) -> ArmConstants:
     ``axis_tol`` [rad]: how far α2 and α3 may be from 0 or π and still count as parallel
     axes; the closed form then treats them as exactly parallel, which moves the tool by at
     most ``axis_tol`` times the arm's length (1e-10 rad: < 1e-10 m on the shipped arms).
+    Further off, up to :data:`NEAR_TOL`, the arm is near the class: the parallel arm's
+    branches seed LM on the arm itself (``ArmConstants.exact`` False).
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
@@ -205,7 +239,8 @@ def class_refusal(robot: Robot, axis_tol: float = 1e-10) -> str | None:
 
 def branch_of(robot: Robot, q, axis_tol: float = 1e-10) -> np.ndarray:
     """``(...)`` the index in :data:`BRANCHES` of the branch configurations ``q (..., 5)``
-    [rad] lie on: front when the wrist point is ahead of the base axis along x1, and the elbow
+    [rad] lie on: front when the wrist point is on the side of the base axis it is on at the
+    arm's home (q = 0 within the limits: ahead along x1 on both arms of the study), and the elbow
     by the sign of its angle (:mod:`nfarm.solvers.geometric_ik`'s docstring). Raises ``ValueError`` for a robot not of the
     class.
 
@@ -226,7 +261,7 @@ def branch_of(robot: Robot, q, axis_tol: float = 1e-10) -> np.ndarray:
     gamma = g.sigma2 * t[..., 2]
     phi = t[..., 1] + gamma + g.sigma * t[..., 3]
     ahead = g.a1 + g.a2 * np.cos(t[..., 1]) + g.a3 * np.cos(t[..., 1] + gamma) + g.a4 * np.cos(phi)
-    back = ahead < 0
-    front = np.where(back, -1.0, 1.0)
-    down = g.elbow_up * front * np.sin(gamma) > 0
+    side = np.where(ahead < 0, -1.0, 1.0)            # of the base axis along x1
+    back = g.forward * side < 0
+    down = g.elbow_up * side * np.sin(gamma) > 0
     return 2 * back.astype(int) + down.astype(int)

@@ -18,6 +18,13 @@ pitch axes (the SO-101's α4 is −1.5708, 3.7e-6 rad off −π/2), a5 and d5 (a
 roll axis: the SO-101's 7.9 mm), the joint offsets, the base and the tool. Any other robot is
 refused in one line saying which condition it breaks (:func:`check_class`).
 
+**Near the class.** A robot whose pitch axes are a little off parallel (α2 or α3 within
+:data:`~nfarm.solvers.arm_class.NEAR_TOL` of 0 or π, or small fixed transforms after its rows,
+:class:`~nfarm.model.robot.Robot`'s ``fixed``: a URDF written with a rounded π puts them 7e-6
+rad apart) is solved through the parallel arm: every branch of it seeds Levenberg–Marquardt on
+the arm itself (the refinement below, for every target), so each branch is found on the arm
+as it is (``refined`` set). Further off, the robot is refused as outside the class.
+
 **Derivation** (θ̄ = q + offset; u(φ) = (cos φ, sin φ); σ2 = cos α2, σ = cos α2 cos α3, both
 ±1; ``Rx(π) Rz(θ) = Rz(−θ) Rx(π)``). The three pitch joints act in the plane of frame 1::
 
@@ -34,8 +41,9 @@ refused in one line saying which condition it breaks (:func:`check_class`).
 
    each of the form ``A sin θ̄1 − B cos θ̄1 = C``, solved by
    ``θ̄1 = atan2(B, A) + atan2(C, ±√(A² + B² − C²))``. The two roots of the first are the base
-   branches, *front* and *back* (the wrist point ahead of the base axis along x1, or behind
-   it). A target in the arm's pose set satisfies both. Where the first is ill-conditioned (its
+   branches, *front* and *back* (the wrist point on the side of the base axis it is on at the
+   arm's home, q = 0 within the limits, or on the other: ahead along x1 on both arms of the
+   study; a URDF's converted frame 0 may face backwards). A target in the arm's pose set satisfies both. Where the first is ill-conditioned (its
    square root small: the wrist point near the base axis, its error growing as 1/√) the roots
    of the second are taken instead, the one nearest to a root of the first for that root's
    branch and the other for the other branch. With w ≠ 0 the back branch reaches a target
@@ -275,7 +283,7 @@ def _base_angles(g: ArmConstants, target: _Target) -> tuple[np.ndarray, np.ndarr
     px, py, pz1 = target.px, target.py, target.pz1
     Ap, Bp, Cp = sa * px, sa * py, g.w - ca * pz1
     hp = np.sqrt(np.maximum(Ap * Ap + Bp * Bp - Cp * Cp, 0.0))
-    front = math.copysign(1.0, sa)
+    front = math.copysign(1.0, sa) * g.forward        # the root whose wrist is in front first
     root = np.stack([front * hp, -front * hp])                             # ±√ of each root
     # cos, sin of θ̄1 = φ + ψ by the angle sum (cos φ = A/ρ, cos ψ = ±h/ρ, sin ψ = C/ρ).
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -434,7 +442,7 @@ def _errors(g: ArmConstants, wrist: _Wrist, link: _TwoLink) -> tuple[np.ndarray,
 def _joint_angles(g: ArmConstants, t1: np.ndarray, wrist: _Wrist, link: _TwoLink) -> tuple:
     """The joint angles [rad], offsets taken out: ``q1, q5 (2, m)`` and ``q2, q3, q4 (2, 2, m)``
     with elbow column 0 "up" (module docstring), 1 "down"."""
-    e_up = np.array([-g.elbow_up, g.elbow_up])[:, None, None] * np.array([1.0, -1.0])[:, None]
+    e_up = np.array([-g.elbow_up, g.elbow_up])[:, None, None] * np.array([g.forward, -g.forward])[:, None]
     gam = e_up * link.gamma[:, None, :]
     q2 = link.psi[:, None, :] - e_up * link.delta[:, None, :]
     q4 = g.sigma * (wrist.Phi[:, None, :] - q2 - gam)
@@ -579,6 +587,8 @@ def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, refine, refine
     q, inside, pos_error, rot_error = q_c.transpose(2, 1, 0), inside_c.T, pos_c.T, rot_c.T
     reaches = (pos_error <= tol_pos) & (rot_error <= tol_rot)
     refined = ~reaches.any(axis=1)
+    if not arm.exact:          # the DH rows' solutions seed LM on the arm with its fixed transforms
+        refined[:], refine = True, True
     if refine and refined.any():
         out = np.flatnonzero(refined)
         result = solve(robot, np.repeat(flat[out], 4, axis=0), q[out].reshape(-1, 5),

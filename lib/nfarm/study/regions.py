@@ -29,6 +29,7 @@ from scipy.stats import qmc
 from ..model.kinematics import fk
 from ..model.robot import Robot, joint_array
 from ..solvers.geometric_ik import wrapped_gap as _wrapped_gap
+from ..solvers.arm_class import check_class
 from ..solvers.ik import closed_form, count_distinct, in_class, solve
 
 __all__ = ["IKRegion", "SingleValuedness", "check_single_valued", "workspace_fraction", "ik_samples",
@@ -215,7 +216,7 @@ class SingleValuedness:
 
 def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int = 24, *,
                         seed: int = 0, tol: float = 1e-6, distinct: float = 1e-4,
-                        method: str = "auto", batch: int = 100_000,
+                        method: str = "auto", batch: int = 100_000, near: float = 1e-5,
                         **ik_options) -> SingleValuedness:
     """Count the IK solutions of ``n_targets`` targets ``T = fk(q)``, ``q`` drawn in ``region``:
     within the full joint limits, and inside the region.
@@ -230,6 +231,11 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
     A solution inside the region that differs from ``q`` by more than ``tol`` [rad] in some
     joint is a second solution. Solutions are distinct when they differ by more than
     ``distinct`` [rad] in some joint, angles 2π apart being the same.
+
+    On an arm near the closed form's class (:data:`nfarm.solvers.arm_class.NEAR_TOL`: pitch axes
+    a rounded π apart), the other branches reach the nearest pose micrometres from the target,
+    not the target: a branch within ``near`` [m and rad] of it counts as a solution there, as
+    it is one to a learner and to any sensor.
     """
     robot = region.robot
     if method == "auto":
@@ -238,12 +244,15 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
         raise ValueError(f"method must be 'auto', 'closed form' or 'lm', got {method!r}")
     if isinstance(batch, bool) or not isinstance(batch, (int, np.integer)) or batch < 1:
         raise ValueError(f"batch must be a whole number >= 1, got {batch!r}")
+    if isinstance(near, bool) or not isinstance(near, (int, float)) or not near > 0:
+        raise ValueError(f"near must be a number > 0 [m and rad], got {near!r}")
     q = region.sample(n_targets, stream_rng(seed, STREAMS["check"]), method="uniform")
     if method == "closed form":
         if ik_options:
             raise ValueError(f"LM options ({', '.join(sorted(ik_options))}) apply to method='lm' "
                              f"only; the closed form takes none")
-        parts = [_closed_form_counts(region, q[k:k + batch], tol, distinct)
+        reach = None if check_class(robot).exact else near
+        parts = [_closed_form_counts(region, q[k:k + batch], tol, distinct, reach)
                  for k in range(0, n_targets, batch)]
         second, q_second, solutions, inside = (np.concatenate(x) for x in zip(*parts))
         return SingleValuedness(q=q, second=second, q_second=q_second, solutions=solutions,
@@ -273,11 +282,18 @@ def _second(q: np.ndarray, candidates: np.ndarray, ok: np.ndarray, tol: float):
     return second, np.where(second[:, None], first, np.nan)
 
 
-def _closed_form_counts(region: IKRegion, q: np.ndarray, tol: float, distinct: float):
+def _closed_form_counts(region: IKRegion, q: np.ndarray, tol: float, distinct: float,
+                        reach: float | None):
+    """Per target of ``q``: whether it has a second solution in the region, the first such,
+    and the distinct solutions in the limits and in the region; ``reach`` [m and rad]: a branch
+    that ends this near the target counts (an arm near the class), else the closed form's own
+    test."""
     result = closed_form(region.robot, fk(region.robot, q))
-    in_region = result.valid & region.contains(result.q)
+    valid = result.valid if reach is None else \
+        (result.pos_error <= reach) & (result.rot_error <= reach) & result.within_limits
+    in_region = valid & region.contains(result.q)
     second, q_second = _second(q, result.q, in_region, tol)
-    return second, q_second, count_distinct(result.q, result.valid, distinct), \
+    return second, q_second, count_distinct(result.q, valid, distinct), \
         count_distinct(result.q, in_region, distinct)
 
 

@@ -20,7 +20,11 @@ distribution, every value of one would lie below every value of the other with p
 Over **independent samples** (the test poses of the learned IK, each drawn on its own; or the
 per-trajectory maxima of a torque error) :func:`bootstrap_rows` resamples rows with SciPy's
 ``scipy.stats.bootstrap`` (percentile method, paired columns, batched so that 2 000 resamples of
-10 000 poses stay within a few tens of MB). :func:`tail_ratios` does the same for the question
+10 000 poses stay within a few tens of MB). A statistic made of sums and order statistics of
+per-row values (the IK metrics: an RMSE, a median, a 95th percentile, a maximum) reads a
+resample through the times each row is drawn instead (:func:`bootstrap_counts`,
+:func:`resampled_quantile`): no copy of the rows, 20× faster on 10 000 poses, the same
+statistic. :func:`tail_ratios` does the same for the question
 "does the error grow near a place": the ratio of the median error over the poses nearest to it
 to that over the poses farthest from it, for several places on the same resamples.
 
@@ -38,7 +42,8 @@ import numpy as np
 import scipy.stats
 
 __all__ = ["trajectory_sums", "trajectory_maxima", "nrmse_from_sums", "Interval", "bootstrap_nrmse",
-           "worst_difference", "Estimate", "bootstrap_rows", "bootstrap_seeds", "ranges_separate", "separation_level",
+           "worst_difference", "Estimate", "bootstrap_rows", "bootstrap_counts", "resampled_quantile",
+           "bootstrap_seeds", "ranges_separate", "separation_level",
            "TailRatios", "tail_ratio", "tail_ratios", "resolved_joints"]
 
 
@@ -214,6 +219,79 @@ def bootstrap_rows(rows: np.ndarray, statistic, *, draws: int = 2000, level: flo
     scalar = value.ndim == 0
     as_out = (lambda v: float(v)) if scalar else (lambda v: np.asarray(v, float))   # noqa: E731
     return Estimate(as_out(value), as_out(low), as_out(high), level, draws, len(rows))
+
+
+def bootstrap_counts(n_rows: int, statistic, *, draws: int = 2000, level: float = 0.95, seed: int = 0,
+                     batch: int = 100) -> Estimate:
+    """A statistic of ``n_rows`` rows read through how often a resample draws each row, and
+    its percentile-bootstrap interval from ``draws`` resamples with replacement (``batch`` at a
+    time from one generator seeded by ``seed``: the same seed and ``n_rows`` draw two methods'
+    rows alike, so a difference of two statistics is paired).
+
+    ``statistic(counts)`` maps ``counts (b, N)`` (integers, each row summing to N; all ones for
+    the rows themselves, the value) to ``(b,)`` or ``(b, m)``. For statistics of sums
+    (``counts @ x``) and order statistics (:func:`resampled_quantile`) of per-row values this
+    costs O(N) a resample and copies no rows, where :func:`bootstrap_rows` gathers them.
+
+    Example:
+        >>> x = np.arange(10.0)
+        >>> mean = lambda counts: counts @ x / len(x)
+        >>> est = bootstrap_counts(10, mean, draws=500)
+        >>> est.value, bool(est.low < 4.5 < est.high)
+        (4.5, True)
+    """
+    if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 2:
+        raise ValueError(f"n_rows must be a whole number >= 2, got {n_rows!r}")
+    if not (isinstance(draws, int) and draws >= 100):
+        raise ValueError(f"draws must be an integer >= 100, got {draws!r}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    n = int(n_rows)
+    value = np.asarray(statistic(np.ones((1, n), np.int64)))[0]
+    rng = np.random.default_rng(seed)
+    theta = []
+    for start in range(0, draws, batch):
+        b = min(batch, draws - start)
+        drawn = rng.integers(0, n, size=(b, n)) + n * np.arange(b)[:, None]
+        theta.append(np.asarray(statistic(np.bincount(drawn.ravel(), minlength=b * n).reshape(b, n))))
+    low, high = np.percentile(np.concatenate(theta), [100 * (1 - level) / 2, 100 * (1 + level) / 2], axis=0)
+    scalar = value.ndim == 0
+    as_out = (lambda v: float(v)) if scalar else (lambda v: np.asarray(v, float))   # noqa: E731
+    return Estimate(as_out(value), as_out(low), as_out(high), level, draws, n)
+
+
+def resampled_quantile(x_sorted: np.ndarray, running: np.ndarray, q: float) -> np.ndarray:
+    """``(b,)``: the ``q``-quantile of each resample, as ``np.percentile(resample, 100 q)``
+    computes it (linear between order statistics; ``q = 0.5``: the median, the mean of the two
+    middle ones as ``np.median`` takes it; ``q = 1``: the maximum), from the values sorted
+    ``x_sorted (N,)`` and ``running (b, N)``, the running sum of each resample's counts
+    (:func:`bootstrap_counts`) taken in that sorted order.
+
+    The k-th smallest value of a resample (from 0) is ``x_sorted[j]`` for the first ``j`` whose
+    running count exceeds k.
+
+    Example:
+        >>> x = np.array([3.0, 1.0, 2.0])
+        >>> counts = np.array([[0, 2, 1], [1, 1, 1]])        # resamples {1, 1, 2} and {3, 1, 2}
+        >>> order = np.argsort(x)
+        >>> resampled_quantile(x[order], np.cumsum(counts[:, order], axis=1), 0.5).tolist()
+        [1.0, 2.0]
+    """
+    if not 0 <= q <= 1:
+        raise ValueError(f"q must be in [0, 1], got {q!r}")
+    size = running[:, -1]
+    h = (size - 1) * q
+    lo = np.floor(h).astype(np.int64)
+    t = h - lo
+
+    def order(k):
+        return x_sorted[np.minimum((running <= k[:, None]).sum(axis=1), len(x_sorted) - 1)]
+
+    a, b = order(lo), order(np.minimum(lo + 1, size - 1))
+    if q == 0.5:
+        return np.where(t > 0, (a + b) / 2, a)
+    diff = b - a                                              # NumPy's lerp, both halves
+    return np.where(t >= 0.5, b - diff * (1 - t), a + diff * t)
 
 
 def bootstrap_seeds(values: np.ndarray, statistic, *, draws: int = 2000, level: float = 0.95, seed: int = 0,

@@ -36,7 +36,8 @@ from ..model.robot import Robot
 from ..presentation.tables import Table, shown
 from ..presentation.wording import times
 from .contest import with_tier_finalists
-from .statistics import Estimate, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums, resolved_joints
+from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums,
+                         resampled_quantile, resolved_joints)
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
 __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
@@ -134,10 +135,27 @@ def _pooled_ik(metric: str) -> tuple[slice, Callable[[np.ndarray], np.ndarray]]:
     return (slice(-2, -1) if where == "position" else slice(-1, None)), lambda X: reduce(X[..., 0])   # noqa: E731
 
 
-def _ik_statistic(n: int) -> Callable[[np.ndarray], np.ndarray]:
-    """``X (b, N, n + 2) -> (b, 7)``: the metrics of :data:`IK_METRICS` (each as :func:`_pooled_ik` computes it)."""
-    metrics = [_pooled_ik(metric) for metric, _ in IK_METRICS]
-    return lambda X: np.stack([statistic(X[..., columns]) for columns, statistic in metrics], axis=-1)   # noqa: E731
+def _ik_statistic(columns: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``counts (b, N) -> (b, 7)``: the metrics of :data:`IK_METRICS` (as :func:`_pooled_ik`
+    computes them) of the rows of ``columns`` (:func:`_ik_columns`, ``(N, n + 2)``) drawn
+    ``counts`` times each (:func:`nfarm.study.statistics.bootstrap_counts`): the joint RMSE
+    from ``counts @ e²``, the medians, 95th percentiles and maxima as order statistics
+    (:func:`nfarm.study.statistics.resampled_quantile`)."""
+    squares = columns[:, :-2] ** 2
+    tools = []
+    for k in (-2, -1):                                           # position, orientation
+        order = np.argsort(columns[:, k], kind="stable")
+        tools.append((order, columns[order, k]))
+    quantile = {"median": 0.5, "p95": 0.95, "max": 1.0}
+
+    def statistic(counts):
+        out = {"worst joint RMSE": np.sqrt(counts.astype(float) @ squares / len(columns)).max(axis=-1)}
+        for where, (order, x) in zip(("position", "orientation"), tools):
+            running = np.cumsum(counts[:, order], axis=1)
+            for what, q in quantile.items():
+                out[f"{where} {what}"] = resampled_quantile(x, running, q)
+        return np.stack([out[metric] for metric, _ in IK_METRICS], axis=-1)
+    return statistic
 
 
 def ik_rows(method: str, role: str, errors: Mapping[str, np.ndarray], *, joint: bool = True,
@@ -147,8 +165,7 @@ def ik_rows(method: str, role: str, errors: Mapping[str, np.ndarray], *, joint: 
     intervals over the poses; ``joint=False`` leaves out the joint RMSE (another branch's);
     ``arm`` names the arm when rows of several go in one table."""
     columns = _ik_columns(errors)
-    n = columns.shape[1] - 2
-    est = bootstrap_rows(columns, _ik_statistic(n), draws=draws, level=level, seed=seed)
+    est = bootstrap_counts(len(columns), _ik_statistic(columns), draws=draws, level=level, seed=seed)
     spread = f"bootstrap over {len(columns):,} test poses"
     extreme = f"the largest of {len(columns):,} test poses (a maximum: no interval)"
     return [Row(task, method, role, metric, unit, float(est.value[k]), float(est.value[k]), float(est.value[k]),
@@ -166,10 +183,9 @@ def ik_difference(errors_a: Mapping, errors_b: Mapping, *, draws: int = 2000, le
     a, b = _ik_columns(errors_a), _ik_columns(errors_b)
     if a.shape != b.shape:
         raise ValueError(f"the two methods must be judged on the same poses, got {a.shape} and {b.shape}")
-    width = a.shape[1]
-    stat = _ik_statistic(width - 2)
-    return bootstrap_rows(np.hstack([a, b]), lambda X: stat(X[..., :width]) - stat(X[..., width:]),
-                          draws=draws, level=level, seed=seed)
+    stat_a, stat_b = _ik_statistic(a), _ik_statistic(b)
+    return bootstrap_counts(len(a), lambda counts: stat_a(counts) - stat_b(counts),
+                            draws=draws, level=level, seed=seed)
 
 
 def _pooled_worst(resolved, normalised: bool) -> Callable[[np.ndarray], np.ndarray]:
