@@ -16,6 +16,14 @@ from nfarm.study.summary import (IK_METRICS, ROLE_BEST_BASELINE, ROLE_CHOSEN, RO
 from nfarm.study.sweep import Cell, CellResult, Replicates
 
 
+
+def paired_for(tmp_path, rows, **data):
+    """The paired differences the abstract needs for ``rows``, computed from the methods' data
+    (``ik_errors``, ``id_sums``, ``measured_sums``), saved and read back as chapter 7 does."""
+    from nfarm.study.summary import abstract_pairs, paired_rows, paired_table, read_paired
+    paired_table(paired_rows(abstract_pairs(rows), draws=300, **data)).save(tmp_path, "07_paired")
+    return read_paired(tmp_path / "tables" / "07_paired.csv")
+
 def ik_errors(seed=0, n=500, joints=5):
     rng = np.random.default_rng(seed)
     return {"joint": rng.normal(0, 0.01, (n, joints)), "position": rng.exponential(1e-3, n),
@@ -88,24 +96,28 @@ def test_the_abstract_reads_every_number_from_the_summary_table(tmp_path):
         ik_rows("RBF", ROLE_BEST_BASELINE, base, draws=300)
     label = np.repeat(np.arange(10), 20)
     tau = rng.normal(size=(200, 2))
+    sums = {}
     for name, role, noise in (("ANFIS, model-free", ROLE_CHOSEN, 0.3), ("ridge", ROLE_BEST_BASELINE, 0.01)):
         predicted = tau + rng.normal(0, noise, size=tau.shape)
-        rows += id_rows(name, role, trajectory_sums(predicted, tau, label), trajectory_maxima(predicted, tau, label),
-                        ["a", "b"], draws=300)
+        sums[name] = trajectory_sums(predicted, tau, label)
+        rows += id_rows(name, role, sums[name], trajectory_maxima(predicted, tau, label), ["a", "b"], draws=300)
     long_table(rows).save(tmp_path, "07_summary")
     table = read_long_table(tmp_path / "tables" / "07_summary.csv")
-    ik_line, id_line = abstract_lines("arm", table)
+    paired = paired_for(tmp_path, rows, ik_errors={"ANFIS, chosen": anfis, "RBF": base}, id_sums=sums)
+    ik_line, id_line = abstract_lines("arm", table, paired)
     chosen_median = next(r for r in table if r["method"] == "ANFIS, chosen" and r["metric"] == "position median")
     three = lambda text: f"{float(text):.3g}"          # noqa: E731 — the abstract writes three digits, as the chapters
     assert (f"{three(chosen_median['value'])} mm ({three(chosen_median['ci_low'])}–"
             f"{three(chosen_median['ci_high'])})") in ik_line
-    assert "is better beyond both intervals on orientation median" in ik_line
+    assert "is better on orientation median" in ik_line and "(paired intervals)" in ik_line
     assert "The ANFIS is better on worst joint RMSE, position median" in ik_line
     assert "ridge" in id_line and "better than the ANFIS" in id_line
     bad = tmp_path / "bad.csv"
     bad.write_text("a,b\n1,2\n", encoding="utf-8")
     with pytest.raises(ValueError, match="not a summary table"):
         read_long_table(bad)
+    with pytest.raises(ValueError, match="no paired difference of 'RBF' against 'ANFIS, chosen' on worst joint RMSE"):
+        abstract_lines("arm", table, [])          # a comparison without its paired difference: an error
 
 
 def test_the_worst_joint_is_taken_over_the_joints_a_sensor_resolves():
@@ -154,7 +166,7 @@ def test_the_abstract_leaves_the_joints_below_noise_out_and_names_them(tmp_path)
     rows = id_rows("ANFIS, model-free", ROLE_CHOSEN, trajectory_sums(predicted, tau, label),
                    trajectory_maxima(predicted, tau, label), ["a", "b"], resolved=[True, False], draws=300)
     long_table(rows).save(tmp_path, "07_summary")
-    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"), [])
     worst = next(r for r in rows if r.metric == WORST_ID)
     assert f"misses by {worst.value:.3g} %" in line and "τ2, whose torque is below the sensor noise, left out" in line
 
@@ -170,8 +182,9 @@ def test_the_abstract_says_where_the_dissertations_recipe_beats_the_chosen_model
         ik_rows("ANFIS, dissertation's recipe, full range", ROLE_RECIPE,
                 {k: 100 * v for k, v in chosen.items()}, draws=300)         # the first listed is the one compared
     long_table(rows).save(tmp_path, "07_summary")
-    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
-    assert "it is better than the chosen model beyond both intervals on position median" in line
+    paired = paired_for(tmp_path, rows, ik_errors={"ANFIS, chosen": chosen, "ANFIS, dissertation's recipe, region": recipe})
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"), paired)
+    assert "it is better than the chosen model on position median" in line
     assert "worst joint RMSE (" not in line.split("it is better")[1]
 
 
@@ -223,7 +236,7 @@ def test_the_roles_the_abstract_reads_are_the_roles_the_chapters_write(tmp_path)
         ik_rows("RBF", ROLE_BEST_BASELINE + ", reworded", ik_errors(10), draws=300)
     long_table(rows).save(tmp_path, "07_summary")
     table = read_long_table(tmp_path / "tables" / "07_summary.csv")
-    (line,) = abstract_lines("arm", table)
+    (line,) = abstract_lines("arm", table, [])
     assert "RBF" not in line and "best baseline" not in line
 
 
@@ -236,9 +249,12 @@ def test_the_abstract_says_what_the_measured_arm_gives_each_tier(tmp_path):
     tau = rng.normal(size=(300, 2))
     task = "ID, measured arm"
 
+    sums = {}
+
     def rows_of(method, role, error):
         predicted = tau + rng.normal(0, error, size=tau.shape)
-        return id_rows(method, role, trajectory_sums(predicted, tau, label), trajectory_maxima(predicted, tau, label),
+        sums[method] = trajectory_sums(predicted, tau, label)
+        return id_rows(method, role, sums[method], trajectory_maxima(predicted, tau, label),
                        ["a", "b"], normalised=False, task=task, draws=300)
 
     rows = (rows_of("Newton–Euler alone", ROLE_NUMERICAL, 0.1) + rows_of("NE + friction LS", ROLE_FRICTION_ID, 0.05)
@@ -251,7 +267,8 @@ def test_the_abstract_says_what_the_measured_arm_gives_each_tier(tmp_path):
              target("identification of the built arm", ROLE_PHYSICS, "worst NRMSE, every joint", 30.0),
              target("NE + ANFIS residual", ROLE_CHOSEN, "worst NRMSE, every joint", 40.0)]
     long_table(rows).save(tmp_path, "07_summary")
-    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"))
+    paired = paired_for(tmp_path, rows, measured_sums=sums)
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"), paired)
     assert "identifying the built arm's masses and drives on the known geometry leaves" in line
     assert line.split("identifying the built arm")[1].split(";")[0].endswith("better than the ANFIS residual")
     assert "the best ANFIS without the rigid-body model (ANFIS alone) leaves" in line
@@ -351,3 +368,22 @@ def test_the_verdict_is_judged_over_seeds_and_units_and_shown_in_a_readers_words
     assert verdict_display([exact])[0][4] == "ridge regression on the chain's trigonometric basis, < 1e-6 N·m"
     assert reader_label("ANFIS, dissertation's design (own, assumed)") == "ANFIS, dissertation's design (own, assumed)"
     assert reader_label("ANFIS, structure-informed (affine)") == "ANFIS, structure-informed"
+
+
+def test_the_abstract_judges_on_the_paired_interval_where_the_unpaired_ones_overlap(tmp_path):
+    """Two methods whose errors share most of their variation (the same hard poses): their
+    intervals overlap, but every resample of the same poses puts one below the other — the
+    abstract says so, as the paired interval does."""
+    shared = ik_errors(12)
+    better = {k: v * 0.97 for k, v in shared.items()}           # 3 % better on every pose
+    rows = ik_rows("ANFIS, chosen", ROLE_CHOSEN, better, draws=300) + ik_rows("RBF", ROLE_BEST_BASELINE, shared, draws=300)
+    get = {(r.method, r.metric): r for r in rows}
+    a, b = get["ANFIS, chosen", "position median"], get["RBF", "position median"]
+    assert a.high > b.low                                       # unpaired: the intervals overlap
+    long_table(rows).save(tmp_path, "07_summary")
+    paired = paired_for(tmp_path, rows, ik_errors={"ANFIS, chosen": better, "RBF": shared})
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"), paired)
+    assert "The ANFIS is better on worst joint RMSE, position median, position p95" in line
+    row = next(p for p in paired if p["metric"] == "position median")          # RBF less the ANFIS
+    assert (row["method"], row["against"]) == ("RBF", "ANFIS, chosen")
+    assert float(row["ci_low"]) > 0 and row["spread"] == "paired bootstrap over 500 test poses"

@@ -405,17 +405,20 @@ ABSTRACT_LIMITS = (
 
 
 def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
-    """Each arm's answers, read from its published ``07_summary.csv`` (every number computed by
-    chapter 07; :func:`nfarm.study.summary.abstract_lines`): what the HTML index and the PDF both
-    print. A table an older chapter 07 wrote gives one line saying so, not a failure."""
-    from ..study.summary import abstract_lines, read_long_table
+    """Each arm's answers, read from its published ``07_summary.csv`` and its comparisons from
+    ``07_paired.csv`` (every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`):
+    what the HTML index and the PDF both print. A table an older chapter 07 wrote (or none of
+    its paired differences) gives one line saying so, not a failure."""
+    from ..study.summary import abstract_lines, read_long_table, read_paired
 
     answers = []
     for edition in arms:
         path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
         if path.is_file():
+            paired = path.with_name("07_paired.csv")
             try:
-                answers += abstract_lines(edition.name, read_long_table(path))
+                answers += abstract_lines(edition.name, read_long_table(path),
+                                          read_paired(paired) if paired.is_file() else [])
             except (ValueError, KeyError) as exc:
                 answers.append(f"{edition.name}: no answers ({exc}); rerun chapter 7.")
     return answers
@@ -481,8 +484,10 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     answers = abstract_answers(figures_dir, arms)
     if answers:
         parts.append("<p><b>Answers</b> (on held-out data, the models of the study's own data, with 95 % bootstrap "
-                     "intervals over the test poses or trajectories; the verdict above pools every seed's model; from "
-                     "each arm's <code>tables/07_summary.csv</code>):</p><ul>")
+                     "intervals over the test poses or trajectories; every comparison on the paired interval of the two "
+                     "methods' difference over the same poses or trajectories; the verdict above pools every seed's "
+                     "model; from each arm's <code>tables/07_summary.csv</code> and "
+                     "<code>tables/07_paired.csv</code>):</p><ul>")
         parts += [f"<li>{html.escape(line)}</li>" for line in answers]
         parts.append("</ul>")
     else:

@@ -248,7 +248,9 @@ def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
         parts.append("**Answers** (on held-out data, the models of the study's own data, with 95 % bootstrap "
-                     "intervals over the test poses or trajectories; the verdict above pools every seed's model):")
+                     "intervals over the test poses or trajectories; every comparison on the paired interval of the "
+                     "two methods' difference over the same poses or trajectories; the verdict above pools every "
+                     "seed's model):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))
     parts.append(f"**Limits.** {_escape(ABSTRACT_LIMITS)}")
     parts.append(f"**Sources.** {SOURCES}")

@@ -46,7 +46,8 @@ __all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
            "verdict_table", "read_verdicts", "conclusion", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE",
-           "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL"]
+           "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "Paired", "abstract_pairs", "paired_rows", "paired_table",
+           "read_paired"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
 WORST_ID = "worst resolved joint NRMSE"
@@ -469,16 +470,136 @@ def _with_interval(row: Mapping[str, str]) -> str:
     return f"{value}{unit}" if low == high == value or not (low or high) else f"{value}{unit} ({low}–{high})"
 
 
-def _compare(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
-    """-1 when ours is lower beyond both intervals, +1 when higher, 0 when they overlap or
-    either is a maximum without an interval (``n`` 0: compared on paired differences only)."""
-    if "0" in (ours.get("n"), theirs.get("n")):
+@dataclass(frozen=True)
+class Paired:
+    """Method ``method`` less method ``against`` on one metric, judged on the same test units
+    (poses or trajectories): the ``difference`` and its paired percentile-bootstrap interval
+    (``low``, ``high`` at coverage ``level`` from ``n`` resamples of ``spread``); ``n == 0``: a
+    maximum, no interval (not judged)."""
+
+    task: str
+    method: str
+    against: str
+    metric: str
+    unit: str
+    difference: float
+    low: float
+    high: float
+    n: int
+    level: float
+    spread: str
+
+
+def _row_text(row) -> Mapping[str, str]:
+    """A :class:`Row` as the text fields :func:`abstract_lines` reads (a row read back from a
+    long table already is)."""
+    if isinstance(row, Row):
+        return {"task": row.task, "method": row.method, "role": row.role, "metric": row.metric,
+                "unit": row.unit, "value": repr(row.value), "ci_low": repr(row.low) if row.n else "",
+                "ci_high": repr(row.high) if row.n else "", "n": str(row.n)}
+    return row
+
+
+def _paired_judge(paired: Sequence[Mapping[str, str]]):
+    """The comparison :func:`abstract_lines` makes of two rows of one task and metric: -1 when
+    ours is lower on the paired interval of ours less theirs (``paired``, rows of
+    :func:`paired_table` as text), +1 when higher, 0 when the interval holds 0 or either row is
+    a maximum without an interval. A comparison with no paired row is an error naming it."""
+    found = {(p["task"], p["method"], p["against"], p["metric"]): p for p in paired}
+
+    def judge(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
+        if "0" in (ours.get("n"), theirs.get("n")):
+            return 0
+        key = (ours["task"], ours["method"], theirs["method"], ours["metric"])
+        sign = 1
+        p = found.get(key)
+        if p is None:
+            p, sign = found.get((key[0], key[2], key[1], key[3])), -1
+        if p is None:
+            raise ValueError(f"no paired difference of {key[1]!r} against {key[2]!r} on {key[3]} "
+                             f"({key[0]}) in the paired table (07_paired.csv)")
+        low, high = _number(p["ci_low"]), _number(p["ci_high"])
+        return -sign if high < 0 else sign if low > 0 else 0
+    return judge
+
+
+def abstract_pairs(rows) -> list[tuple[str, str, str, str]]:
+    """``(task, method, against, metric)`` of every comparison :func:`abstract_lines` makes of
+    ``rows`` (:class:`Row` objects or a long table's text rows): the paired differences a
+    chapter computes for it (:func:`paired_rows`)."""
+    pairs = []
+
+    def record(ours, theirs):
+        if "0" not in (ours.get("n"), theirs.get("n")):
+            pairs.append((ours["task"], ours["method"], theirs["method"], ours["metric"]))
         return 0
-    if _number(ours["ci_high"]) < _number(theirs["ci_low"]):
-        return -1
-    if _number(ours["ci_low"]) > _number(theirs["ci_high"]):
-        return 1
-    return 0
+    _abstract("", [_row_text(r) for r in rows], record)
+    return list(dict.fromkeys(pairs))
+
+
+def paired_rows(pairs, *, ik_errors: Mapping[str, Mapping] | None = None,
+                id_sums: Mapping[str, np.ndarray] | None = None, resolved=None,
+                measured_sums: Mapping[str, np.ndarray] | None = None, draws: int = 2000,
+                level: float = 0.95, seed: int = 0) -> list[Paired]:
+    """The paired difference of each ``(task, method, against, metric)`` of ``pairs``
+    (:func:`abstract_pairs`), each pair judged on the same resamples of the same test units:
+    the IK metrics over the test poses (:func:`ik_difference`, from ``ik_errors[name]``); the
+    worst (resolved) joint's NRMSE over the test trajectories from ``id_sums[name]``
+    (:func:`nfarm.study.statistics.worst_difference`; ``resolved`` as :func:`id_rows` takes it);
+    on the measured arm the worst joint's RMSE from ``measured_sums[name]``."""
+    from .statistics import worst_difference
+
+    boot = dict(draws=draws, level=level, seed=seed)
+    ik_units = {m: u for m, u in IK_METRICS}
+    cache = {}
+    out = []
+    for task, a, b, metric in pairs:
+        if task == "inverse kinematics":
+            if (a, b) not in cache:
+                cache[a, b] = ik_difference(ik_errors[a], ik_errors[b], **boot)
+            est, k = cache[a, b], [m for m, _ in IK_METRICS].index(metric)
+            value, low, high, unit = est.value[k], est.low[k], est.high[k], ik_units[metric]
+            spread = f"paired bootstrap over {est.rows:,} test poses"
+        elif task == "inverse dynamics" and metric in (WORST_ID, "worst joint NRMSE"):
+            keep = resolved if metric == WORST_ID else None
+            sa, sb = (id_sums[x] if keep is None else resolved_sums(id_sums[x], keep) for x in (a, b))
+            value, low, high = (100 * v for v in worst_difference(sa, sb, **boot))
+            unit, spread = "%", f"paired bootstrap over {len(sa)} test trajectories"
+        elif task == "ID, measured arm" and metric == "worst joint RMSE":
+            value, low, high = worst_difference(measured_sums[a], measured_sums[b], normalised=False, **boot)
+            unit, spread = "N·m", f"paired bootstrap over {len(measured_sums[a])} test trajectories"
+        else:
+            raise ValueError(f"no paired difference for {metric!r} of {task!r}")
+        out.append(Paired(task, a, b, metric, unit, float(value), float(low), float(high), draws, level, spread))
+    return out
+
+
+def paired_table(pairs: Sequence[Paired], *, floors: Mapping[str, float] | None = None,
+                 caption: str = "") -> Table:
+    """The paired differences as a table (columns ``task, method, against, metric, unit,
+    difference, ci_low, ci_high, n, level, spread``); differences below a unit's floor written
+    as such."""
+    floors = floors or {}
+    fmt = lambda v, p: shown(v, ".4g", floor=floors.get(p.unit, 0.0))   # noqa: E731
+    return Table(["task", "method", "against", "metric", "unit", "difference", "ci_low", "ci_high", "n", "level",
+                  "spread"],
+                 [[p.task, p.method, p.against, p.metric, p.unit, fmt(p.difference, p), fmt(p.low, p), fmt(p.high, p),
+                   p.n, f"{p.level:g}", p.spread] for p in pairs], caption=caption)
+
+
+def read_paired(path) -> list[dict[str, str]]:
+    """The rows of a paired table (:func:`paired_table`, ``07_paired.csv``) as dicts of their
+    columns' text; a file without its columns is refused in one line."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as f:
+        rows = list(csv.DictReader(f))
+    needed = {"task", "method", "against", "metric", "ci_low", "ci_high"}
+    if rows and not needed <= set(rows[0]):
+        raise ValueError(f"{path}: not a paired table: columns {', '.join(sorted(needed - set(rows[0])))} missing")
+    return rows
 
 
 
@@ -487,9 +608,7 @@ def _times_of(ours: Mapping[str, str], theirs: Mapping[str, str]) -> str:
     return times(_number(ours["value"]) / _number(theirs["value"]))
 
 
-def _verdict(ours: Mapping[str, str], theirs: Mapping[str, str]) -> str:
-    """``"better than"``, ``"worse than"`` or ``"no different from"``: :func:`_compare` in words."""
-    return {-1: "better than", 1: "worse than", 0: "no different from"}[_compare(ours, theirs)]
+_VERDICT = {-1: "better than", 1: "worse than", 0: "no different from"}
 
 
 def _unchosen(method: str) -> str:
@@ -497,11 +616,22 @@ def _unchosen(method: str) -> str:
     (arm_plane)" → "ANFIS (arm_plane)")."""
     return method.replace(", chosen", "")
 
-def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
+def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]],
+                   paired: Sequence[Mapping[str, str]]) -> list[str]:
     """Plain-text sentences (one per task) of one arm's answers, every number read from its
     summary rows: the chosen ANFIS, the dissertation's design (assumed), the best baseline and
-    the references, and on which metrics the baseline is better beyond both intervals. Rows are
+    the references; every comparison ("better", "worse", "no different") on the paired
+    interval of the two methods' difference over the same test units (``paired``: the rows of
+    :func:`paired_table`, as text; :func:`abstract_pairs` lists the ones needed). Rows are
     found by their whole role (:data:`ROLES`)."""
+    return _abstract(arm, rows, _paired_judge(paired))
+
+
+def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str]:
+    """:func:`abstract_lines` with its comparison ``_compare(ours, theirs) -> -1, 0, 1``."""
+    def _verdict(ours, theirs):
+        return _VERDICT[_compare(ours, theirs)]
+
     def find(task, role, metric):
         return next((r for r in rows if r["task"] == task and r["role"] == role and r["metric"] == metric), None)
 
@@ -522,17 +652,17 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
                      f" on its worst joint")
             better = [f"{m} ({_with_interval(r)} against {_with_interval(get[m])})"
                       for m, r in recipe.items() if m in get and _compare(r, get[m]) < 0]
-            text += ("; it is better than the chosen model beyond both intervals on " + "; ".join(better) + "."
+            text += ("; it is better than the chosen model on " + "; ".join(better) + " (paired intervals)."
                      if better else ".")
         base = [r for r in rows if r["task"] == task and r["role"] == ROLE_BEST_BASELINE]
         if base:
             wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
                     for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) < 0]
             losses = [r["metric"] for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) > 0]
-            text += (f" The best baseline on validation, {base[0]['method']}, is better beyond both intervals on "
-                     + "; ".join(wins) + "." if wins else
-                     f" The best baseline on validation, {base[0]['method']}, is better on no metric beyond both "
-                     f"intervals.")
+            text += (f" The best baseline on validation, {base[0]['method']}, is better on "
+                     + "; ".join(wins) + " (paired intervals)." if wins else
+                     f" The best baseline on validation, {base[0]['method']}, is better on no metric (paired "
+                     f"intervals).")
             if losses:
                 text += f" The ANFIS is better on {', '.join(losses)}."
         exact = find(task, ROLE_EXACT, "position max")
@@ -552,7 +682,7 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]]) -> list[str]:
         base = find(task, ROLE_BEST_BASELINE, worst)
         if base:
             verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
-                       0: "no different from the ANFIS within the intervals"}[_compare(base, free)]
+                       0: "no different from the ANFIS (paired interval)"}[_compare(base, free)]
             text += f" The best baseline on validation, {base['method']}: {_with_interval(base)}, {verdict}."
         recipe = find(task, ROLE_DESIGN, worst)
         if recipe:
