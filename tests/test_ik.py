@@ -143,7 +143,7 @@ def test_the_documented_names_are_the_methods():
 
 @pytest.mark.parametrize("name", list(DOCUMENTED))
 def test_a_method_s_name_is_that_method_with_its_documented_defaults(intelbot5, name):
-    T = good_targets(intelbot5, 5 if name == "jt" else 20)      # the transpose takes thousands of steps a target
+    T = good_targets(intelbot5, 2 if name == "jt" else 20)      # the transpose takes thousands of steps a target
     fields = ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason")
     by_name, documented = solve(intelbot5, T, method=name), solve(intelbot5, T, method=DOCUMENTED[name])
     for field in fields:
