@@ -555,10 +555,10 @@ def test_an_arm_near_the_class_is_solved_on_the_arm_itself(tmp_path, rpy, how):
     nearest = np.argmin(np.abs(np.remainder(result.q - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(-1), axis=1)
     found = result.q[np.arange(200), nearest]
     assert np.abs(np.remainder(found - q + np.pi, 2 * np.pi) - np.pi).max() < 1e-8
-    assert result.pos_error.max() < 2e-5 and result.rot_error.max() < 2e-4     # [m], [rad]
+    assert result.pos_error.max() < 2e-5 and result.rot_error.max() < 5e-5     # [m], [rad] (7e-6, 1.4e-5)
     counted = closed_form(exact, fk(exact, q), tol_pos=1e-10, tol_rot=1e-10)
     near = (result.pos_error < 2e-5) & result.within_limits
-    assert (near.sum(1) == counted.valid.sum(1)).mean() > 0.95
+    np.testing.assert_array_equal(near.sum(1), counted.valid.sum(1))     # every target, every branch
 
 
 def test_an_arm_beyond_the_near_class_is_refused_naming_the_joint_and_the_angle(tmp_path):
