@@ -7,6 +7,9 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 UV     := $(VENV)/bin/uv
 STAMP  := $(VENV)/.nfarm-setup
+# The project's modules compiled to bytecode before a run (only those changed since; half a second):
+# an editable install is not compiled by the set-up, and Python may be told to write no bytecode.
+BYTECODE = $(PY) -m compileall -q lib >/dev/null
 KERNEL := nfarm
 # Jupyter looks in JUPYTER_PATH first: the project kernel wins over any kernel of the same
 # name the machine happens to have.
@@ -34,7 +37,9 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 	@mkdir -p build
 	@awk '/^uv==/{on=1} on&&/^[^ #]/&&!/^uv==/{on=0} on' environment.lock > build/uv.req
 	@$(PY) -m pip install --quiet --disable-pip-version-check --require-hashes --no-deps -r build/uv.req
-	VIRTUAL_ENV=$(VENV) $(UV) pip sync --quiet --python $(PY) environment.lock
+	@# Bytecode compiled once here: where PYTHONDONTWRITEBYTECODE is set (as on the machines measured), every
+	@# kernel, worker and test process would compile numpy, scipy, matplotlib … from source again (README "Costs").
+	VIRTUAL_ENV=$(VENV) $(UV) pip sync --quiet --compile-bytecode --python $(PY) environment.lock
 	VIRTUAL_ENV=$(VENV) $(UV) pip install --quiet --python $(PY) --no-deps --no-build-isolation -e .
 	$(PY) -m ipykernel install --sys-prefix --name $(KERNEL) --display-name "Python 3.11 (nfarm)" \
 	    --env MPLBACKEND module://matplotlib_inline.backend_inline >/dev/null
@@ -46,6 +51,7 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 # the arms) without the others'; SCHEDULER sends chapter 6's missing sweep cells to a running Dask
 # cluster (its workers: this checkout and `make setup`); the published files are the same.
 report: $(STAMP)
+	@$(BYTECODE)
 	$(REPORT_ENV) $(PY) -m nfarm report $(if $(SCHEDULER),--scheduler "$(SCHEDULER)") $(if $(ARM),--arm "$(ARM)")
 
 # make arm URDF=path/to/arm.urdf [NAME=n] [ARM_ARGS="--tip LINK --lock JOINT=VALUE"]: a new arm's
@@ -62,6 +68,7 @@ verify: $(STAMP)
 # tests that share a chain of chapters' data stay in one worker (--dist loadgroup). One BLAS
 # thread per worker: two workers already use both cores (two threads each would thrash them).
 test: $(STAMP)
+	@$(BYTECODE)
 	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(PY) -m pytest -n 2 --dist loadgroup
 
 bench: $(STAMP)
@@ -71,12 +78,14 @@ bench: $(STAMP)
 # build/course/teacher/ (executed with the worked solutions, HTML) and build/course/index.html.
 # The teacher's notebooks reuse the data sets and models `make report` made.
 course: $(STAMP)
+	@$(BYTECODE)
 	$(REPORT_ENV) $(PY) -m nfarm course
 
 # make sweep SWEEP=params/sweeps/smoke.yaml [SWEEP_ARGS="--scheduler tcp://host:8786"]: the
 # cells run with the report's numerics, so a chapter reuses them (README "Running sweeps").
 sweep: $(STAMP)
 	@test -n "$(SWEEP)" || { echo "make sweep: name a sweep file, e.g. make sweep SWEEP=params/sweeps/smoke.yaml" >&2; exit 2; }
+	@$(BYTECODE)
 	$(REPORT_ENV) $(PY) -m nfarm sweep $(SWEEP) $(SWEEP_ARGS)
 
 # make worker SCHEDULER=tcp://host:8786 [WORKERS=N]: Dask workers for `make report SCHEDULER=…` and
@@ -84,6 +93,7 @@ sweep: $(STAMP)
 # that the cells they run are the bits a local run makes (and the chapters reuse their models).
 worker: $(STAMP)
 	@test -n "$(SCHEDULER)" || { echo "make worker: name the scheduler, e.g. make worker SCHEDULER=tcp://host:8786" >&2; exit 2; }
+	@$(BYTECODE)
 	$(REPORT_ENV) $(VENV)/bin/dask worker "$(SCHEDULER)" --nthreads 1 --nworkers $(or $(WORKERS),$(shell nproc))
 
 lock: $(STAMP)

@@ -6,7 +6,10 @@ Shapes:
 
 * **learned IK at its deployment size** — intelbot5's 20 000 training poses in the arm's plane
   (the chosen encoding), the elbow joint, fuzzy c-means rules (16, 32, 64, 128), Gaussian
-  functions, validated on the 5 000 validation poses;
+  functions, the learned-IK contest's ridge on the least squares (``IK_RIDGE``, as
+  ``params/sweeps/ik_contest.yaml`` trains), validated on the 5 000 validation poses; and the
+  128-rule shape once more at the engine's default ridge, whose ill-conditioned epochs take the
+  orthogonal fall-back (the column "fall-backs" counts them, per engine);
 * **model-free ID** — intelbot5's ``affine`` input set (rules over q, 357 consequent inputs), the
   five joints' models: every 16th training state for 3 epochs (chapter 6's cells), and **all**
   156 413 training states for one epoch; today's engine trains the joints with shared premises
@@ -15,7 +18,8 @@ Shapes:
 
 Columns: seconds per fit and per epoch (the fit less its initial rule base, over the epochs),
 the speed-up, peak memory (tracemalloc: NumPy's
-allocations), the error each reaches, and the largest difference between the two engines'
+allocations), the error each reaches, how many least-squares steps took the orthogonal fall-back
+(IK rows), and the largest difference between the two engines'
 predictions. Beside that difference, the same for the *old* engine fitted on inputs moved by one
 unit in the last place: the hybrid rule's normal equations are ill-conditioned (a Gaussian
 rule base of many rules), so a rounding change anywhere moves the trained model by about that
@@ -36,6 +40,7 @@ import tracemalloc
 from contextlib import contextmanager
 
 import numpy as np
+import scipy.linalg
 from threadpoolctl import threadpool_limits
 
 import common  # noqa: F401  (sets sys.path like `make bench`)
@@ -51,6 +56,8 @@ from nfarm.study.study_files import load_study
 IK_RULES = (16, 32, 64, 128)
 IK_JOINT = 2                  # the elbow: q1 and q5 are near-linear maps of the arm-plane inputs
 IK_EPOCHS = 5
+#: The learned-IK contest's relative ridge on the normal equations (params/sweeps/ik_contest.yaml).
+IK_RIDGE = 1e-8
 
 
 @contextmanager
@@ -82,34 +89,51 @@ def ik_rows(old, study, data):
     Xv, Xt = encoder.transform(data["ik_val"]["T"]), encoder.transform(data["ik_test"]["T"])
     y, yv = data["ik_train"]["q"][:, IK_JOINT], data["ik_val"]["q"][:, IK_JOINT]
     rows = []
-    for rules in IK_RULES:
-        options = dict(partition="fcm", n_rules=rules, mf="gauss", random_state=0)
+    for rules, ridge in [(r, IK_RIDGE) for r in IK_RULES] + [(128, 1e-12)]:
+        options = dict(partition="fcm", n_rules=rules, mf="gauss", ridge=ridge, random_state=0)
         fits = {}
         for name, cls in (("before", old.ANFIS), ("today", ANFIS)):
             phases = Phases()
             undo = phases.wrap(cls, "_initial_structure", "init")
             try:
-                with measured() as full:
+                with measured() as full, orthogonal_calls() as calls:
                     model = cls(**options, epochs=IK_EPOCHS).fit(X, y, Xv, yv)
             finally:
                 undo()
             epoch = (full["s"] - phases.seconds["init"]) / model.n_epochs_     # the epochs alone
-            fits[name] = (full["s"], epoch, full["peak"], model)
+            fits[name] = (full["s"], epoch, full["peak"], model, calls["n"])
         sensitivity = ""
         if rules == 64:
             nudged = old.ANFIS(**options, epochs=IK_EPOCHS).fit(np.nextafter(X, np.inf), y, Xv, yv)
             sensitivity = f"{np.abs(nudged.predict(Xt) - fits['before'][3].predict(Xt)).max():.2g}"
-        rows.append(_row(f"IK, {rules} rules, 20 000 poses", IK_EPOCHS, fits,
+        rows.append(_row(f"IK, {rules} rules, ridge {ridge:.0e}, 20 000 poses", IK_EPOCHS, fits,
                          lambda m: f"val {np.degrees(m.val_loss_curve_[m.best_epoch_]):.3f}°",
                          np.abs(fits["today"][3].predict(Xt) - fits["before"][3].predict(Xt)).max(),
                          sensitivity))
     return rows
 
 
+@contextmanager
+def orthogonal_calls():
+    """How many least-squares solutions by orthogonal factorisation (``scipy.linalg.lstsq``, the
+    fall-back of both engines' normal equations) run inside: ``with orthogonal_calls() as c: …; c["n"]``."""
+    count, original = {"n": 0}, scipy.linalg.lstsq
+
+    def counted(*args, **kwargs):
+        count["n"] += 1
+        return original(*args, **kwargs)
+    scipy.linalg.lstsq = counted
+    try:
+        yield count
+    finally:
+        scipy.linalg.lstsq = original
+
+
 def _row(name, epochs, fits, error, difference, sensitivity):
-    (t_old, e_old, m_old, old), (t_new, e_new, m_new, new) = fits["before"], fits["today"]
+    (t_old, e_old, m_old, old, *f_old), (t_new, e_new, m_new, new, *f_new) = fits["before"], fits["today"]
+    fallbacks = f"{f_old[0]} / {f_new[0]}" if f_old else ""
     return [name, epochs, t_old, t_new, t_old / t_new, e_old, e_new, e_old / e_new,
-            m_old / 2**20, m_new / 2**20, error(old), error(new), f"{difference:.2g}", sensitivity]
+            m_old / 2**20, m_new / 2**20, error(old), error(new), fallbacks, f"{difference:.2g}", sensitivity]
 
 
 def id_rows(old, study, data):
@@ -232,8 +256,9 @@ def main() -> None:
         phases = phase_table(old, study, data)
     print(Table(["shape", "epochs", "before s/fit", "today s/fit", "fit ×", "before s/epoch",
                  "today s/epoch", "epoch ×", "before peak MiB", "today peak MiB", "before error",
-                 "today error", "max |Δ prediction|", "before vs before, inputs ±1 ulp"], rows,
-                floatfmt=["", "", ".2f", ".2f", ".1f", ".3f", ".3f", ".1f", ".0f", ".0f", "", "", "", ""]).to_markdown())
+                 "today error", "fall-backs before / today", "max |Δ prediction|",
+                 "before vs before, inputs ±1 ulp"], rows,
+                floatfmt=["", "", ".2f", ".2f", ".1f", ".3f", ".3f", ".1f", ".0f", ".0f", "", "", "", "", ""]).to_markdown())
     print()
     print(phases.to_markdown())
 

@@ -61,7 +61,8 @@ def smoke_report(tmp_path_factory):
     notebooks = root / "notebooks"
     notebooks.mkdir()
     chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"', FIGURE_AND_TABLE.format(p="01"),
-            prose="This chapter draws a line ({numref}`01_line`).")
+            prose="This chapter draws a line ({numref}`01_line`),\n\n$$y = x \\label{eq:line}$$\n\n"
+                  "and {eq}`line` is its equation.")
     chapter(notebooks / "02_shared.ipynb", "seed = 0", FIGURE_AND_TABLE.format(p="02"))
     chapter(notebooks / "03_compare.ipynb", 'study_files = ["sa.yaml"]', FIGURE_AND_TABLE.format(p="03"))
     arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
@@ -91,6 +92,8 @@ def test_the_smoke_report_builds_one_pdf_of_the_whole_study(smoke_report):
     assert "draws a line (Figure 1.1)" in flat and "draws a line (Figure B1.1)" in flat, "citations resolved per edition"
     assert "Its parameters are in Table 1.1." in flat and "Its parameters are in Table B1.1." in flat
     assert "Its parameters are in Table 2.1." in flat and "numref" not in flat
+    assert "and (1.1) is its equation" in flat and "and (B1.1) is its equation" in flat, "equations numbered per edition"
+    assert "\\label" not in flat and "{eq}" not in flat
     assert "??" not in text and not re.search(r"\(\w+\?\)", text), "no unresolved reference"
     assert "References" in text
     refs = flat[flat.rindex("References"):]
@@ -244,6 +247,40 @@ def test_a_citation_of_a_figure_or_table_no_chapter_shows_stops_the_pdf_in_one_l
         paper._prose("as {numref}`01_lnie` shows", {"01_line": "fig-a-01_line"}, "01_robot.ipynb")
 
 
+def test_equations_are_numbered_in_order_and_each_carries_a_label():
+    from nfarm.infra.notebook_runs import ReportError
+    from nfarm.presentation.numbering import equations
+
+    assert equations(["$$a = b \\label{eq:first}$$ and", "$$c \\label{eq:second} = d$$"]) == ["first", "second"]
+    with pytest.raises(ValueError, match="without a label"):
+        equations(["$$a = b$$"])
+    with pytest.raises(ValueError, match="given twice"):
+        equations(["$$a \\label{eq:x}$$", "$$b \\label{eq:x}$$"])
+    # In the PDF: the label unique to the edition, after an empty group (pandoc refuses a label after a bare letter)
+    assert paper._prose("$$y = x \\label{eq:line}$$ as {eq}`line`", {"eq:line": "eq-a-line"}, "01.ipynb") == \
+        "$$y = x {} \\label{eq-a-line}$$ as `@eq-a-line`{=typst}"
+    with pytest.raises(ReportError, match=r"^01.ipynb: cites equation lnie, which no chapter of this edition numbers"):
+        paper._prose("as {eq}`lnie`", {"eq:line": "eq-a-line"}, "01.ipynb")
+
+
+def test_the_chapters_equations_are_labelled_and_their_citations_resolve_within_the_chapter():
+    """Every display equation of a chapter carries a label, and prose cites only its own chapter's
+    equations (the course's teacher pages are exported one by one)."""
+    from nfarm.infra.notebook_runs import chapters
+    from nfarm.infra.paths import NOTEBOOKS
+    from nfarm.presentation.numbering import EQ_CITATION, equations
+
+    cited = 0
+    for notebook in chapters(NOTEBOOKS):
+        markdown = [c.source for c in nbformat.read(notebook, 4).cells if c.cell_type == "markdown"]
+        names = equations(markdown)
+        for text in markdown:
+            for found in EQ_CITATION.finditer(text):
+                assert found.group("name") in names, f"{notebook.name} cites {found.group('name')}"
+                cited += 1
+    assert cited >= 4
+
+
 def test_a_page_citing_what_its_edition_does_not_show_is_refused_in_one_line():
     from nfarm.infra.notebook_runs import ReportError
     from nfarm.publishing.pages import resolve_citations
@@ -253,6 +290,8 @@ def test_a_page_citing_what_its_edition_does_not_show_is_refused_in_one_line():
         'as <a href="06_anfis_training.html#06_ik_curves">Figure S6.2</a> shows'
     with pytest.raises(ReportError, match=r"^06.ipynb: cites 06_ik_curvse, which no chapter of this edition shows"):
         resolve_citations("as {numref}<code>06_ik_curvse</code> shows", refs, "06.ipynb")
+    with pytest.raises(ReportError, match=r"^06.ipynb: cites equation lm-stpe, which no chapter"):
+        resolve_citations("by {eq}<code>lm-stpe</code>", {"eq:lm-step": ("(2.2)", "#eq-lm-step")}, "06.ipynb")
 
 
 @pytest.mark.notebook
@@ -265,6 +304,11 @@ def test_each_edition_s_html_cites_its_figures_and_tables_by_number_and_links_th
     assert '<a href="01_robot.html#fig-01_line">Figure B1.1</a>' in other and "<strong>Table B1.1.</strong>" in other
     unfolded = lambda text: re.sub(r'<details class="nfarm-code">.*?</details>', "", text, flags=re.S)   # noqa: E731
     assert "numref" not in unfolded(page) and "numref" not in unfolded(other), "every citation resolved"
+    # Equations: numbered for MathJax, anchored, cited by number and linked, per edition
+    assert '<a id="eq-line"></a>' in page and r"\tag{1.1}" in page and r"\label" not in page
+    assert '<a href="01_robot.html#eq-line">(1.1)</a> is its equation' in page
+    assert r"\tag{B1.1}" in other and '<a href="01_robot.html#eq-line">(B1.1)</a> is its equation' in other
+    assert "{eq}" not in unfolded(page) and "{eq}" not in unfolded(other)
 
 
 @pytest.mark.notebook

@@ -1,4 +1,4 @@
-"""Figures and tables numbered by chapter, and prose that cites them by number.
+r"""Figures and tables numbered by chapter, and prose that cites them by number.
 
 A chapter's saved figures and tables (:func:`nfarm.presentation.plotting.save_figure`,
 :meth:`nfarm.presentation.tables.Table.save`) are numbered in the order a reader first meets
@@ -17,6 +17,11 @@ The report resolves the citation to "Table 6.2", linked to the table, in the HTM
 (:mod:`nfarm.publishing.paper`); a citation of a name no chapter of the edition shows stops the
 report with a one-line error. A chapter run by hand shows the citation as written.
 
+**Equations.** Every display equation of a chapter's Markdown (``$$ … $$``, on one line) carries
+a label, ``\label{eq:<name>}``, and is numbered in the order it stands in the chapter: "(2.1)",
+"(S2.1)" in another edition; prose cites it as {eq}`<name>`, resolved to "(2.1)", linked, in
+the pages and the PDF alike (:func:`equations`).
+
 Example:
     >>> clear()
     >>> number("Figure", "06_ik_curves"), number("Figure", "06_ik_rules"), number("Table", "06_ik_models")
@@ -27,13 +32,16 @@ Example:
     ['06_ik_rules']
     >>> sorted(citation_keys([("Figure", "06_ik_contest"), ("Table", "06_ik_contest"), ("Figure", "06_ik_rules")]))
     ['06_ik_rules', 'fig:06_ik_contest', 'fig:06_ik_rules', 'tbl:06_ik_contest']
+    >>> equations(["$$\\Delta q = J^+ e \\label{eq:step}$$", "as {eq}`step` says; $$E = e^2 \\label{eq:error}$$"])
+    ['step', 'error']
 """
 
 from __future__ import annotations
 
 import re
 
-__all__ = ["number", "clear", "chapter_of", "citation_keys", "anchor", "CITATION", "CITATION_HTML", "KINDS"]
+__all__ = ["number", "clear", "chapter_of", "citation_keys", "anchor", "equations", "CITATION", "CITATION_HTML", "KINDS",
+           "EQUATION", "EQ_CITATION", "EQ_CITATION_HTML"]
 
 #: What is numbered: figures and tables, each counted apart within a chapter; the prefix of each
 #: kind's anchors and citations.
@@ -42,6 +50,14 @@ KINDS = {"Figure": "fig", "Table": "tbl"}
 CITATION = re.compile(r"\{numref\}`(?P<name>[^`\s]+)`")
 #: The same citation as nbconvert renders it in a page.
 CITATION_HTML = re.compile(r"\{numref\}<code>(?P<name>[^<\s]+)</code>")
+
+#: A labelled display equation in Markdown, on one line: ``$$ … \label{eq:<name>} … $$``.
+EQUATION = re.compile(r"\$\$(?P<before>[^$\n]*?)\\label\{eq:(?P<name>[\w-]+)\}(?P<after>[^$\n]*)\$\$")
+#: Any display equation in Markdown (labelled or not).
+DISPLAY = re.compile(r"\$\$.*?\$\$", re.S)
+#: A citation of an equation in Markdown, {eq}`<name>`, and as nbconvert renders it in a page.
+EQ_CITATION = re.compile(r"\{eq\}`(?P<name>[^`\s]+)`")
+EQ_CITATION_HTML = re.compile(r"\{eq\}<code>(?P<name>[^<\s]+)</code>")
 
 _SEEN: dict[tuple[str, str], list[str]] = {}       # (kind, chapter) → names, in the order first shown
 
@@ -84,3 +100,23 @@ def citation_keys(items) -> dict[str, tuple[str, str]]:
     bare = [name for _, name in items]
     keys.update({name: (kind, name) for kind, name in items if bare.count(name) == 1})
     return keys
+
+
+def equations(markdowns) -> list[str]:
+    """The names of the display equations in ``markdowns`` (a chapter's Markdown cells, in
+    order), in the order they stand: equation ``k`` (from 1) of chapter ``c`` is "(c.k)".
+
+    Raises:
+        ValueError: a display equation without a label, on more than one line, or a name given twice.
+    """
+    names: list[str] = []
+    for text in markdowns:
+        for display in DISPLAY.finditer(text):
+            found = EQUATION.fullmatch(display.group(0))
+            if not found:
+                raise ValueError(f"a display equation without a label \\label{{eq:<name>}} on one line: "
+                                 f"{display.group(0)[:80]!r}")
+            if found.group("name") in names:
+                raise ValueError(f"equation name {found.group('name')!r} given twice")
+            names.append(found.group("name"))
+    return names

@@ -208,6 +208,38 @@ def numbered_outputs(executed: Path) -> dict[tuple[str, str], str]:
     return found
 
 
+def numbered_equations(executed: Path, letter: str = "") -> dict[str, str]:
+    """The display equations a chapter numbers, by name: ``{"lm-step": "(S2.2)", …}``, in the
+    order they stand in its Markdown (:func:`nfarm.presentation.numbering.equations`); none for a
+    notebook that is not a chapter (``NN_…``)."""
+    import nbformat
+
+    from ..presentation.numbering import equations
+
+    if not executed.name[:2].isdigit():
+        return {}
+    cells = nbformat.read(executed, 4).cells
+    try:
+        names = equations(c.source for c in cells if c.cell_type == "markdown")
+    except ValueError as exc:
+        raise ReportError(f"{executed.name}: {exc}") from None
+    return {name: f"({letter}{int(executed.name[:2])}.{k})" for k, name in enumerate(names, 1)}
+
+
+def _tag_equations(nb, numbers: Mapping[str, str]) -> None:
+    """Each labelled display equation of ``nb``'s Markdown shown with its number (MathJax's
+    ``\\tag``) after an anchor (``eq-<name>``) that citations link to."""
+    from ..presentation.numbering import EQUATION
+
+    def tagged(match: re.Match) -> str:
+        name = match.group("name")
+        return (f'<a id="eq-{name}"></a>\n\n$${match.group("before")}{match.group("after")}'
+                f'\\tag{{{numbers[name].strip("()")}}}$$')
+    for cell in nb.cells:
+        if cell.cell_type == "markdown":
+            cell.source = EQUATION.sub(tagged, cell.source)
+
+
 def citable(numbered: Mapping[tuple[str, str], tuple[str, str]]) -> dict[str, tuple[str, str]]:
     """Each citation key prose may write (:func:`nfarm.presentation.numbering.citation_keys`) ->
     the text and address of what it names, from ``numbered``: ``(kind, name)`` -> (text, address)."""
@@ -224,7 +256,7 @@ def resolve_citations(body: str, refs: Mapping[str, tuple[str, str]], where: str
     Raises:
         ReportError: ``"<where>: cites <name>, which no chapter of this edition shows"``.
     """
-    from ..presentation.numbering import CITATION_HTML
+    from ..presentation.numbering import CITATION_HTML, EQ_CITATION_HTML
 
     def link(match: re.Match) -> str:
         name = html.unescape(match.group("name"))
@@ -233,7 +265,14 @@ def resolve_citations(body: str, refs: Mapping[str, tuple[str, str]], where: str
                               f"figure or table")
         text, href = refs[name]
         return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
-    return CITATION_HTML.sub(link, body)
+
+    def equation(match: re.Match) -> str:
+        name = html.unescape(match.group("name"))
+        if f"eq:{name}" not in refs:
+            raise ReportError(f"{where}: cites equation {name}, which no chapter of this edition numbers")
+        text, href = refs[f"eq:{name}"]
+        return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
+    return EQ_CITATION_HTML.sub(equation, CITATION_HTML.sub(link, body))
 
 
 _SECTION = re.compile(r'<h([23]) id="([^"]+)">(.*?)<a class="anchor-link"', re.S)
@@ -287,6 +326,8 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     exporter.log.addFilter(quiet)
     try:
         nb = nbformat.read(executed, 4)
+        equations = numbered_equations(executed, letter)
+        _tag_equations(nb, equations)
         _merge_parameters(nb)
         if fold_code:
             _parameters_table(nb)
@@ -300,9 +341,10 @@ def export_html(executed: Path, target: Path, nav: str = "", mathjax: str = MATH
     if letter:
         body = _FIGURE_NUMBER.sub(lambda m: f"<b>Figure {letter}{m.group(1)}.</b>", body)
         body = _TABLE_NUMBER.sub(lambda m: f"<strong>Table {letter}{m.group(1)}.</strong>", body)
-    if refs is None:                 # the page's own figures and tables
+    if refs is None:                 # the page's own figures, tables and equations
         refs = citable({(kind, name): (f"{kind} {letter}{number}", f"#{anchor(kind, name)}")
                         for (kind, name), number in numbered_outputs(executed).items()})
+        refs.update({f"eq:{name}": (number, f"#eq-{name}") for name, number in equations.items()})
     body = resolve_citations(body, refs, executed.name)
     if contents:
         body = _contents(body)
@@ -716,6 +758,11 @@ def write_pages(report: ReportPages) -> None:
                 numbered.setdefault((kind, name), (f"{kind} {letter}{number}",
                                                    f"{Path(shown_at).name}#{anchor(kind, name)}"))
         refs = citable(numbered)
+        for (prefix, _, source), shown_at in zip(own, here):
+            executed = report.executed_dir / source.replace(".html", ".ipynb")
+            letter = edition_letter(arm) if prefix in per_arm else ""
+            for name, number in (numbered_equations(executed, letter) if executed.exists() else {}).items():
+                refs.setdefault(f"eq:{name}", (number, f"{Path(shown_at).name}#eq-{name}"))
         for k, (prefix, title, page) in enumerate(own):
             # An edition's last chapter leads on to the chapter that compares the arms (one page,
             # the primary's), which the reader of every edition meets last; that page leads back

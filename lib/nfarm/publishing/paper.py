@@ -32,7 +32,7 @@ from ..infra.paths import ROOT, atomic_path
 from ..presentation.numbering import citation_keys
 from .editions import Edition
 from .pages import (ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
-                    _git, abstract_answers, chapter_title, edition_letter, numbered_outputs, verdict_rows,
+                    _git, abstract_answers, chapter_title, edition_letter, numbered_equations, numbered_outputs, verdict_rows,
                     warm_start_rows)
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
@@ -64,6 +64,7 @@ _TYPST_PREAMBLE = r"""
 #set par(justify: true)
 #let chap = state("nfarm-chapter", "")
 #set figure(numbering: n => context (chap.get() + "." + str(n)))
+#set math.equation(numbering: n => context ("(" + chap.get() + "." + str(n) + ")"))
 #show figure.where(kind: table): set block(breakable: true)
 #show figure.caption: set text(size: 9pt)
 #show table: set text(size: 7pt)
@@ -74,6 +75,9 @@ _TYPST_PREAMBLE = r"""
   if el != none and el.func() == figure {
     let loc = el.location()
     link(loc)[#el.supplement~#chap.at(loc).#counter(figure.where(kind: el.kind)).at(loc).first()]
+  } else if el != none and el.func() == math.equation {
+    let loc = el.location()
+    link(loc)[(#chap.at(loc).#counter(math.equation).at(loc).first())]
   } else { it }
 }
 #show heading.where(level: 1): it => { pagebreak(weak: true); it }
@@ -114,6 +118,15 @@ def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "")
     Raises:
         ReportError: a citation of a name ``labels`` lacks (``where`` names the chapter).
     """
+    from ..presentation.numbering import EQUATION
+
+    def labelled(match: re.Match) -> str:
+        key = f"eq:{match.group('name')}"
+        if labels is None or key not in labels:
+            raise ReportError(f"{where}: equation {match.group('name')} has no label in this edition")
+        # (an empty group before the label: pandoc's TeX reader refuses a label after a bare letter)
+        return f"$${match.group('before')}{match.group('after')}{{}} \\label{{{labels[key]}}}$$"
+    markdown = EQUATION.sub(labelled, markdown)
     out, fenced = [], False
     for line in markdown.split("\n"):
         if line.lstrip().startswith("```"):
@@ -127,8 +140,9 @@ def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "")
 
 
 def _cite(text: str, labels: dict[str, str] | None, where: str) -> str:
-    """``text`` with each citation of a figure or table a Typst reference to its label (:func:`_prose`)."""
-    from ..presentation.numbering import CITATION
+    """``text`` with each citation of a figure, table or equation a Typst reference to its label
+    (:func:`_prose`; an equation's key is ``eq:<name>``)."""
+    from ..presentation.numbering import CITATION, EQ_CITATION
 
     def reference(match: re.Match) -> str:
         name = match.group("name")
@@ -136,7 +150,13 @@ def _cite(text: str, labels: dict[str, str] | None, where: str) -> str:
             raise ReportError(f"{where}: cites {name}, which no chapter of this edition shows as a numbered "
                               f"figure or table")
         return f"`@{labels[name]}`{{=typst}}"
-    return CITATION.sub(reference, text)
+
+    def equation(match: re.Match) -> str:
+        key = f"eq:{match.group('name')}"
+        if labels is None or key not in labels:
+            raise ReportError(f"{where}: cites equation {match.group('name')}, which no chapter of this edition numbers")
+        return f"`@{labels[key]}`{{=typst}}"
+    return EQ_CITATION.sub(equation, CITATION.sub(reference, text))
 
 
 def _label(edition: str, kind: str, name: str) -> str:
@@ -171,7 +191,8 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str
     parts = [f"## Chapter {chapter.label} — {_escape(title)}",
              _raw(f'#chap.update("{chapter.label}")\n'
                   "#counter(figure.where(kind: image)).update(0)\n"
-                  "#counter(figure.where(kind: table)).update(0)")]
+                  "#counter(figure.where(kind: table)).update(0)\n"
+                  "#counter(math.equation).update(0)")]
     titled, shown = False, set()
     for k, cell in enumerate(nb.cells):
         tags = set(cell.metadata.get("tags", []))
@@ -324,6 +345,10 @@ def paper_markdown(report: ReportPages, assets: Path, *, commit: str = "", built
             numbered.setdefault(c.edition, []).extend(numbered_outputs(c.executed))
     labels = {edition: {key: _label(edition, kind, name) for key, (kind, name) in citation_keys(items).items()}
               for edition, items in numbered.items()}
+    for _, _, chapters in parts:                 # and its equations
+        for c in chapters:
+            labels.setdefault(c.edition, {}).update(
+                {f"eq:{name}": f"eq-{c.edition}-{name}" for name in numbered_equations(c.executed)})
     primary = report.arms[0].name if report.arms else ""
     for part, note, chapters in parts:
         body.append(f"# {_escape(part)}")
@@ -394,6 +419,9 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
             cwd=work, capture_output=True, text=True, timeout=600)
         if done.returncode != 0:
             raise ReportError(f"the PDF: pandoc failed: {' '.join(done.stderr.strip().splitlines()[-1:])}")
+        unconverted = re.search(r"Could not convert TeX math (.{0,80})", done.stderr)
+        if unconverted:                              # never raw TeX in print
+            raise ReportError(f"the PDF: pandoc could not convert an equation: {unconverted.group(1)}")
         unresolved = re.findall(r"citation (\S+) not found", done.stderr)
         if unresolved:                               # a citation the bibliography lacks: never "(key?)" in print
             raise ReportError(f"the PDF cites what {BIBLIOGRAPHY.name} lacks: {', '.join(sorted(set(unresolved)))}")
