@@ -149,6 +149,7 @@ def test_pages_fold_their_code_and_load_nothing_from_the_internet(smoke_report):
     import html as html_
     assert table and '<code>robot_file</code></td><td><code>"ra.yaml"</code>' in html_.unescape(table.group(0)), table
     assert "<code>smoke</code></td><td><code>True</code>" in table.group(0), "the run's value, not the default"
+    assert "out_dir" not in table.group(0) and "build/" not in table.group(0), "no build path among the study's values"
 
 
 @pytest.mark.notebook
@@ -251,29 +252,34 @@ def test_equations_are_numbered_in_order_and_each_carries_a_label():
     from nfarm.infra.notebook_runs import ReportError
     from nfarm.presentation.numbering import equations
 
-    assert equations(["$$a = b \\label{eq:first}$$ and", "$$c \\label{eq:second} = d$$"]) == ["first", "second"]
-    with pytest.raises(ValueError, match="without a label"):
-        equations(["$$a = b$$"])
+    assert equations(["$$a = b \\label{eq:first}$$ and $$x^2$$", "$$c \\label{eq:second} = d$$"]) == ["first", "second"]
+    assert equations(["$$a = b$$"]) == [], "an equation without a label is not numbered"
     with pytest.raises(ValueError, match="given twice"):
         equations(["$$a \\label{eq:x}$$", "$$b \\label{eq:x}$$"])
-    # In the PDF: the label unique to the edition, after an empty group (pandoc refuses a label after a bare letter)
-    assert paper._prose("$$y = x \\label{eq:line}$$ as {eq}`line`", {"eq:line": "eq-a-line"}, "01.ipynb") == \
-        "$$y = x {} \\label{eq-a-line}$$ as `@eq-a-line`{=typst}"
+    with pytest.raises(ValueError, match="must stand on one line"):
+        equations(["$$a =\nb \\label{eq:x}$$"])
+    # In the PDF: numbered while Typst's numbering is set around it, the label unique to the edition, after an
+    # empty group (pandoc refuses a label after a bare letter); an equation without a label is left as it is
+    pdf = paper._prose("$$y = x \\label{eq:line}$$\n\nas {eq}`line`; $$x^2$$", {"eq:line": "eq-a-line"}, "01.ipynb")
+    assert "$$y = x {} \\label{eq-a-line}$$" in pdf and "as `@eq-a-line`{=typst}; $$x^2$$" in pdf
+    assert pdf.index("#set math.equation(numbering: n =>") < pdf.index("$$y") < pdf.index("numbering: none)")
     with pytest.raises(ReportError, match=r"^01.ipynb: cites equation lnie, which no chapter of this edition numbers"):
         paper._prose("as {eq}`lnie`", {"eq:line": "eq-a-line"}, "01.ipynb")
 
 
 def test_the_chapters_equations_are_labelled_and_their_citations_resolve_within_the_chapter():
-    """Every display equation of a chapter carries a label, and prose cites only its own chapter's
-    equations (the course's teacher pages are exported one by one)."""
+    """Every display equation of the study's chapters carries a label (numbered, as a paper numbers its
+    equations), and prose cites only its own chapter's equations (the course's teacher pages are
+    exported one by one)."""
     from nfarm.infra.notebook_runs import chapters
     from nfarm.infra.paths import NOTEBOOKS
-    from nfarm.presentation.numbering import EQ_CITATION, equations
+    from nfarm.presentation.numbering import DISPLAY, EQ_CITATION, equations
 
     cited = 0
     for notebook in chapters(NOTEBOOKS):
         markdown = [c.source for c in nbformat.read(notebook, 4).cells if c.cell_type == "markdown"]
         names = equations(markdown)
+        assert len(names) == sum(len(DISPLAY.findall(text)) for text in markdown), f"{notebook.name}: every equation numbered"
         for text in markdown:
             for found in EQ_CITATION.finditer(text):
                 assert found.group("name") in names, f"{notebook.name} cites {found.group('name')}"

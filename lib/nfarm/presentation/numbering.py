@@ -17,10 +17,10 @@ The report resolves the citation to "Table 6.2", linked to the table, in the HTM
 (:mod:`nfarm.publishing.paper`); a citation of a name no chapter of the edition shows stops the
 report with a one-line error. A chapter run by hand shows the citation as written.
 
-**Equations.** Every display equation of a chapter's Markdown (``$$ … $$``, on one line) carries
-a label, ``\label{eq:<name>}``, and is numbered in the order it stands in the chapter: "(2.1)",
+**Equations.** A display equation of a chapter's Markdown (``$$ … $$``, on one line) that carries
+a label, ``\label{eq:<name>}``, is numbered in the order it stands in the chapter: "(2.1)",
 "(S2.1)" in another edition; prose cites it as {eq}`<name>`, resolved to "(2.1)", linked, in
-the pages and the PDF alike (:func:`equations`).
+the pages and the PDF alike (:func:`equations`). One without a label is not numbered.
 
 Example:
     >>> clear()
@@ -32,7 +32,7 @@ Example:
     ['06_ik_rules']
     >>> sorted(citation_keys([("Figure", "06_ik_contest"), ("Table", "06_ik_contest"), ("Figure", "06_ik_rules")]))
     ['06_ik_rules', 'fig:06_ik_contest', 'fig:06_ik_rules', 'tbl:06_ik_contest']
-    >>> equations(["$$\\Delta q = J^+ e \\label{eq:step}$$", "as {eq}`step` says; $$E = e^2 \\label{eq:error}$$"])
+    >>> equations(["$$\\Delta q = J^+ e \\label{eq:step}$$", "as {eq}`step` says; $$E = e^2 \\label{eq:error}$$ $$x^2$$"])
     ['step', 'error']
 """
 
@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["number", "clear", "chapter_of", "citation_keys", "anchor", "equations", "CITATION", "CITATION_HTML", "KINDS",
+__all__ = ["number", "clear", "chapter_of", "citation_keys", "anchor", "equations", "CITATION", "CITATION_HTML", "KINDS", "DISPLAY",
            "EQUATION", "EQ_CITATION", "EQ_CITATION_HTML"]
 
 #: What is numbered: figures and tables, each counted apart within a chapter; the prefix of each
@@ -103,19 +103,20 @@ def citation_keys(items) -> dict[str, tuple[str, str]]:
 
 
 def equations(markdowns) -> list[str]:
-    """The names of the display equations in ``markdowns`` (a chapter's Markdown cells, in
-    order), in the order they stand: equation ``k`` (from 1) of chapter ``c`` is "(c.k)".
+    """The names of the labelled display equations in ``markdowns`` (a chapter's Markdown cells,
+    in order), in the order they stand: equation ``k`` (from 1) of chapter ``c`` is "(c.k)".
 
     Raises:
-        ValueError: a display equation without a label, on more than one line, or a name given twice.
+        ValueError: a labelled display equation on more than one line, or a name given twice.
     """
     names: list[str] = []
     for text in markdowns:
         for display in DISPLAY.finditer(text):
             found = EQUATION.fullmatch(display.group(0))
             if not found:
-                raise ValueError(f"a display equation without a label \\label{{eq:<name>}} on one line: "
-                                 f"{display.group(0)[:80]!r}")
+                if "\\label{eq:" in display.group(0):
+                    raise ValueError(f"a labelled display equation must stand on one line: {display.group(0)[:80]!r}")
+                continue
             if found.group("name") in names:
                 raise ValueError(f"equation name {found.group('name')!r} given twice")
             names.append(found.group("name"))

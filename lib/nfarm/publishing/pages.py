@@ -110,7 +110,9 @@ def _merge_parameters(nb) -> None:
 def _parameters_table(nb) -> None:
     """The parameters cell's values as rows (name, value, its comment) in the cell's metadata
     (``nfarm_parameters``), which the study edition's page shows as a small table above the
-    folded code: a reader sees the values the page was made with without opening the code."""
+    folded code: a reader sees the values the page was made with without opening the code. The
+    directories the run read and wrote (``…_dir``, ``…_dirs``: the build's, not the study's) are
+    left to the folded code."""
     import ast
 
     for cell in nb.cells:
@@ -123,7 +125,8 @@ def _parameters_table(nb) -> None:
         lines = cell.source.split("\n")
         rows = []
         for node in tree.body:
-            if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+            if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name) \
+                    and not node.targets[0].id.endswith(("_dir", "_dirs")):
                 rest = lines[node.end_lineno - 1][node.end_col_offset:].strip()
                 note = rest[1:].strip() if rest.startswith("#") else ""
                 rows.append([node.targets[0].id, ast.get_source_segment(cell.source, node.value), note])
@@ -153,7 +156,7 @@ PAGE_TEMPLATE = """{%- extends 'lab/index.html.j2' -%}
 {% block input_group -%}
 {%- if resources.nfarm_fold_code and cell.cell_type == 'code' -%}
 {%- if cell.metadata.nfarm_parameters -%}
-<table class="nfarm-parameters"><caption>The parameters of this run</caption>
+<table class="nfarm-parameters"><caption>The parameters of this run (the directories it read and wrote: in its code)</caption>
 <thead><tr><th>parameter</th><th>value</th><th>what it sets</th></tr></thead><tbody>
 {%- for row in cell.metadata.nfarm_parameters -%}
 <tr><td><code>{{ row[0] | e }}</code></td><td><code>{{ row[1] | e }}</code></td><td>{{ row[2] | e }}</td></tr>

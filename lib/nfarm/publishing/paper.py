@@ -64,7 +64,6 @@ _TYPST_PREAMBLE = r"""
 #set par(justify: true)
 #let chap = state("nfarm-chapter", "")
 #set figure(numbering: n => context (chap.get() + "." + str(n)))
-#set math.equation(numbering: n => context ("(" + chap.get() + "." + str(n) + ")"))
 #show figure.where(kind: table): set block(breakable: true)
 #show figure.caption: set text(size: 9pt)
 #show table: set text(size: 7pt)
@@ -124,8 +123,11 @@ def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "")
         key = f"eq:{match.group('name')}"
         if labels is None or key not in labels:
             raise ReportError(f"{where}: equation {match.group('name')} has no label in this edition")
-        # (an empty group before the label: pandoc's TeX reader refuses a label after a bare letter)
-        return f"$${match.group('before')}{match.group('after')}{{}} \\label{{{labels[key]}}}$$"
+        # Numbered while it is set (an equation without a label is not numbered, as on the page); an
+        # empty group before the label: pandoc's TeX reader refuses a label after a bare letter
+        return (_raw('#set math.equation(numbering: n => context ("(" + chap.get() + "." + str(n) + ")"))')
+                + f"\n$${match.group('before')}{match.group('after')}{{}} \\label{{{labels[key]}}}$$\n"
+                + _raw("#set math.equation(numbering: none)"))
     markdown = EQUATION.sub(labelled, markdown)
     out, fenced = [], False
     for line in markdown.split("\n"):
