@@ -197,6 +197,18 @@ def test_the_report_folder_holds_what_it_links_and_says_how_to_reproduce_it(smok
     assert re.search(r"<dt>commit</dt><dd><code>([0-9a-f]{7,}|unknown)", box)
 
 
+@pytest.mark.notebook
+def test_the_index_lists_the_references_as_the_pdf_does(smoke_report):
+    """The HTML edition has its references list too: every work of the bibliography, formatted by the
+    same citeproc as the PDF's, the dissertation among them."""
+    index = (smoke_report / "index.html").read_text(encoding="utf-8")
+    assert "<h2 id='references'>References</h2>" in index and 'id="refs"' in index
+    keys = re.findall(r"^@\w+\{([\w-]+),", paper.BIBLIOGRAPHY.read_text(encoding="utf-8"), re.M)
+    assert {k for k in keys if f'id="ref-{k}"' in index} == set(keys), "every work listed"
+    listed = re.sub(r"<[^>]+>|\s+", " ", index[index.index('id="refs"'):])
+    assert "Tu Rain" in listed and "Belgorod State National Research University" in listed and "Jang" in listed
+
+
 def test_the_bibliography_has_every_work_the_pdf_cites():
     bib = paper.BIBLIOGRAPHY.read_text(encoding="utf-8")
     keys = re.findall(r"^@\w+\{([\w-]+),", bib, re.M)

@@ -24,7 +24,7 @@ from ..presentation.numbering import anchor
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ReportPages", "write_pages", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ReportPages", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -45,6 +45,30 @@ MATHJAX = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
 
 #: The whole study as one PDF in the report directory (:mod:`.paper` writes it; the index links it).
 PAPER_NAME = "nfarm-study.pdf"
+#: The works the study leans on (BibTeX): the PDF's references list and the index's are made from it.
+BIBLIOGRAPHY = ROOT / "docs" / "references.bib"
+
+
+def pandoc_path() -> str:
+    """The pandoc binary the lock ships (the ``pypandoc-binary`` wheel's)."""
+    import pypandoc
+
+    return pypandoc.get_pandoc_path()
+
+
+def references_html(bibliography: Path = BIBLIOGRAPHY) -> str:
+    """Every work in ``bibliography`` as an HTML references list, formatted by pandoc's citeproc
+    as the PDF's list is (its default style, Chicago author–date), sorted by author.
+
+    Raises:
+        ReportError: pandoc failed (one line with its message).
+    """
+    done = subprocess.run([pandoc_path(), "--from", "markdown", "--to", "html", "--citeproc",
+                           "--bibliography", str(bibliography)],
+                          input="---\nnocite: |\n  @*\n---\n", capture_output=True, text=True, timeout=120)
+    if done.returncode != 0 or 'id="refs"' not in done.stdout:
+        raise ReportError(f"the references list: pandoc failed: {' '.join(done.stderr.strip().splitlines()[-1:])}")
+    return done.stdout
 
 
 def install_mathjax(report_dir: Path) -> None:
@@ -669,6 +693,9 @@ def _write_index(report_dir: Path, figures_dir: Path,
                     f"<a href='{html.escape(f.relative_to(report_dir).as_posix())}'>{html.escape(f.name)}</a>"
                     for f in copied) + f" (open one with <code>.venv/bin/rerun "
                     f"{html.escape(copied[0].relative_to(report_dir).as_posix())}</code> in this folder)</p>")
+    # The works the chapters cite ("Jang 1993", "Sugihara 2011", …), the dissertation among them
+    parts.append("<h2 id='references'>References</h2>")
+    parts.append(references_html())
     # The appendix: every chapter's figures and tables, the arms side by side first
     parts.append("<h2 id='appendix'>Appendix: every chapter's figures and tables</h2>")
     for prefix, title, page in compared:

@@ -31,14 +31,12 @@ from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from ..presentation.numbering import citation_keys
 from .editions import Edition
-from .pages import (ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
-                    _git, abstract_answers, chapter_title, edition_letter, numbered_equations, numbered_outputs, verdict_rows,
+from .pages import (BIBLIOGRAPHY, ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
+                    _git, abstract_answers, chapter_title, edition_letter, numbered_equations, numbered_outputs, pandoc_path, verdict_rows,
                     warm_start_rows)
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
-#: The works the study leans on (BibTeX); the PDF's references list is made from it.
-BIBLIOGRAPHY = ROOT / "docs" / "references.bib"
 #: The key of the dissertation reproduced in :data:`BIBLIOGRAPHY`.
 DISSERTATION = "tu_rain_2023"
 
@@ -362,12 +360,6 @@ def paper_markdown(report: ReportPages, assets: Path, *, commit: str = "", built
     return "\n\n".join(body) + "\n"
 
 
-def _pandoc() -> str:
-    import pypandoc
-
-    return pypandoc.get_pandoc_path()
-
-
 _BUILT = "@@built@@"      # the build time's place in the Markdown while its key is taken
 
 
@@ -375,8 +367,6 @@ def _paper_key(markdown: str, assets: Path, bibliography: Path) -> str:
     """SHA-256 of what the PDF is made of: its Markdown (the build time left out), every figure
     copied beside it, the bibliography, this module (the preamble, the pandoc call) and the
     locked environment (pandoc's and Typst's versions)."""
-    from ..infra.paths import ROOT
-
     h = hashlib.sha256(markdown.encode())
     for path in [*sorted(assets.rglob("*")), bibliography, Path(__file__), ROOT / "environment.lock"]:
         if path.is_file():
@@ -414,7 +404,7 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
         markdown = markdown.replace(_BUILT, built)
         (work / "paper.md").write_text(markdown, encoding="utf-8")
         done = subprocess.run(
-            [_pandoc(), "paper.md", "--from", "markdown-auto_identifiers",
+            [pandoc_path(), "paper.md", "--from", "markdown-auto_identifiers",
              # --columns: no pipe table is "wider than the page" to pandoc, so Typst sizes the columns to their cells
              "--to", "typst", "--columns", "100000", "--citeproc", "--bibliography", str(bibliography),
              "--metadata", "link-citations=true", "--output", "body.typ"],
