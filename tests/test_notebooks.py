@@ -32,7 +32,11 @@ LONG_TABLES = {"07_summary", "08_learned"}
 PROSE_DEFECTS = (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ections?|[Ff]igures?|[Tt]ables?)\s+0\d"),
                  ("a file stem", r"\b0\d_[a-z]\w+"),
                  ("a build log", r"\bran in this run\b|\bfiles? made and\b|\bwere read from\b"),
-                 ("a number that is not finite", r"(?<![\w-])-?(?:inf|nan)(?!\w)"))     # as Python prints one
+                 ("a number that is not finite", r"(?<![\w-])-?(?:inf|nan)(?!\w)"),     # as Python prints one
+                 # a measured value a millionth of a unit or less, printed with digits: rounding or a solver's
+                 # tolerance, not data (shown as "< 1e-8 N·m", nfarm.presentation.tables.shown)
+                 ("a value at noise level printed with digits",
+                  r"(?<![\w.])\d\.\d+e-(?:0[6-9]|[1-9]\d)\s?(?:%|N·m|mm\b|m\b|rad\b|°|deg\b)"))
 
 
 def prose_defect(words: str) -> tuple[str, str] | None:
@@ -50,6 +54,10 @@ def prose_defect(words: str) -> tuple[str, str] | None:
     ("0 files made and 9 reused", "a build log"),
     ("LM needs -inf% fewer iterations", "a number that is not finite"),
     ("an error of nan mm", "a number that is not finite"),
+    ("ridge: < 1e-6 % and 8.09e-09 N·m on the worst joint", "a value at noise level printed with digits"),
+    ("τ5 NRMSE 4.976e-06 %", "a value at noise level printed with digits"),
+    ("LM ends 8.8e-10 m from the target", "a value at noise level printed with digits"),
+    ("the spacing of doubles near 1 is 2.2e-16); < 1e-8 N·m; a step of 2.5e-3 m; 1.2e-4 rad", None),
     ("as chapter 6 shows, 0.9 mm in Figure 6.2; an infinite line; nanometres; no exception, no NaN", None)])
 def test_the_prose_check_fails_on_each_defect(words, kind):
     found = prose_defect(words)
