@@ -33,10 +33,10 @@ PROSE_DEFECTS = (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ection
                  ("a file stem", r"\b0\d_[a-z]\w+"),
                  ("a build log", r"\bran in this run\b|\bfiles? made and\b|\bwere read from\b"),
                  ("a number that is not finite", r"(?<![\w-])-?(?:inf|nan)(?!\w)"),     # as Python prints one
-                 # a measured value a millionth of a unit or less, printed with digits: rounding or a solver's
-                 # tolerance, not data (shown as "< 1e-8 N·m", nfarm.presentation.tables.shown)
+                 # a value below 1e-7 of its unit (1e-9 of a whole, in %) printed with digits: rounding or a
+                 # solver's tolerance, not data (shown as "< 1e-8 N·m", nfarm.presentation.tables.shown)
                  ("a value at noise level printed with digits",
-                  r"(?<![\w.])\d\.\d+e-(?:0[6-9]|[1-9]\d)\s?(?:%|N·m|mm\b|m\b|rad\b|°|deg\b)"))
+                  r"(?<![\w.])\d\.\d+e-(?:0[5-9]|[1-9]\d)\s?%|(?<![\w.])\d\.\d+e-(?:0[89]|[1-9]\d)\s?(?:N·m|mm\b|m\b|rad\b|°|deg\b)"))
 
 
 def prose_defect(words: str) -> tuple[str, str] | None:
@@ -58,6 +58,7 @@ def prose_defect(words: str) -> tuple[str, str] | None:
     ("τ5 NRMSE 4.976e-06 %", "a value at noise level printed with digits"),
     ("LM ends 8.8e-10 m from the target", "a value at noise level printed with digits"),
     ("the spacing of doubles near 1 is 2.2e-16); < 1e-8 N·m; a step of 2.5e-3 m; 1.2e-4 rad", None),
+    ("LM ends 5.9e-06 m from the target; σ_min is 8.43e-06 m; at most 3.8e-05 mm and 5.4e-07° away", None),
     ("as chapter 6 shows, 0.9 mm in Figure 6.2; an infinite line; nanometres; no exception, no NaN", None)])
 def test_the_prose_check_fails_on_each_defect(words, kind):
     found = prose_defect(words)

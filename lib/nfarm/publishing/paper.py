@@ -264,6 +264,28 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
             + " ".join(_escape(sentence) for sentence in conclusion(rows, warm_start_rows(figures_dir, arms))))
 
 
+#: The long tables, every row of a chapter's results for machines (:func:`nfarm.study.summary.long_table`),
+#: whose reading copies the chapters show: the PDF sets them whole in its appendix.
+LONG_TABLES = ("07_summary", "08_learned")
+
+
+def _appendix(figures_dir: Path, arms: list[Edition]) -> str:
+    """The PDF's appendix: each of :data:`LONG_TABLES` an edition published, whole, numbered "Table A.k"
+    (``""`` where none is published)."""
+    tables = []
+    for arm in arms:
+        for name in LONG_TABLES:
+            path = figures_dir / arm.subdir / "tables" / f"{name}.md"
+            found = _TABLE.match(path.read_text(encoding="utf-8")) if path.is_file() else None
+            if found:
+                tables.append(found.group("table").rstrip() + "\n\n: " + _escape(found.group("caption").strip())
+                              + f" ({_escape(arm.name)}) {{#tbl-appendix-{arm.name}-{name}}}")
+    if not tables:
+        return ""
+    return "\n\n".join(["# Appendix: the long tables {.unnumbered}",
+                         _raw('#chap.update("A")\n#counter(figure.where(kind: table)).update(0)'), *tables])
+
+
 def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
     parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
@@ -356,6 +378,9 @@ def paper_markdown(report: ReportPages, assets: Path, *, commit: str = "", built
             body.append(_escape(note))
         body += [_chapter_markdown(c, assets, {**labels.get(primary, {}), **labels.get(c.edition, {})})
                  for c in chapters]
+    appendix = _appendix(report.figures_dir, list(report.arms))
+    if appendix:
+        body.append(appendix)
     body.append("# References {.unnumbered}\n\n::: {#refs}\n:::")
     return "\n\n".join(body) + "\n"
 
