@@ -222,6 +222,17 @@ def test_the_pdf_s_appendix_holds_every_long_table_each_edition_published(tmp_pa
     assert paper._appendix(tmp_path / "none", arms) == ""
 
 
+def test_the_verdict_before_the_chapters_is_not_numbered():
+    """A numbered table before any chapter would print "Table .1": the verdict's caption stands above it, as an
+    unnumbered table's does (read from the published verdicts)."""
+    from nfarm.infra.paths import FIGURES
+    from nfarm.publishing.editions import editions
+
+    text = paper._verdict(FIGURES, editions())
+    assert text.startswith("# Verdict {.unnumbered}\n\n*The verdict on held-out data")
+    assert not re.search(r"^: ", text, re.M), "no numbered caption"
+
+
 def test_the_bibliography_has_every_work_the_pdf_cites():
     bib = paper.BIBLIOGRAPHY.read_text(encoding="utf-8")
     keys = re.findall(r"^@\w+\{([\w-]+),", bib, re.M)

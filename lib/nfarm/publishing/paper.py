@@ -259,8 +259,9 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
         return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 7 has not published its verdict table."
     lines = ["| " + " | ".join(VERDICT_HEAD) + " |", "|" + "---|" * len(VERDICT_HEAD)]
     lines += ["| " + " | ".join(_escape(cell) for cell in row) + " |" for row in verdict_display(rows)]
-    return ("# Verdict {.unnumbered}\n\n" + "\n".join(lines)
-            + "\n\n: The verdict on held-out data, per task and arm (each arm's verdict table, chapter 7)\n\n"
+    # Before the chapters: not numbered (a number would have no chapter to belong to), its caption above it
+    return ("# Verdict {.unnumbered}\n\n*The verdict on held-out data, per task and arm (each arm's verdict table, "
+            "chapter 7)*\n\n" + "\n".join(lines) + "\n\n"
             + " ".join(_escape(sentence) for sentence in conclusion(rows, warm_start_rows(figures_dir, arms))))
 
 
