@@ -38,7 +38,7 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 	@awk '/^uv==/{on=1} on&&/^[^ #]/&&!/^uv==/{on=0} on' environment.lock > build/uv.req
 	@$(PY) -m pip install --quiet --disable-pip-version-check --require-hashes --no-deps -r build/uv.req
 	@# Bytecode compiled once here: where PYTHONDONTWRITEBYTECODE is set (as on the machines measured), every
-	@# kernel, worker and test process would compile numpy, scipy, matplotlib … from source again (README "Costs").
+	@# kernel, worker and test process would compile numpy, scipy, matplotlib … from source again (README "Performance", "Bytecode").
 	VIRTUAL_ENV=$(VENV) $(UV) pip sync --quiet --compile-bytecode --python $(PY) environment.lock
 	VIRTUAL_ENV=$(VENV) $(UV) pip install --quiet --python $(PY) --no-deps --no-build-isolation -e .
 	$(PY) -m ipykernel install --sys-prefix --name $(KERNEL) --display-name "Python 3.11 (nfarm)" \
