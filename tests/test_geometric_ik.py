@@ -561,6 +561,19 @@ def test_an_arm_near_the_class_is_solved_on_the_arm_itself(tmp_path, rpy, how):
     np.testing.assert_array_equal(near.sum(1), counted.valid.sum(1))     # every target, every branch
 
 
+def test_identity_fixed_transforms_leave_an_arm_exact(tmp_path):
+    """A robot file may write the identity after every row: a pure DH chain, solved by the closed
+    form itself (``exact``), not seeded into LM as an arm near the class."""
+    import dataclasses
+
+    exact = near_arm(tmp_path, "0 0 0")
+    written = dataclasses.replace(exact, fixed=np.tile(np.eye(4), (5, 1, 1)))
+    assert check_class(exact).exact and check_class(written).exact
+    q = np.random.default_rng(4).uniform(-2.5, 2.5, (50, 5))
+    result = closed_form(written, fk(written, q))
+    assert not result.refined.any()
+
+
 def test_an_arm_beyond_the_near_class_is_refused_naming_the_joint_and_the_angle(tmp_path):
     robot = near_arm(tmp_path, "0 0.001 0")          # 0.057°: beyond NEAR_TOL
     with pytest.raises(ValueError, match=r"joint 3's fixed transform after its DH row turns 0\.0573° "

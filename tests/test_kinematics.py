@@ -153,3 +153,31 @@ def test_a_base_places_the_chain_in_the_world(intelbot5):
     assert robot_from_dict(robot_to_dict(placed)).base.tolist() == B.tolist()
     with pytest.raises(ParamsError, match=r"base: .*determinant|base: .*orthonormal"):
         robot_from_dict({**data, "base": np.diag([1.0, 1.0, -1.0, 1.0]).tolist()})
+
+
+@given(st.integers(0, 2**32 - 1))
+def test_dh_transform_is_the_product_of_its_four_motions_batched(seed):
+    """A = Rz(θ) Tz(d) Tx(a) Rx(α), the rotations from SciPy, for arguments that broadcast."""
+    from scipy.spatial.transform import Rotation
+
+    from nfarm.model.kinematics import dh_transform
+
+    rng = np.random.default_rng(seed)
+    a, d = rng.normal(size=(3, 1)), rng.normal(size=(1, 4))
+    alpha, theta = rng.uniform(-np.pi, np.pi, (3, 4)), rng.uniform(-np.pi, np.pi)
+
+    def motion(rotation=None, along=None, by=0.0):
+        T = np.eye(4)
+        if rotation is not None:
+            T[:3, :3] = Rotation.from_euler(*rotation).as_matrix()
+        if along is not None:
+            T["xyz".index(along), 3] = by
+        return T
+
+    A = dh_transform(a, alpha, d, theta)
+    assert A.shape == (3, 4, 4, 4)
+    for i in range(3):
+        for j in range(4):
+            expected = (motion(("z", theta)) @ motion(along="z", by=d[0, j]) @ motion(along="x", by=a[i, 0])
+                        @ motion(("x", alpha[i, j])))
+            np.testing.assert_allclose(A[i, j], expected, rtol=0, atol=1e-14)

@@ -104,6 +104,14 @@ def test_the_smoke_report_builds_one_pdf_of_the_whole_study(smoke_report):
     for code in ("save_figure(", "import matplotlib", "out_dir", "display(Markdown"):
         assert code not in text, f"code left in the PDF: {code}"
     assert "smoke run" in flat.lower()
+    outline = []
+
+    def walk(items):
+        for item in items:
+            walk(item) if isinstance(item, list) else outline.append(" ".join(item.title.split()))
+    walk(pypdf.PdfReader(pdf).outline)
+    # every chapter writes a section "1.1": the b edition's chapter B1 numbers it B1.1, the shared chapters do not
+    assert outline.count("1.1 A section") == 3 and outline.count("B1.1 A section") == 1, outline
 
 
 class _Refs(HTMLParser):

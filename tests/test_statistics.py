@@ -150,6 +150,21 @@ def test_tail_ratios_use_only_the_rows_a_cause_has():
     np.testing.assert_allclose(result.value, [5.0, 5.0])
 
 
+def test_tail_ratios_leave_out_a_resample_with_no_value_without_a_warning():
+    """A cause few rows have (another solution, on a few poses): some resamples draw none of them;
+    their ratio is NaN and left out of the interval, and NumPy's "All-NaN slice" is not printed."""
+    import warnings
+
+    from nfarm.study.statistics import tail_ratios
+    rng = np.random.default_rng(5)
+    x = rng.random(40)
+    rare = np.where(np.arange(40) < 2, x, np.nan)                          # two rows of forty have a value
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = tail_ratios({"rare": rare, "all": x}, 1 + x, draws=200, seed=0)
+    assert np.isfinite(result.value).all() and np.isfinite(result.low).all()
+
+
 @pytest.mark.parametrize("causes, error, message", [
     ({}, np.ones(5), "at least one"),
     ({"a": np.ones(4)}, np.ones(5), r"each cause \(N,\)"),

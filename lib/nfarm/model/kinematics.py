@@ -23,7 +23,7 @@ import numpy as np
 
 from .robot import Robot, joint_array
 
-__all__ = ["fk", "fk_all", "jacobian", "numerical_jacobian", "pose_jacobian_T",
+__all__ = ["dh_transform", "fk", "fk_all", "jacobian", "numerical_jacobian", "pose_jacobian_T",
            "manipulability", "min_singular_value", "joint_placements", "cos_sin", "snap_right_angles",
            "CHUNK"]
 
@@ -47,6 +47,35 @@ def _Tr(x: float, y: float, z: float) -> np.ndarray:
     T = np.eye(4)
     T[:3, 3] = x, y, z
     return T
+
+
+def dh_transform(a, alpha, d, theta) -> np.ndarray:
+    """The standard Denavit–Hartenberg link transform (chapter 1, equation 1.1), batched over the
+    arguments' broadcast leading shape ``(...)``:
+
+    ``A = R_z(θ) T_z(d) T_x(a) R_x(α) =
+    [[cθ, −sθ cα, sθ sα, a cθ], [sθ, cθ cα, −cθ sα, a sθ], [0, sα, cα, d], [0, 0, 0, 1]]``
+
+    Args:
+        a: the common normal's length [m]; alpha: the twist about it [rad];
+        d: the offset along the previous z [m]; theta: the angle about it [rad] (a revolute
+        joint's ``q + offset``).
+
+    Returns:
+        ``(..., 4, 4)``: frame i in frame i−1.
+
+    Example:
+        >>> A = dh_transform(0.1, np.pi / 2, 0.2, np.pi / 2)
+        >>> (A[:3, 3].round(12) + 0.0).tolist()      # a along the turned x, d along z [m]
+        [0.0, 0.1, 0.2]
+    """
+    a, alpha, d, theta = np.broadcast_arrays(*(np.asarray(x, float) for x in (a, alpha, d, theta)))
+    c, s, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
+    A = np.zeros(a.shape + (4, 4))
+    A[..., 0, :] = np.stack([c, -s * ca, s * sa, a * c], axis=-1)
+    A[..., 1, :] = np.stack([s, c * ca, -c * sa, a * s], axis=-1)
+    A[..., 2, 1], A[..., 2, 2], A[..., 2, 3], A[..., 3, 3] = sa, ca, d, 1.0
+    return A
 
 
 def joint_placements(robot: Robot) -> tuple[list[np.ndarray], list[np.ndarray]]:

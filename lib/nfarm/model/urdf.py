@@ -32,7 +32,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from ..infra.reading import MAX_BYTES, ParamsError, ParamsWarning, Validator, read_bytes, show
-from .kinematics import joint_placements
+from .kinematics import dh_transform, joint_placements
 from .robot import MAX_PLAUSIBLE_LENGTH, Robot, register_reader, robot_from_dict, with_provenance
 from .rotations import matrix_to_rpy
 
@@ -840,10 +840,7 @@ def _fixed_transforms(frames: list[np.ndarray], rows: list[dict[str, float]],
     scale = max([1.0] + [float(np.linalg.norm(F[:3, 3])) for F in frames])
     out, exact = [], True
     for i, row in enumerate(rows):
-        c, s = math.cos(row["offset"]), math.sin(row["offset"])
-        ca, sa = math.cos(row["alpha"]), math.sin(row["alpha"])
-        A = np.array([[c, -s * ca, s * sa, row["a"] * c], [s, c * ca, -c * sa, row["a"] * s],
-                      [0.0, sa, ca, row["d"]], [0.0, 0.0, 0.0, 1.0]])
+        A = dh_transform(row["a"], row["alpha"], row["d"], row["offset"])
         E = np.linalg.solve(frames[i] @ A, frames[i + 1])
         if (np.abs(E[:3, :3] - np.eye(3)).max() <= tol and np.abs(E[:3, 3]).max() <= tol * scale):
             E = np.eye(4)

@@ -103,12 +103,15 @@ def _raw(typst: str) -> str:
 
 
 _HEADING = re.compile(r"^(#{1,5})(\s)", re.M)
+#: A section's number at the start of its heading ("7.1", "6.2.1"): an edition's letter goes before it.
+_SECTION_NUMBER = re.compile(r"^(#{2,6}\s+)(?=\d+(?:\.\d+)+\s)")
 _CITATION_LIKE = re.compile(r"(^|[\s\[(;-])@(?=[\w])")
 
 
-def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "") -> str:
+def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "", letter: str = "") -> str:
     """A notebook's Markdown in the PDF: its headings one level down (a chapter is level 2 in
-    its part), no ``@`` read as a bibliography citation (the notebooks cite none), and each
+    its part), their section numbers after the edition's ``letter`` ("S7.1" in a chapter "S7",
+    as the outline lists it), no ``@`` read as a bibliography citation (the notebooks cite none), and each
     citation of a figure or table (:data:`nfarm.presentation.numbering.CITATION`) a Typst
     reference to its label in ``labels`` (name -> label).
 
@@ -132,6 +135,8 @@ def _prose(markdown: str, labels: dict[str, str] | None = None, where: str = "")
         if line.lstrip().startswith("```"):
             fenced = not fenced
         elif not fenced:
+            if letter:
+                line = _SECTION_NUMBER.sub(lambda m: m.group(1) + letter, line)
             line = _HEADING.sub(lambda m: "#" + m.group(1) + m.group(2), line)
             line = _CITATION_LIKE.sub(lambda m: m.group(1) + "\\@", line)
             line = _cite(line, labels, where)
@@ -193,6 +198,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str
                   "#counter(figure.where(kind: image)).update(0)\n"
                   "#counter(figure.where(kind: table)).update(0)\n"
                   "#counter(math.equation).update(0)")]
+    letter = re.sub(r"\d+$", "", chapter.label)      # "S" of chapter "S7"; "" for the primary edition's
     titled, shown = False, set()
     for k, cell in enumerate(nb.cells):
         tags = set(cell.metadata.get("tags", []))
@@ -203,7 +209,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str
             if not titled:
                 text, n = re.subn(r"^# [^\n]*\n?", "", text, count=1, flags=re.M)
                 titled = bool(n)
-            parts.append(_prose(text, labels, chapter.executed.name))
+            parts.append(_prose(text, labels, chapter.executed.name, letter))
             continue
         if cell.cell_type != "code":
             continue
@@ -246,7 +252,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str
                     parts.append(f"*{_cite(table.group('caption').strip(), labels, chapter.executed.name)}*\n\n"
                                  + table.group("table").rstrip())
                 else:
-                    parts.append(_prose(text, labels, chapter.executed.name))
+                    parts.append(_prose(text, labels, chapter.executed.name, letter))
     return "\n\n".join(parts) + "\n"
 
 

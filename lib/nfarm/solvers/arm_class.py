@@ -119,7 +119,7 @@ def _reason(robot: Robot, axis_tol: float):
                               f"{deg(turn):.3g}° and shifts {shift:.3g} m (the closed form seeds "
                               f"LM through at most {deg(NEAR_TOL):.3g}° and {NEAR_TOL:g} of the "
                               f"arm's length)")
-    exact = robot.fixed is None
+    exact = robot.fixed is None or bool((robot.fixed == np.eye(4)).all())   # identities: a pure DH chain
     alpha = np.array(alpha, dtype=float)
     for i in (1, 2):
         if abs(math.sin(alpha[i])) > NEAR_TOL:

@@ -36,6 +36,7 @@ the units, so an interval covers what varies between trainings as well as the te
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -384,12 +385,15 @@ class TailRatios:
 
 def _tail_ratio(X: np.ndarray, E: np.ndarray, share: float) -> np.ndarray:
     """``X, E (b, N)`` (NaN in ``X``: no value) → ``(b,)`` median ``E`` of the ``share`` of each
-    row's finite ``X`` that is smallest over that of the ``share`` that is largest."""
-    lo = np.nanquantile(X, share, axis=1, keepdims=True)
-    hi = np.nanquantile(X, 1 - share, axis=1, keepdims=True)
-    with np.errstate(invalid="ignore"):
-        near = np.nanmedian(np.where(X <= lo, E, np.nan), axis=1)
-        far = np.nanmedian(np.where(X >= hi, E, np.nan), axis=1)
+    row's finite ``X`` that is smallest over that of the ``share`` that is largest; NaN for a row
+    with no finite ``X`` (a resample that drew no row with a value), without NumPy's warning."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "All-NaN slice", RuntimeWarning)
+        lo = np.nanquantile(X, share, axis=1, keepdims=True)
+        hi = np.nanquantile(X, 1 - share, axis=1, keepdims=True)
+        with np.errstate(invalid="ignore"):
+            near = np.nanmedian(np.where(X <= lo, E, np.nan), axis=1)
+            far = np.nanmedian(np.where(X >= hi, E, np.nan), axis=1)
     return near / far
 
 
