@@ -26,7 +26,7 @@ REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
 
 
 #: Tables of every row saved for machines (nfarm.study.summary.long_table); their pages show reading copies.
-LONG_TABLES = {"07_summary", "08_learned"}
+LONG_TABLES = {"07_summary", "07_summary_pooled", "08_learned"}
 
 #: What a page's prose (its markdown, code and tables left out) must not hold, each a kind and a pattern.
 PROSE_DEFECTS = (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ections?|[Ff]igures?|[Tt]ables?)\s+0\d"),

@@ -387,3 +387,95 @@ def test_the_abstract_judges_on_the_paired_interval_where_the_unpaired_ones_over
     row = next(p for p in paired if p["metric"] == "position median")          # RBF less the ANFIS
     assert (row["method"], row["against"]) == ("RBF", "ANFIS, chosen")
     assert float(row["ci_low"]) > 0 and row["spread"] == "paired bootstrap over 500 test poses"
+
+
+def test_pooled_rows_pool_a_method_over_its_seeds_and_keep_a_method_trained_once():
+    """The value is the metric of every seed's errors pooled; its two-level interval is wider than the
+    one-level interval of one seed when the seeds differ; a method with one model, and a maximum, stay."""
+    from nfarm.study.summary import ik_seed_values, pooled_rows
+    seeds = [ik_errors(s) for s in range(4)]
+    for s, e in enumerate(seeds):
+        e["position"] = e["position"] * (1 + s)                  # the seeds' models differ
+    rows = ik_rows("ANFIS", ROLE_CHOSEN, seeds[0], draws=300) + ik_rows("RBF", ROLE_BEST_BASELINE, ik_errors(9), draws=300)
+    values = {("inverse kinematics", "ANFIS"): ik_seed_values(seeds),
+              ("inverse kinematics", "RBF"): ik_seed_values([ik_errors(9)])}
+    pooled = {(r.method, r.metric): r for r in pooled_rows(rows, values, draws=300)}
+    before = {(r.method, r.metric): r for r in rows}
+    every = 1e3 * np.concatenate([e["position"] for e in seeds])
+    p95 = pooled["ANFIS", "position p95"]
+    np.testing.assert_allclose(p95.value, np.percentile(every, 95), rtol=1e-12)
+    assert p95.low <= p95.value <= p95.high and "4 seeds × 500 test poses" in p95.spread
+    assert p95.high - p95.low > before["ANFIS", "position p95"].high - before["ANFIS", "position p95"].low
+    assert pooled["ANFIS", "position max"] == before["ANFIS", "position max"]        # a maximum: as it was
+    assert all(pooled["RBF", m] == before["RBF", m] for m, _ in IK_METRICS)           # one model: as it was
+
+
+def test_pooled_rows_pool_the_id_metrics_over_the_resolved_joints():
+    from nfarm.study.summary import pooled_rows
+    predicted, tau, label = [], None, None
+    rng = np.random.default_rng(2)
+    tau = rng.normal(size=(600, 3)) * [1.0, 2.0, 1e-4]
+    label = np.repeat(np.arange(12), 50)
+    sums = np.stack([trajectory_sums(tau + rng.normal(0, 0.1 * (1 + s), tau.shape), tau, label) for s in range(3)])
+    resolved = np.array([True, True, False])
+    rows = id_rows("ANFIS", ROLE_CHOSEN, sums[0], trajectory_maxima(tau, tau, label), ["a", "b", "c"],
+                   resolved=resolved, draws=300)
+    pooled = {r.metric: r for r in pooled_rows(rows, {("inverse dynamics", "ANFIS"): sums},
+                                               resolved={"inverse dynamics": resolved}, draws=300)}
+    total = sums.sum(axis=(0, 1))
+    from nfarm.study.statistics import nrmse_from_sums
+    direct = 100 * nrmse_from_sums(total)
+    np.testing.assert_allclose([pooled[f"τ{j + 1} NRMSE"].value for j in range(2)], direct[:2], rtol=1e-12)
+    np.testing.assert_allclose(pooled[WORST_ID].value, direct[:2].max(), rtol=1e-12)
+    assert "τ3 NRMSE (below noise)" in pooled and pooled["largest error"].n == 0
+
+
+def test_pooled_pairs_pair_the_seeds_stand_an_exact_method_beside_each_and_keep_a_once_trained_one():
+    from nfarm.study.summary import Paired, pooled_pairs
+    rng = np.random.default_rng(3)
+    tau = rng.normal(size=(400, 2))
+    label = np.repeat(np.arange(8), 50)
+    model = lambda s, scale: trajectory_sums(tau + rng.normal(0, scale * (1 + 0.2 * s), tau.shape), tau, label)  # noqa: E731
+    task, metric = "ID, measured arm", "worst joint RMSE"
+    values = {(task, "residual"): np.stack([model(s, 0.1) for s in range(5)]),
+              (task, "boosting"): np.stack([model(s, 0.3) for s in range(5)]),
+              (task, "Newton–Euler alone"): model(0, 1.0)[None],
+              (task, "trained once"): model(0, 0.2)[None]}
+    pairs = [Paired(task, a, b, metric, "N·m", 9.0, 8.0, 10.0, 300, 0.95, "one seed")
+             for a, b in (("residual", "boosting"), ("residual", "Newton–Euler alone"), ("residual", "trained once"))]
+    out = pooled_pairs(pairs, values, exact=[(task, "Newton–Euler alone")], draws=300)
+    assert out[0].high < 0 and "5 seeds × 8 test trajectories" in out[0].spread          # better on every draw
+    assert out[1].high < 0 and "5 seeds" in out[1].spread                                # the exact one beside each seed
+    assert out[2] == pairs[2]                                                            # trained once: as it was
+    with pytest.raises(ValueError, match="not a metric pooled"):
+        pooled_pairs([Paired(task, "residual", "boosting", "mean error", "N·m", 0, 0, 0, 300, 0.95, "")], values,
+                     draws=300)
+
+
+def test_the_abstract_reads_the_rows_pooled_over_the_seeds_where_chapter_7_published_them(tmp_path):
+    """The index and the PDF state the pooled summary (07_summary_pooled, 07_paired_pooled); an older chapter 7's
+    tables (the chapter's seed only) still give answers."""
+    from nfarm.publishing import report
+    from nfarm.publishing.pages import abstract_answers
+    from nfarm.study.summary import (abstract_pairs, ik_seed_values, paired_rows, paired_table, pooled_pairs, pooled_rows,
+                                     read_paired)
+
+    seeds = [ik_errors(s) for s in range(3)]
+    for s, e in enumerate(seeds):
+        e["position"] = e["position"] * (1 + 2 * s)
+    rival = [ik_errors(10 + s) for s in range(3)]
+    rows = ik_rows("ANFIS, chosen", ROLE_CHOSEN, seeds[0], draws=300) + ik_rows("RBF", ROLE_BEST_BASELINE, rival[0], draws=300)
+    paired = paired_rows(abstract_pairs(rows), ik_errors={"ANFIS, chosen": seeds[0], "RBF": rival[0]}, draws=300)
+    long_table(rows).save(tmp_path, "07_summary")
+    paired_table(paired).save(tmp_path, "07_paired")
+    arms = [report.Edition("arm", "sa.yaml", "ra.yaml", True)]
+    (seed_0,) = abstract_answers(tmp_path, arms)
+    values = {("inverse kinematics", "ANFIS, chosen"): ik_seed_values(seeds), ("inverse kinematics", "RBF"): ik_seed_values(rival)}
+    pooled = pooled_rows(rows, values, draws=300)
+    long_table(pooled).save(tmp_path, "07_summary_pooled")
+    paired_table(pooled_pairs(paired, values, draws=300)).save(tmp_path, "07_paired_pooled")
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary_pooled.csv"),
+                             read_paired(tmp_path / "tables" / "07_paired_pooled.csv"))
+    assert abstract_answers(tmp_path, arms) == [line] and line != seed_0
+    p95 = next(r for r in pooled if r.method == "ANFIS, chosen" and r.metric == "position p95")
+    assert f"{p95.value:.3g} mm" in line and f"{p95.value:.3g} mm" not in seed_0

@@ -24,7 +24,7 @@ from ..presentation.numbering import anchor
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ReportPages", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ANSWERS_KIND", "ReportPages", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -473,18 +473,29 @@ ABSTRACT_LIMITS = (
     "bootstrap).")
 
 
+#: What the abstract's intervals and comparisons are (:func:`abstract_answers`), as the index and the PDF say it.
+ANSWERS_KIND = ("on held-out data; a method chapter 6 trained over several seeds pooled over them, with a two-level 95 % "
+                "bootstrap interval over the seeds and the test poses or trajectories; a method trained once, or exact, "
+                "with its interval over the test units; every comparison on the paired interval of the two methods' "
+                "difference, seed by seed where both have seeds, on the same poses or trajectories")
+
+
 def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
-    """Each arm's answers, read from its published ``07_summary.csv`` and its comparisons from
-    ``07_paired.csv`` (every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`):
+    """Each arm's answers, read from its published ``07_summary_pooled.csv`` and its comparisons from
+    ``07_paired_pooled.csv`` (pooled over the seeds; ``07_summary.csv`` and ``07_paired.csv`` of an
+    older chapter 07; every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`):
     what the HTML index and the PDF both print. A table an older chapter 07 wrote (or none of
     its paired differences) gives one line saying so, not a failure."""
     from ..study.summary import abstract_lines, read_long_table, read_paired
 
     answers = []
     for edition in arms:
-        path = figures_dir / edition.subdir / "tables" / "07_summary.csv"
+        tables = figures_dir / edition.subdir / "tables"
+        # Pooled over the seeds where chapter 07 published it, else its chapter seed's rows
+        pooled = (tables / "07_summary_pooled.csv").is_file()
+        path = tables / ("07_summary_pooled.csv" if pooled else "07_summary.csv")
         if path.is_file():
-            paired = path.with_name("07_paired.csv")
+            paired = tables / ("07_paired_pooled.csv" if pooled else "07_paired.csv")
             try:
                 answers += abstract_lines(edition.name, read_long_table(path),
                                           read_paired(paired) if paired.is_file() else [])
@@ -552,11 +563,8 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     parts += ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
     answers = abstract_answers(figures_dir, arms)
     if answers:
-        parts.append("<p><b>Answers</b> (on held-out data, the models of the study's own data, with 95 % bootstrap "
-                     "intervals over the test poses or trajectories; every comparison on the paired interval of the two "
-                     "methods' difference over the same poses or trajectories; the verdict above pools every seed's "
-                     "model; from each arm's <code>tables/07_summary.csv</code> and "
-                     "<code>tables/07_paired.csv</code>):</p><ul>")
+        parts.append(f"<p><b>Answers</b> ({html.escape(ANSWERS_KIND)}; from each arm's "
+                     "<code>tables/07_summary_pooled.csv</code> and <code>tables/07_paired_pooled.csv</code>):</p><ul>")
         parts += [f"<li>{html.escape(line)}</li>" for line in answers]
         parts.append("</ul>")
     else:

@@ -31,7 +31,7 @@ from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from ..presentation.numbering import citation_keys
 from .editions import Edition
-from .pages import (BIBLIOGRAPHY, ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
+from .pages import (ANSWERS_KIND, BIBLIOGRAPHY, ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
                     _git, abstract_answers, chapter_title, edition_letter, numbered_equations, numbered_outputs, pandoc_path, verdict_rows,
                     warm_start_rows)
 
@@ -273,7 +273,7 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
 
 #: The long tables, every row of a chapter's results for machines (:func:`nfarm.study.summary.long_table`),
 #: whose reading copies the chapters show: the PDF sets them whole in its appendix.
-LONG_TABLES = ("07_summary", "08_learned")
+LONG_TABLES = ("07_summary", "07_summary_pooled", "08_learned")
 
 
 def _appendix(figures_dir: Path, arms: list[Edition]) -> str:
@@ -297,10 +297,7 @@ def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
     parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
-        parts.append("**Answers** (on held-out data, the models of the study's own data, with 95 % bootstrap "
-                     "intervals over the test poses or trajectories; every comparison on the paired interval of the "
-                     "two methods' difference over the same poses or trajectories; the verdict above pools every "
-                     "seed's model):")
+        parts.append(f"**Answers** ({_escape(ANSWERS_KIND)}):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))
     parts.append(f"**Limits.** {_escape(ABSTRACT_LIMITS)}")
     parts.append(f"**Sources.** {SOURCES}")

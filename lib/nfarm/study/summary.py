@@ -40,7 +40,7 @@ from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_
                          resampled_quantile, resolved_joints)
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
-__all__ = ["IK_METRICS", "Row", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
+__all__ = ["IK_METRICS", "Row", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
@@ -239,6 +239,111 @@ def seed_comparison(values: Mapping[str, np.ndarray], anfis: str, rival: str, me
     gap = bootstrap_seeds(np.concatenate([a[:common], b[:common]], axis=-1),
                           lambda X: statistic(X[..., :width]) - statistic(X[..., width:]), **boot)
     return estimates, gap
+
+
+_PER_JOINT = re.compile(r"τ(?P<joint>\d+) (?P<kind>N?RMSE)( \(below noise\))?")
+#: The worst-joint metrics of the ID rows: (normalised, over the resolved joints).
+_WORST = {"worst joint NRMSE": (True, False), "worst resolved joint NRMSE": (True, True), "worst joint RMSE": (False, False),
+          "worst resolved joint RMSE": (False, True), "worst NRMSE": (True, True), "worst NRMSE, every joint": (True, False)}
+
+
+def _pooled_metric(task: str, metric: str, resolved) -> tuple[slice, Callable[[np.ndarray], np.ndarray], float]:
+    """The columns one summary metric reads of a method's seed values, the statistic of their pooled
+    rows ``X (b, M, k) -> (b,)`` and its scale to the row's unit: the IK metrics
+    (:data:`IK_METRICS`) of :func:`ik_seed_values`, else an ID metric of trajectory sums (a
+    joint's NRMSE [%] or RMSE [N·m]; the worst joint's, over the ``resolved`` joints where the
+    metric says so). A maximum, or a metric of no such kind, is a one-line ``ValueError``."""
+    if task == "inverse kinematics":
+        if metric.endswith(" max"):
+            raise ValueError(f"{metric}: a maximum is not pooled over seeds")
+        columns, statistic = _pooled_ik(metric)
+        return columns, statistic, 1.0
+    joint = _PER_JOINT.fullmatch(metric)
+    if joint:
+        j, normalised = int(joint.group("joint")) - 1, joint.group("kind") == "NRMSE"
+        return (slice(None), lambda X: nrmse_from_sums(X.sum(axis=-2), normalised=normalised)[..., j],
+                100.0 if normalised else 1.0)
+    if metric in _WORST:
+        normalised, over_resolved = _WORST[metric]
+        return slice(None), _pooled_worst(resolved if over_resolved else None, normalised), 100.0 if normalised else 1.0
+    raise ValueError(f"{metric!r} ({task}) is not a metric pooled over seeds")
+
+
+def pooled_rows(rows: Sequence[Row], values: Mapping[tuple[str, str], np.ndarray], *,
+                resolved: Mapping[str, np.ndarray] | None = None, draws: int = 2000, level: float = 0.95,
+                seed: int = 0) -> list[Row]:
+    """``rows`` (of the chapter's seed's models) with every method chapter 6 trained over several
+    seeds pooled over them: for ``(task, method)`` in ``values`` — ``(S, N, k)``, its seeds' test
+    errors (:func:`ik_seed_values`) or trajectory sums, as :func:`seed_comparison` takes them —
+    with ``S > 1``, each metric's value over all its seeds' models and the test units, with the
+    two-level interval (:func:`nfarm.study.statistics.bootstrap_seeds`; its kind in ``spread``).
+    Maxima, and methods with one model (trained once, or exact), are kept as they are: their
+    interval is over the test units. ``resolved``: task → the joints a sensor resolves, for the
+    worst-joint metrics over them.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> errors = [{"joint": rng.normal(0, 0.01, (50, 2)), "position": rng.random(50) * 1e-3,
+        ...            "orientation": rng.random(50) * 1e-3} for _ in range(3)]
+        >>> rows = ik_rows("ANFIS", ROLE_CHOSEN, errors[0], draws=200)
+        >>> pooled = pooled_rows(rows, {("inverse kinematics", "ANFIS"): ik_seed_values(errors)}, draws=200)
+        >>> [r.spread for r in pooled if r.metric in ("position median", "position max")]
+        ['two-level bootstrap over 3 seeds × 50 test poses', 'the largest of 50 test poses (a maximum: no interval)']
+    """
+    resolved = resolved or {}
+    out = list(rows)
+    for (task, method), v in values.items():
+        v = np.asarray(v, float)
+        if v.ndim != 3 or len(v) < 2:
+            continue
+        at = [k for k, r in enumerate(out) if r.task == task and r.method == method and r.n]
+        if not at:
+            continue
+        parts = [_pooled_metric(task, out[k].metric, resolved.get(task)) for k in at]
+        est = bootstrap_seeds(v, lambda X: np.stack([f(X[..., c]) for c, f, _ in parts], axis=-1),
+                              draws=draws, level=level, seed=seed)
+        units = "test poses" if task == "inverse kinematics" else "test trajectories"
+        for i, (k, (_, _, scale)) in enumerate(zip(at, parts)):
+            out[k] = replace(out[k], value=scale * float(est.value[i]), low=scale * float(est.low[i]),
+                             high=scale * float(est.high[i]), n=draws, level=level,
+                             spread=f"two-level bootstrap over {len(v)} seeds × {v.shape[1]:,} {units}")
+    return out
+
+
+def pooled_pairs(pairs: Sequence[Paired], values: Mapping[tuple[str, str], np.ndarray], *,
+                 exact: Sequence[tuple[str, str]] = (), resolved: Mapping[str, np.ndarray] | None = None,
+                 draws: int = 2000, level: float = 0.95, seed: int = 0) -> list[Paired]:
+    """``pairs`` (:func:`paired_rows`, the chapter's seed's) each judged over the seeds where both
+    methods have them (``values`` as :func:`pooled_rows` takes them): model ``s`` of each trained on
+    the same draw of data, on the same test units, the difference with its paired two-level
+    interval. A method in ``exact`` (``(task, method)``: no training, the same on every draw, e.g.
+    Newton–Euler alone) stands beside each seed's model as it is. A pair with a method trained once
+    is kept as it is (paired over the test units)."""
+    resolved = resolved or {}
+    out = []
+    for p in pairs:
+        a, b = (np.asarray(values[p.task, m], float) if (p.task, m) in values else None for m in (p.method, p.against))
+        seeds = [0 if v is None else len(v) for v in (a, b)]
+        fixed = [(p.task, m) in exact for m in (p.method, p.against)]
+        if a is None or b is None or max(seeds) < 2 or any(s < 2 and not f for s, f in zip(seeds, fixed)):
+            out.append(p)
+            continue
+        common = min(s for s, f in zip(seeds, fixed) if not f)
+        a, b = (np.repeat(v[:1], common, axis=0) if f else v[:common] for v, f in zip((a, b), fixed))
+        if a.shape != b.shape:
+            raise ValueError(f"{p.method!r} and {p.against!r} must be judged on the same test units, got "
+                             f"{a.shape[1:]} and {b.shape[1:]}")
+        columns, statistic, scale = _pooled_metric(p.task, p.metric, resolved.get(p.task))
+        a, b = a[..., columns], b[..., columns]
+        width = a.shape[-1]
+        gap = bootstrap_seeds(np.concatenate([a, b], axis=-1),
+                              lambda X: statistic(X[..., :width]) - statistic(X[..., width:]),
+                              draws=draws, level=level, seed=seed)
+        units = "test poses" if p.task == "inverse kinematics" else "test trajectories"
+        out.append(replace(p, difference=scale * float(gap.value), low=scale * float(gap.low),
+                           high=scale * float(gap.high), n=draws, level=level,
+                           spread=f"paired two-level bootstrap over {common} seeds × {a.shape[1]:,} {units}"))
+    return out
 
 
 def _largest(X):
