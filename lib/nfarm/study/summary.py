@@ -512,13 +512,13 @@ def wide_table(rows: Sequence[Row], task: str, *, floors: Mapping[str, float] | 
 
 
 def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None,
-                     resolved=None):
+                     resolved=None, seeds: Sequence[int] | None = None):
     """The best scikit-learn baseline of a baselines sweep (``params/sweeps/id_baselines.yaml``,
     restricted to one arm), as chapter 6.5 chooses it: each learner's best configuration by its
     worst-joint NRMSE on validation with seed 0, where every configuration ran (over the
     ``resolved`` joints, :func:`with_resolved_worst`; ``None``: every joint), the best of those
     (least squares on ``q, q̇, q̈``, the floor, left out), over its seeds (each tier's best ran on
-    more, :func:`nfarm.study.contest.with_tier_finalists`), and that configuration's run on the
+    more, :func:`nfarm.study.contest.with_tier_finalists`: ``seeds``, by default its), and that configuration's run on the
     test split with ``seed`` (run now if it is not in ``sweeps_dir``). Returns ``(name,
     validation Replicates, test CellResult)``, or ``None`` if the sweep holds no learner but the
     floor."""
@@ -527,8 +527,9 @@ def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: i
     if not seed0:
         return None
     joints = np.ones(len(seed0[0].metrics["nrmse"]), bool) if resolved is None else np.asarray(resolved, bool)
+    more = {} if seeds is None else {"seeds": tuple(seeds)}
     val = with_resolved_worst(by_configuration(with_tier_finalists(sweep, joints, "nrmse", sweeps_dir, workers=workers,
-                                                                   seed0=seed0)), joints, "nrmse")
+                                                                   seed0=seed0, **more)), joints, "nrmse")
     learners = [g for learner, g in best_by(val, "learner", "worst_nrmse", seed=0).items() if learner != "linear"]
     if not learners:
         return None
