@@ -322,12 +322,9 @@ def test_visible_code_uses_no_name_defined_only_in_hidden_cells(notebook):
 #: pitch axes, converted with the tilt in a fixed transform: the closed form's branches polished by
 #: LM), one outside it (the wrist turning across the pitch axes: LM alone).
 ADDED_ARMS = {"rounded": "0 1 7.346410206832132e-06", "skew": "1 0 0"}
-#: The chapters an added arm's edition runs here: for the arm outside the class every robot and study
-#: chapter but the IK solvers' comparison (04, run on three shipped arms above) and the comparison of
-#: arms (08); for the arm near the class the chapters its conversion and its region reach (its
-#: dynamics, learning and testing take the shipped planar arms' path, run above; the fixed transforms'
-#: dynamics are checked against Pinocchio's own parse of such a URDF in test_urdf_hardening.py).
-ADDED_CHAPTERS = {"rounded": ("01", "02", "05"), "skew": ("01", "02", "03", "05", "06", "07")}
+#: The chapters an added arm's edition runs here: every robot and study chapter but the IK
+#: solvers' comparison (04, run on three shipped arms above) and the comparison of arms (08).
+ADDED_CHAPTERS = ("01", "02", "03", "05", "06", "07")
 
 
 @pytest.fixture(scope="module")
@@ -353,7 +350,7 @@ def added_arms(tmp_path_factory):
 @pytest.mark.notebook
 @pytest.mark.parametrize("arm, notebook", [
     pytest.param(arm, nb, marks=pytest.mark.xdist_group(f"added-{arm}"), id=f"{nb.stem}-{arm}")
-    for arm in ADDED_ARMS for nb in NOTEBOOK_FILES if nb.name[:2] in ADDED_CHAPTERS[arm]])
+    for arm in ADDED_ARMS for nb in NOTEBOOK_FILES if nb.name[:2] in ADDED_CHAPTERS])
 def test_an_added_arms_edition_runs_in_smoke_mode(arm, notebook, added_arms):
     """A new arm, from its URDF through `add-arm`, gets a whole edition: the robot chapters on its
     robot file, the study chapters in order on its study file (05's data, 06's models, 07's
