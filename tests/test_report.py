@@ -104,8 +104,11 @@ def test_default_run_publishes_atomically_with_index_manifest_and_offline_html(p
     assert str(ROOT) not in executed, "no absolute paths of the checkout"
 
     first = (figures / "MANIFEST.sha256").read_bytes()
+    record = (build / "stamps" / "clean_build.json").read_text()
+    assert re.search(r"<dt>clean build</dt><dd><code>\d+ min \d+ s for every chapter", index), "the clean build timed"
     assert build_report(**dirs) == 0
     assert (figures / "MANIFEST.sha256").read_bytes() == first, "figures are byte-reproducible"
+    assert (build / "stamps" / "clean_build.json").read_text() == record, "a run that reuses its work is not a clean build"
 
 
 @pytest.mark.notebook
@@ -121,6 +124,8 @@ def test_smoke_and_custom_runs_never_touch_the_published_figures(project):
     assert verify_manifest(build / "smoke" / "figures") == []
     assert "smoke run" in (build / "smoke" / "report" / "index.html").read_text()
     assert (build / "custom" / "figures" / "01_line.png").is_file()
+    assert not (build / "stamps" / "clean_build.json").exists(), "one chapter, a smoke or a custom run: not a clean build"
+    assert "not made in this build directory" in (build / "report" / "index.html").read_text()
 
 
 @pytest.mark.notebook

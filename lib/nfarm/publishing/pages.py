@@ -24,7 +24,7 @@ from ..presentation.numbering import anchor
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ANSWERS_KIND", "ReportPages", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ANSWERS_KIND", "ReportPages", "machine", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -591,7 +591,7 @@ def _copy_published(figures_dir: Path, shown: Path) -> bool:
     return True
 
 
-def _cpu() -> str:
+def machine() -> str:
     """The machine's CPU model and the cores this process may use."""
     model = ""
     try:
@@ -607,14 +607,23 @@ def _cpu() -> str:
     return f"{model or platform.processor() or platform.machine() or 'unknown CPU'}, {cores} core{'s' if cores != 1 else ''}"
 
 
-def _reproduce_html(commit: str) -> str:
-    """The index's "reproduce" box: the commit, the command, the lock's SHA-256 and the machine."""
+def _reproduce_html(commit: str, clean_build: Mapping | None = None) -> str:
+    """The index's "reproduce" box: the commit, the command, the lock's SHA-256, the machine and
+    the time of the last clean build in this build directory (``clean_build``, as
+    :func:`nfarm.publishing.report.build_report` records it), if one was made here."""
     import hashlib
 
     lock = ROOT / "environment.lock"
     lock_hash = hashlib.sha256(lock.read_bytes()).hexdigest() if lock.is_file() else "no environment.lock"
     rows = {"commit": commit, "command": "make setup && make report",
-            "environment.lock SHA-256": lock_hash, "machine": _cpu()}
+            "environment.lock SHA-256": lock_hash, "machine": machine()}
+    if clean_build:
+        minutes, seconds = divmod(round(float(clean_build["seconds"])), 60)
+        rows["clean build"] = (f"{minutes} min {seconds} s for every chapter, every data set, model and sweep cell "
+                               f"made (set-up excluded), on {clean_build['machine']}, commit {clean_build['commit']}, "
+                               f"{clean_build['finished']}")
+    else:
+        rows["clean build"] = "not made in this build directory (README, make report: the times measured)"
     return ("<div class='reproduce'><b>Reproduce</b><dl>"
             + "".join(f"<dt>{html.escape(k)}</dt><dd><code>{html.escape(v)}</code></dd>" for k, v in rows.items())
             + "</dl><p>Every chapter reads its inputs from this commit; <code>make report</code> reruns them "
@@ -625,7 +634,7 @@ def _reproduce_html(commit: str) -> str:
 def _write_index(report_dir: Path, figures_dir: Path,
                  pages: dict[str, list[tuple[str, str, str]]], arms: list[Edition],
                  compared: list[tuple[str, str, str]], *, parameters: dict, smoke: bool,
-                 recordings_dir: Path | None = None) -> None:
+                 recordings_dir: Path | None = None, clean_build: Mapping | None = None) -> None:
     """``pages``: per edition name, (prefix, title, page path) of its chapters in order;
     ``compared``: the same for the chapters comparing the editions. Each edition's section
     links the rerun recordings its chapters wrote (:data:`RECORDINGS`, an edition's in its own
@@ -656,7 +665,7 @@ def _write_index(report_dir: Path, figures_dir: Path,
         parts.append(f"<p><a href='{PAPER_NAME}'>The whole study as one PDF</a> (every chapter of both "
                      "editions, without code, with a references list)</p>")
     parts += _abstract_html(figures_dir, arms)
-    parts.append(_reproduce_html(commit + dirty))
+    parts.append(_reproduce_html(commit + dirty, clean_build))
     has_manifest = _copy_published(figures_dir, shown)
     if has_manifest:
         facts["figures"] = (shown_path(figures_dir) + ", copied into this folder's figures/ "
@@ -739,6 +748,8 @@ class ReportPages:
         parameters: the run's parameters other than the defaults (the index names them).
         smoke: a smoke run (the index says so).
         recordings_dir: the rerun recordings the index links, or ``None``.
+        clean_build: the last clean build in this build directory (its seconds, machine, commit
+            and when it finished), or ``None``.
     """
 
     chapters: tuple[Path, ...]
@@ -751,6 +762,7 @@ class ReportPages:
     parameters: Mapping[str, object]
     smoke: bool
     recordings_dir: Path | None = None
+    clean_build: Mapping | None = None
 
 
 def write_pages(report: ReportPages) -> None:
@@ -832,4 +844,4 @@ def write_pages(report: ReportPages) -> None:
                         letter=edition_letter(arm) if prefix in per_arm else "", refs=refs)
     _write_index(report_dir, report.figures_dir, {a.name: pages.get(a.name, []) for a in arms}, list(arms),
                  compared, parameters=dict(report.parameters), smoke=report.smoke,
-                 recordings_dir=report.recordings_dir)
+                 recordings_dir=report.recordings_dir, clean_build=report.clean_build)

@@ -51,7 +51,7 @@ from ..infra.provenance import digest_files as _digest_files
 from ..presentation.tables import DOCUMENTS
 from .editions import PRIMARY_STUDY, RECORDINGS, Edition, editions
 from .manifest import chapter_files, publish_chapter, publishing_lock, recover_figures
-from .pages import COURSE_TAGS, ReportPages, install_mathjax, write_pages
+from .pages import COURSE_TAGS, ReportPages, _git, install_mathjax, machine, write_pages
 from .paper import write_paper
 
 __all__ = ["Edition", "editions", "build_report", "ReportRun", "ReportUsageError", "ReportInterrupted",
@@ -243,6 +243,10 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         raise ReportUsageError(f"--arm: no edition {arm!r}; the editions are {', '.join(a.name for a in arms)} "
                                f"(params/studies/*.yaml)")
     declared = {nb.name: declared_parameters(nb) for nb in everything}
+    # A clean build: the published run of every chapter of every edition with nothing made before it
+    clean = variant is None and only is None and arm is None and not force and \
+        not any((build_dir / made).exists() for made in ("datasets", "models", "sweeps", "stamps"))
+    started = time.monotonic()
 
     def runs(nb: Path) -> list[tuple[Edition, dict]]:
         names = declared[nb.name]
@@ -309,11 +313,15 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         else:
             in_order([j for j in jobs if j[0].name not in comparing])
         in_order([j for j in jobs if j[0].name in comparing])
+        record = build_dir / "stamps" / CLEAN_BUILD
+        if clean:
+            _record_clean_build(record, time.monotonic() - started)
         pages = ReportPages(
             chapters=tuple(everything), runs={nb.name: tuple(arm for arm, _ in runs(nb)) for nb in everything},
             comparing=frozenset(comparing), arms=tuple(arms), executed_dir=base / "notebooks",
             report_dir=report_dir, figures_dir=figures_dir, parameters=extra, smoke=smoke,
-            recordings_dir=None if smoke or extra else build_dir / "recordings")
+            recordings_dir=None if smoke or extra else build_dir / "recordings",
+            clean_build=None if variant else _read_clean_build(record))
         say("the PDF of the whole study …")
         write_paper(pages)                        # before the index, which links it
         write_pages(pages)
@@ -323,6 +331,34 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     except OSError as exc:                        # a read-only or full build directory, …
         raise ReportError(_cannot_write(exc)) from None
     return ReportRun(report_dir / "index.html", figures_dir)
+
+
+#: Where a clean build records its time (under ``build/stamps/``): the index's "reproduce" box reads it.
+CLEAN_BUILD = "clean_build.json"
+
+
+def _record_clean_build(path: Path, seconds: float) -> None:
+    """Record a clean build's time (its chapters, from nothing made), the machine and the commit."""
+    import datetime
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps({
+            "seconds": round(seconds, 1), "machine": machine(),
+            "commit": (_git("rev-parse", "--short=12", "HEAD") or "unknown") + (" (with uncommitted changes)" if _git(
+                "status", "--porcelain") else ""),
+            "finished": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}, indent=1),
+            encoding="utf-8")
+
+
+def _read_clean_build(path: Path) -> dict | None:
+    """The clean build recorded at ``path``, or ``None`` (none, or a file this code did not write)."""
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+        float(record["seconds"]), str(record["machine"]), str(record["commit"]), str(record["finished"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return record
 
 
 def _cpus() -> int:
