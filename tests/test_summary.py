@@ -108,7 +108,7 @@ def test_the_abstract_reads_every_number_from_the_summary_table(tmp_path):
     chosen_median = next(r for r in table if r["method"] == "ANFIS, chosen" and r["metric"] == "position median")
     three = lambda text: f"{float(text):.3g}"          # noqa: E731 — the abstract writes three digits, as the chapters
     assert (f"{three(chosen_median['value'])} mm ({three(chosen_median['ci_low'])}–"
-            f"{three(chosen_median['ci_high'])})") in ik_line
+            f"{three(chosen_median['ci_high'])}, test poses only)") in ik_line     # one model: its interval's kind said
     assert "is better on orientation median" in ik_line and "(paired intervals)" in ik_line
     assert "The ANFIS is better on worst joint RMSE, position median" in ik_line
     assert "ridge" in id_line and "better than the ANFIS" in id_line
@@ -479,3 +479,4 @@ def test_the_abstract_reads_the_rows_pooled_over_the_seeds_where_chapter_7_publi
     assert abstract_answers(tmp_path, arms) == [line] and line != seed_0
     p95 = next(r for r in pooled if r.method == "ANFIS, chosen" and r.metric == "position p95")
     assert f"{p95.value:.3g} mm" in line and f"{p95.value:.3g} mm" not in seed_0
+    assert "test poses only" in seed_0 and "test poses only" not in line, "each interval's kind said beside it"

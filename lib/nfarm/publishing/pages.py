@@ -476,7 +476,7 @@ ABSTRACT_LIMITS = (
 #: What the abstract's intervals and comparisons are (:func:`abstract_answers`), as the index and the PDF say it.
 ANSWERS_KIND = ("on held-out data; a method chapter 6 trained over several seeds pooled over them, with a two-level 95 % "
                 "bootstrap interval over the seeds and the test poses or trajectories; a method trained once, or exact, "
-                "with its interval over the test units; every comparison on the paired interval of the two methods' "
+                "with its interval over the test units alone, marked so; every comparison on the paired interval of the two methods' "
                 "difference, seed by seed where both have seeds, on the same poses or trajectories")
 
 

@@ -571,9 +571,14 @@ def _three(text: str) -> str:
 
 
 def _with_interval(row: Mapping[str, str]) -> str:
+    """``value unit (low–high)``; an interval over the test units alone (not pooled over seeds:
+    :func:`pooled_rows`) says so."""
     value, low, high = (_three(row[k]) for k in ("value", "ci_low", "ci_high"))
     unit = {"deg": "°", "%": " %", "mm": " mm", "N·m": " N·m"}.get(row["unit"], f" {row['unit']}")
-    return f"{value}{unit}" if low == high == value or not (low or high) else f"{value}{unit} ({low}–{high})"
+    spread = row.get("spread", "")
+    kind = "" if not spread or spread.startswith("two-level") else \
+        f", test {'poses' if 'poses' in spread else 'trajectories'} only"
+    return f"{value}{unit}" if low == high == value or not (low or high) else f"{value}{unit} ({low}–{high}{kind})"
 
 
 @dataclass(frozen=True)
@@ -602,7 +607,7 @@ def _row_text(row) -> Mapping[str, str]:
     if isinstance(row, Row):
         return {"task": row.task, "method": row.method, "role": row.role, "metric": row.metric,
                 "unit": row.unit, "value": repr(row.value), "ci_low": repr(row.low) if row.n else "",
-                "ci_high": repr(row.high) if row.n else "", "n": str(row.n)}
+                "ci_high": repr(row.high) if row.n else "", "n": str(row.n), "spread": row.spread}
     return row
 
 
