@@ -480,3 +480,16 @@ def test_the_abstract_reads_the_rows_pooled_over_the_seeds_where_chapter_7_publi
     p95 = next(r for r in pooled if r.method == "ANFIS, chosen" and r.metric == "position p95")
     assert f"{p95.value:.3g} mm" in line and f"{p95.value:.3g} mm" not in seed_0
     assert "test poses only" in seed_0 and "test poses only" not in line, "each interval's kind said beside it"
+
+
+def test_the_abstract_names_methods_in_words_a_reader_knows(tmp_path):
+    """Internal configurations stay in the tables: the abstract says "ANFIS in the arm's plane", not
+    "ANFIS, chosen (arm_plane)"; "RBF interpolation", not "RBF interpolation (contest)"."""
+    anfis, rival = ik_errors(1), {k: 2 * v for k, v in ik_errors(2).items()}
+    rows = ik_rows("ANFIS, chosen (arm_plane)", ROLE_CHOSEN, anfis, draws=300) + \
+        ik_rows("RBF interpolation (contest)", ROLE_BEST_BASELINE, rival, draws=300)
+    paired = paired_for(tmp_path, rows, ik_errors={"ANFIS, chosen (arm_plane)": anfis, "RBF interpolation (contest)": rival})
+    long_table(rows).save(tmp_path, "07_summary")
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"), paired)
+    assert "the chosen model, ANFIS in the arm's plane, misses" in line and "RBF interpolation, is better" in line
+    assert "arm_plane" not in line and "(contest)" not in line

@@ -722,11 +722,6 @@ def _times_of(ours: Mapping[str, str], theirs: Mapping[str, str]) -> str:
 _VERDICT = {-1: "better than", 1: "worse than", 0: "no different from"}
 
 
-def _unchosen(method: str) -> str:
-    """A method's name after "the chosen model,": without its own ", chosen" ("ANFIS, chosen
-    (arm_plane)" → "ANFIS (arm_plane)")."""
-    return method.replace(", chosen", "")
-
 def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]],
                    paired: Sequence[Mapping[str, str]]) -> list[str]:
     """Plain-text sentences (one per task) of one arm's answers, every number read from its
@@ -751,7 +746,7 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
     chosen = [r for r in rows if r["task"] == task and r["role"] == ROLE_CHOSEN]
     if chosen:
         get = {r["metric"]: r for r in chosen}
-        text = (f"{arm}, inverse kinematics: the chosen model, {_unchosen(chosen[0]['method'])}, misses by "
+        text = (f"{arm}, inverse kinematics: the chosen model, {reader_label(chosen[0]['method'])}, misses by "
                 f"{_with_interval(get['worst joint RMSE'])} on its worst joint; the tool lands "
                 f"{_with_interval(get['position median'])} from the target at the median, "
                 f"{_with_interval(get['position p95'])} at the 95th percentile and "
@@ -770,9 +765,9 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
             wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
                     for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) < 0]
             losses = [r["metric"] for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) > 0]
-            text += (f" The best baseline on validation, {base[0]['method']}, is better on "
+            text += (f" The best baseline on validation, {reader_label(base[0]['method'])}, is better on "
                      + "; ".join(wins) + " (paired intervals)." if wins else
-                     f" The best baseline on validation, {base[0]['method']}, is better on no metric (paired "
+                     f" The best baseline on validation, {reader_label(base[0]['method'])}, is better on no metric (paired "
                      f"intervals).")
             if losses:
                 text += f" The ANFIS is better on {', '.join(losses)}."
@@ -786,7 +781,7 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
     if free:
         below = [r["metric"].split()[0] for r in rows if r["task"] == task and r["role"] == ROLE_CHOSEN
                  and r["metric"].endswith("(below noise)")]
-        text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {_unchosen(free['method'])}, "
+        text = (f"{arm}, inverse dynamics without the arm's parameters: the chosen model, {reader_label(free['method'])}, "
                 f"misses by {_with_interval(free)} of the worst joint's torque spread (NRMSE"
                 + (f"; {' and '.join(below)}, whose torque is below the sensor noise, left out" if below else "")
                 + f"), largest error {_with_interval(find(task, ROLE_CHOSEN, 'largest error'))}.")
@@ -794,7 +789,7 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
         if base:
             verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
                        0: "no different from the ANFIS (paired interval)"}[_compare(base, free)]
-            text += f" The best baseline on validation, {base['method']}: {_with_interval(base)}, {verdict}."
+            text += f" The best baseline on validation, {reader_label(base['method'])}: {_with_interval(base)}, {verdict}."
         recipe = find(task, ROLE_DESIGN, worst)
         if recipe:
             text += f" The dissertation's design (assumed, each joint's own state): {_with_interval(recipe)}."
@@ -819,10 +814,10 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
                      f"{_with_interval(built)}, {_verdict(built, residual)} the ANFIS residual")
         alone_learned = find(task, ROLE_LEARNED_ALONE, "worst joint RMSE")
         if alone_learned and alone:
-            text += (f"; the best ANFIS without the rigid-body model ({alone_learned['method']}) leaves "
+            text += (f"; the best ANFIS without the rigid-body model ({reader_label(alone_learned['method'])}) leaves "
                      f"{_with_interval(alone_learned)}, {_verdict(alone_learned, alone)} Newton–Euler alone")
         if learner:
-            text += (f"; the best other learner as a residual, {learner['method']}: {_with_interval(learner)}, "
+            text += (f"; the best other learner as a residual, {reader_label(learner['method'])}: {_with_interval(learner)}, "
                      f"{_verdict(learner, residual)} the ANFIS residual")
             if _compare(learner, residual) < 0:
                 text += f" (the ANFIS residual leaves {_times_of(residual, learner)} its error)"
@@ -832,11 +827,11 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
                              ("worst NRMSE, every joint", "over every joint, the noise-level ones included")):
             judged = [r for r in rows if r["task"] == task and r["metric"] == metric]
             if judged:
-                met = [r["method"] for r in judged if r.get("n") != "0" and _number(r["ci_high"]) <= 5.0]
+                met = [reader_label(r["method"]) for r in judged if r.get("n") != "0" and _number(r["ci_high"]) <= 5.0]
                 best = min(judged, key=lambda r: _number(r["value"]))
                 text += (f" The study's ≤ 5 % target on the measured spread, {over}: "
                          + (f"met by {', '.join(met)}." if met else
-                            f"met by none (best {best['method']}, {_with_interval(best)})."))
+                            f"met by none (best {reader_label(best['method'])}, {_with_interval(best)})."))
         lines.append(text)
     return lines
 
