@@ -412,7 +412,6 @@ def test_pooled_rows_pool_a_method_over_its_seeds_and_keep_a_method_trained_once
 
 def test_pooled_rows_pool_the_id_metrics_over_the_resolved_joints():
     from nfarm.study.summary import pooled_rows
-    predicted, tau, label = [], None, None
     rng = np.random.default_rng(2)
     tau = rng.normal(size=(600, 3)) * [1.0, 2.0, 1e-4]
     label = np.repeat(np.arange(12), 50)
@@ -427,10 +426,15 @@ def test_pooled_rows_pool_the_id_metrics_over_the_resolved_joints():
     direct = 100 * nrmse_from_sums(total)
     np.testing.assert_allclose([pooled[f"τ{j + 1} NRMSE"].value for j in range(2)], direct[:2], rtol=1e-12)
     np.testing.assert_allclose(pooled[WORST_ID].value, direct[:2].max(), rtol=1e-12)
-    assert "τ3 NRMSE (below noise)" in pooled and pooled["largest error"].n == 0
+    assert pooled["τ3 NRMSE (below noise)"].spread.startswith("two-level") and pooled["largest error"].n == 0
+    np.testing.assert_allclose(pooled["τ3 NRMSE (below noise)"].value, direct[2], rtol=1e-12)
 
 
-def test_pooled_pairs_pair_the_seeds_stand_an_exact_method_beside_each_and_keep_a_once_trained_one():
+def test_pooled_pairs_pair_the_seeds_and_stand_a_method_with_one_model_beside_each():
+    """Seed s of each method on the same draw; a method with one model (Newton–Euler alone, or one trained once)
+    as it is beside each seed's model; a pair of two one-model methods as it was. The difference is the metric
+    of one side's pooled rows less the other's."""
+    from nfarm.study.statistics import nrmse_from_sums
     from nfarm.study.summary import Paired, pooled_pairs
     rng = np.random.default_rng(3)
     tau = rng.normal(size=(400, 2))
@@ -442,13 +446,21 @@ def test_pooled_pairs_pair_the_seeds_stand_an_exact_method_beside_each_and_keep_
               (task, "Newton–Euler alone"): model(0, 1.0)[None],
               (task, "trained once"): model(0, 0.2)[None]}
     pairs = [Paired(task, a, b, metric, "N·m", 9.0, 8.0, 10.0, 300, 0.95, "one seed")
-             for a, b in (("residual", "boosting"), ("residual", "Newton–Euler alone"), ("residual", "trained once"))]
-    out = pooled_pairs(pairs, values, exact=[(task, "Newton–Euler alone")], draws=300)
+             for a, b in (("residual", "boosting"), ("residual", "Newton–Euler alone"), ("trained once", "Newton–Euler alone"))]
+    out = pooled_pairs(pairs, values, draws=300)
     assert out[0].high < 0 and "5 seeds × 8 test trajectories" in out[0].spread          # better on every draw
-    assert out[1].high < 0 and "5 seeds" in out[1].spread                                # the exact one beside each seed
-    assert out[2] == pairs[2]                                                            # trained once: as it was
+    worst = lambda v: nrmse_from_sums(v.sum(axis=(0, 1)), normalised=False).max()        # noqa: E731
+    np.testing.assert_allclose(out[0].difference, worst(values[task, "residual"]) - worst(values[task, "boosting"]),
+                               rtol=1e-12)
+    assert out[1].high < 0 and "5 seeds" in out[1].spread                                # one model beside each seed
+    np.testing.assert_allclose(out[1].difference, worst(values[task, "residual"]) - worst(values[task, "Newton–Euler alone"]),
+                               rtol=1e-12)
+    assert out[2] == pairs[2]                                                            # two one-model methods: as it was
     with pytest.raises(ValueError, match="not a metric pooled"):
         pooled_pairs([Paired(task, "residual", "boosting", "mean error", "N·m", 0, 0, 0, 300, 0.95, "")], values,
+                     draws=300)
+    with pytest.raises(ValueError, match="give resolved"):
+        pooled_pairs([Paired(task, "residual", "boosting", "worst NRMSE", "%", 0, 0, 0, 300, 0.95, "")], values,
                      draws=300)
 
 

@@ -564,7 +564,9 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     answers = abstract_answers(figures_dir, arms)
     if answers:
         parts.append(f"<p><b>Answers</b> ({html.escape(ANSWERS_KIND)}; from each arm's "
-                     "<code>tables/07_summary_pooled.csv</code> and <code>tables/07_paired_pooled.csv</code>):</p><ul>")
+                     "<code>tables/07_summary_pooled.csv</code> and <code>tables/07_paired_pooled.csv</code>, or "
+                     "<code>07_summary.csv</code> and <code>07_paired.csv</code> where an older chapter 7 wrote no "
+                     "pooled tables):</p><ul>")
         parts += [f"<li>{html.escape(line)}</li>" for line in answers]
         parts.append("</ul>")
     else:

@@ -244,9 +244,10 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                                f"(params/studies/*.yaml)")
     declared = {nb.name: declared_parameters(nb) for nb in everything}
     # A clean build: the published run of every chapter of every edition with nothing made before it
-    clean = variant is None and only is None and arm is None and not force and \
+    # (its sweep cells on this machine: a cluster's workers would make the time another machine's)
+    clean = variant is None and only is None and arm is None and not force and scheduler is None and \
         not any((build_dir / made).exists() for made in ("datasets", "models", "sweeps", "stamps"))
-    started = time.monotonic()
+    started, commit = time.monotonic(), _commit()
 
     def runs(nb: Path) -> list[tuple[Edition, dict]]:
         names = declared[nb.name]
@@ -315,7 +316,7 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         in_order([j for j in jobs if j[0].name in comparing])
         record = build_dir / "stamps" / CLEAN_BUILD
         if clean:
-            _record_clean_build(record, time.monotonic() - started)
+            _record_clean_build(record, time.monotonic() - started, commit)
         pages = ReportPages(
             chapters=tuple(everything), runs={nb.name: tuple(arm for arm, _ in runs(nb)) for nb in everything},
             comparing=frozenset(comparing), arms=tuple(arms), executed_dir=base / "notebooks",
@@ -337,16 +338,20 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
 CLEAN_BUILD = "clean_build.json"
 
 
-def _record_clean_build(path: Path, seconds: float) -> None:
+def _commit() -> str:
+    """The checkout's commit, and whether it had uncommitted changes (when a build starts)."""
+    return (_git("rev-parse", "--short=12", "HEAD") or "unknown") + \
+        (" (with uncommitted changes)" if _git("status", "--porcelain") else "")
+
+
+def _record_clean_build(path: Path, seconds: float, commit: str) -> None:
     """Record a clean build's time (its chapters, from nothing made), the machine and the commit."""
     import datetime
 
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps({
-            "seconds": round(seconds, 1), "machine": machine(),
-            "commit": (_git("rev-parse", "--short=12", "HEAD") or "unknown") + (" (with uncommitted changes)" if _git(
-                "status", "--porcelain") else ""),
+            "seconds": round(seconds, 1), "machine": machine(), "commit": commit,
             "finished": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}, indent=1),
             encoding="utf-8")
 

@@ -265,6 +265,8 @@ def _pooled_metric(task: str, metric: str, resolved) -> tuple[slice, Callable[[n
                 100.0 if normalised else 1.0)
     if metric in _WORST:
         normalised, over_resolved = _WORST[metric]
+        if over_resolved and resolved is None:
+            raise ValueError(f"{metric!r} ({task}) is over the joints a sensor resolves: give resolved for {task!r}")
         return slice(None), _pooled_worst(resolved if over_resolved else None, normalised), 100.0 if normalised else 1.0
     raise ValueError(f"{metric!r} ({task}) is not a metric pooled over seeds")
 
@@ -311,25 +313,37 @@ def pooled_rows(rows: Sequence[Row], values: Mapping[tuple[str, str], np.ndarray
 
 
 def pooled_pairs(pairs: Sequence[Paired], values: Mapping[tuple[str, str], np.ndarray], *,
-                 exact: Sequence[tuple[str, str]] = (), resolved: Mapping[str, np.ndarray] | None = None,
-                 draws: int = 2000, level: float = 0.95, seed: int = 0) -> list[Paired]:
-    """``pairs`` (:func:`paired_rows`, the chapter's seed's) each judged over the seeds where both
-    methods have them (``values`` as :func:`pooled_rows` takes them): model ``s`` of each trained on
-    the same draw of data, on the same test units, the difference with its paired two-level
-    interval. A method in ``exact`` (``(task, method)``: no training, the same on every draw, e.g.
-    Newton–Euler alone) stands beside each seed's model as it is. A pair with a method trained once
-    is kept as it is (paired over the test units)."""
+                 resolved: Mapping[str, np.ndarray] | None = None, draws: int = 2000, level: float = 0.95,
+                 seed: int = 0) -> list[Paired]:
+    """``pairs`` (:func:`paired_rows`, the chapter's seed's) each judged over the seeds (``values``
+    as :func:`pooled_rows` takes them) where at least one of the two methods has several: model
+    ``s`` of each trained on the same draw of data, on the same test units, the difference with its
+    paired two-level interval. A method with one model (trained once, or needing no training, as
+    Newton–Euler alone) stands as it is beside each of the other's seeds' models: the comparison
+    of the two values :func:`pooled_rows` gives. A pair neither of whose methods has several seeds,
+    or one without ``values``, is kept as it is (paired over the test units).
+
+    Example:
+        >>> from nfarm.study.statistics import trajectory_sums
+        >>> rng = np.random.default_rng(0)
+        >>> tau, label = rng.normal(size=(100, 2)), np.repeat(np.arange(5), 20)
+        >>> sums = lambda scale: trajectory_sums(tau + rng.normal(0, scale, tau.shape), tau, label)  # noqa: E731
+        >>> values = {("ID, measured arm", "residual"): np.stack([sums(0.1) for _ in range(3)]),
+        ...           ("ID, measured arm", "Newton–Euler alone"): sums(1.0)[None]}
+        >>> p = Paired("ID, measured arm", "residual", "Newton–Euler alone", "worst joint RMSE", "N·m", 0, 0, 0, 0, 0.95, "")
+        >>> (gap,) = pooled_pairs([p], values, draws=200)
+        >>> bool(gap.high < 0), gap.spread
+        (True, 'paired two-level bootstrap over 3 seeds × 5 test trajectories')
+    """
     resolved = resolved or {}
     out = []
     for p in pairs:
         a, b = (np.asarray(values[p.task, m], float) if (p.task, m) in values else None for m in (p.method, p.against))
-        seeds = [0 if v is None else len(v) for v in (a, b)]
-        fixed = [(p.task, m) in exact for m in (p.method, p.against)]
-        if a is None or b is None or max(seeds) < 2 or any(s < 2 and not f for s, f in zip(seeds, fixed)):
+        if a is None or b is None or max(len(a), len(b)) < 2:
             out.append(p)
             continue
-        common = min(s for s, f in zip(seeds, fixed) if not f)
-        a, b = (np.repeat(v[:1], common, axis=0) if f else v[:common] for v, f in zip((a, b), fixed))
+        common = min(n for n in (len(a), len(b)) if n > 1)
+        a, b = (np.repeat(v, common, axis=0) if len(v) == 1 else v[:common] for v in (a, b))
         if a.shape != b.shape:
             raise ValueError(f"{p.method!r} and {p.against!r} must be judged on the same test units, got "
                              f"{a.shape[1:]} and {b.shape[1:]}")
