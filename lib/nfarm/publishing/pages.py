@@ -285,21 +285,18 @@ def resolve_citations(body: str, refs: Mapping[str, tuple[str, str]], where: str
     """
     from ..presentation.numbering import CITATION_HTML, EQ_CITATION_HTML
 
-    def link(match: re.Match) -> str:
-        name = html.unescape(match.group("name"))
-        if name not in refs:
-            raise ReportError(f"{where}: cites {name}, which no chapter of this edition shows as a numbered "
-                              f"figure or table")
-        text, href = refs[name]
-        return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
-
-    def equation(match: re.Match) -> str:
-        name = html.unescape(match.group("name"))
-        if f"eq:{name}" not in refs:
-            raise ReportError(f"{where}: cites equation {name}, which no chapter of this edition numbers")
-        text, href = refs[f"eq:{name}"]
-        return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
-    return EQ_CITATION_HTML.sub(equation, CITATION_HTML.sub(link, body))
+    def linker(prefix: str, missing: str):
+        """A citation's link: ``refs[prefix + name]``; one line naming the citation where it has none."""
+        def link(match: re.Match) -> str:
+            name = html.unescape(match.group("name"))
+            if prefix + name not in refs:
+                raise ReportError(f"{where}: cites {missing.format(name=name)}")
+            text, href = refs[prefix + name]
+            return f'<a href="{html.escape(href, quote=True)}">{html.escape(text)}</a>'
+        return link
+    body = CITATION_HTML.sub(linker("", "{name}, which no chapter of this edition shows as a numbered figure or table"),
+                             body)
+    return EQ_CITATION_HTML.sub(linker("eq:", "equation {name}, which no chapter of this edition numbers"), body)
 
 
 _SECTION = re.compile(r'<h([23]) id="([^"]+)">(.*?)<a class="anchor-link"', re.S)

@@ -149,19 +149,16 @@ def _cite(text: str, labels: dict[str, str] | None, where: str) -> str:
     (:func:`_prose`; an equation's key is ``eq:<name>``)."""
     from ..presentation.numbering import CITATION, EQ_CITATION
 
-    def reference(match: re.Match) -> str:
-        name = match.group("name")
-        if labels is None or name not in labels:
-            raise ReportError(f"{where}: cites {name}, which no chapter of this edition shows as a numbered "
-                              f"figure or table")
-        return f"`@{labels[name]}`{{=typst}}"
-
-    def equation(match: re.Match) -> str:
-        key = f"eq:{match.group('name')}"
-        if labels is None or key not in labels:
-            raise ReportError(f"{where}: cites equation {match.group('name')}, which no chapter of this edition numbers")
-        return f"`@{labels[key]}`{{=typst}}"
-    return EQ_CITATION.sub(equation, CITATION.sub(reference, text))
+    def referrer(prefix: str, missing: str):
+        """A citation's Typst reference to ``labels[prefix + name]``; one line naming it where there is none."""
+        def reference(match: re.Match) -> str:
+            name = match.group("name")
+            if labels is None or prefix + name not in labels:
+                raise ReportError(f"{where}: cites {missing.format(name=name)}")
+            return f"`@{labels[prefix + name]}`{{=typst}}"
+        return reference
+    text = CITATION.sub(referrer("", "{name}, which no chapter of this edition shows as a numbered figure or table"), text)
+    return EQ_CITATION.sub(referrer("eq:", "equation {name}, which no chapter of this edition numbers"), text)
 
 
 def _label(edition: str, kind: str, name: str) -> str:

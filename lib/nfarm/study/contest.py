@@ -55,7 +55,7 @@ from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Sweep
 
-__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
+__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "promoted_params", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -67,6 +67,9 @@ RUNG_FRACTION = 0.25
 PROMOTED = 1
 #: The draws each chosen configuration is trained on besides seed 0.
 SPREAD_SEEDS = (1, 2, 3, 4)
+#: The other draws of a smoke run (chapters 6-8's ``spread_seeds`` in smoke mode): two draws in all,
+#: a spread to exercise the code, not a measure of it.
+SMOKE_SPREAD_SEEDS = (1,)
 #: A contestant stays in contention within this factor of the best seed-0 95th percentile.
 KEEP_WITHIN = 2.0
 #: Each contestant in words a reader knows.
