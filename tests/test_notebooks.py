@@ -26,7 +26,7 @@ REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
 
 
 #: Tables of every row saved for machines (nfarm.study.summary.long_table); their pages show reading copies.
-LONG_TABLES = {"07_summary", "07_summary_pooled", "08_learned"}
+LONG_TABLES = {"07_summary", "08_learned"}
 
 #: What a page's prose (its markdown, code and tables left out) must not hold, each a kind and a pattern.
 PROSE_DEFECTS = (("a zero-padded chapter number", r"\b(?:[Cc]hapters?|[Ss]ections?|[Ff]igures?|[Tt]ables?)\s+0\d"),
@@ -171,7 +171,7 @@ def test_runs_in_smoke_mode_and_writes_its_figures(notebook, tmp_path, shared):
     if "study_files" in declared:       # the comparison, here of one arm (both: test below)
         study = "params/studies/intelbot5.yaml"
         parameters.update(study_files=[study], data_dirs=[str(shared / "data_dir")],
-                          models_dirs=[str(shared / "models_dir")], sweeps_dirs=[str(shared / "sweeps_dir")])
+                          models_dirs=[str(shared / "models_dir")])
         ensure_models(shared, study, tmp_path)
     elif notebook.name.startswith("07"):
         ensure_models(shared, "params/studies/intelbot5.yaml", tmp_path)
@@ -266,8 +266,7 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     run_chapter(compare, tmp_path / compare.name, {
         "smoke": True, "out_dir": str(tmp_path / "out"), "study_files": list(studies),
         "data_dirs": [str(d / "data_dir") for d in studies.values()],
-        "models_dirs": [str(d / "models_dir") for d in studies.values()],
-        "sweeps_dirs": [str(d / "sweeps_dir") for d in studies.values()]})
+        "models_dirs": [str(d / "models_dir") for d in studies.values()]})
     check_page(compare, tmp_path / compare.name, tmp_path)
     table = (tmp_path / "out" / "tables" / f"{compare.name[:2]}_arms.csv").read_text()
     assert table.splitlines()[0] == "quantity,intelbot5,so101"
@@ -364,8 +363,7 @@ def test_an_added_arms_edition_runs_in_smoke_mode(arm, notebook, added_arms):
     if "study_file" in declared:
         parameters["study_file"] = study
     elif "study_files" in declared:                # chapter 08: the arms present, here the added one
-        parameters |= {"study_files": [study], **{f"{name}s": [str(root / name)]
-                                                  for name in ("data_dir", "models_dir", "sweeps_dir")}}
+        parameters |= {"study_files": [study], **{f"{name}s": [str(root / name)] for name in ("data_dir", "models_dir")}}
     else:
         parameters["robot_file"] = str(root / "params" / "robots" / f"{arm}.yaml")
     for name in ("recordings_dir", "data_dir", "models_dir", "sweeps_dir"):
@@ -373,9 +371,9 @@ def test_an_added_arms_edition_runs_in_smoke_mode(arm, notebook, added_arms):
             parameters[name] = str(root / name)
     if notebook.name[:2] in ("07", "08"):
         ensure_models(root, study, root)
-    if notebook.name.startswith("08") and not (root / "models_dir" / "results" / "tables" / "07_verdict.csv").exists():
+    if notebook.name.startswith("08") and not (root / "models_dir" / "results" / "tables" / "07_summary.csv").exists():
         (chapter_07,) = [n for n in NOTEBOOK_FILES if n.name.startswith("07")]
-        run_chapter(chapter_07, root / "scratch_07.ipynb", {      # chapter 08 reads chapter 07's verdict
+        run_chapter(chapter_07, root / "scratch_07.ipynb", {      # chapter 08 reads chapter 07's verdict and summary
             "smoke": True, "study_file": study, "out_dir": str(root / "scratch_07"),
             **{n: str(root / n) for n in ("data_dir", "models_dir", "sweeps_dir", "recordings_dir")}})
     executed = root / notebook.name

@@ -219,14 +219,13 @@ def test_the_index_lists_the_references_as_the_pdf_does(smoke_report):
 
 def test_the_pdf_s_appendix_holds_every_long_table_each_edition_published(tmp_path):
     arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
-    for where, name in (("", "07_summary"), ("", "07_summary_pooled"), ("", "08_learned"), ("b", "07_summary")):
+    for where, name in (("", "07_summary"), ("", "08_learned"), ("b", "07_summary")):
         (tmp_path / where / "tables").mkdir(parents=True, exist_ok=True)
         (tmp_path / where / "tables" / f"{name}.md").write_text(f"*Every row of {name}*\n\n| x |\n|---|\n| < 1e-6 |\n")
     appendix = paper._appendix(tmp_path, arms)
     assert appendix.startswith("# Appendix: the long tables") and '#chap.update("A")' in appendix
     assert [m for m in re.findall(r"\{#(tbl-appendix-[\w-]+)\}", appendix)] == \
-        ["tbl-appendix-a-07_summary", "tbl-appendix-a-07_summary_pooled", "tbl-appendix-a-08_learned",
-         "tbl-appendix-b-07_summary"]
+        ["tbl-appendix-a-07_summary", "tbl-appendix-a-08_learned", "tbl-appendix-b-07_summary"]
     assert ": Every row of 07\\_summary (b)" in appendix and "| < 1e-6 |" in appendix
     assert paper._appendix(tmp_path / "none", arms) == ""
 

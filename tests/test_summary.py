@@ -11,8 +11,9 @@ import pytest
 
 from nfarm.study.statistics import trajectory_maxima, trajectory_sums
 from nfarm.study.statistics import bootstrap_nrmse
-from nfarm.study.summary import (IK_METRICS, ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_RECIPE, ROLES, WORST_ID, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
-                           Row, long_table, read_long_table, resolved_sums, wide_table, with_resolved_worst)
+from nfarm.study.summary import (IK_METRICS, ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_RECIPE, ROLES, WORST_ID, Row, paired_difference,
+                                 published, rows_from_table, abstract_lines, id_rows, ik_difference, ik_rows, largest_difference,
+                           interval_text, long_table, read_long_table, resolved_sums, wide_table, with_resolved_worst)
 from nfarm.study.sweep import Cell, CellResult, Replicates
 
 
@@ -464,9 +465,10 @@ def test_pooled_pairs_pair_the_seeds_and_stand_a_method_with_one_model_beside_ea
                      draws=300)
 
 
-def test_the_abstract_reads_the_rows_pooled_over_the_seeds_where_chapter_7_published_them(tmp_path):
-    """The index and the PDF state the pooled summary (07_summary_pooled, 07_paired_pooled); an older chapter 7's
-    tables (the chapter's seed only) still give answers."""
+def test_the_abstract_reads_the_rows_pooled_over_the_seeds_and_says_each_interval_s_kind(tmp_path):
+    """The index and the PDF state chapter 7's published summary (07_summary, 07_paired): rows pooled over the
+    seeds are stated as such; an interval over the test units alone (a method trained once, or an older chapter 7's
+    table of the chapter's seed) is marked "test poses only"."""
     from nfarm.publishing import report
     from nfarm.publishing.pages import abstract_answers
     from nfarm.study.summary import (abstract_pairs, ik_seed_values, paired_rows, paired_table, pooled_pairs, pooled_rows,
@@ -483,15 +485,39 @@ def test_the_abstract_reads_the_rows_pooled_over_the_seeds_where_chapter_7_publi
     arms = [report.Edition("arm", "sa.yaml", "ra.yaml", True)]
     (seed_0,) = abstract_answers(tmp_path, arms)
     values = {("inverse kinematics", "ANFIS, chosen"): ik_seed_values(seeds), ("inverse kinematics", "RBF"): ik_seed_values(rival)}
-    pooled = pooled_rows(rows, values, draws=300)
-    long_table(pooled).save(tmp_path, "07_summary_pooled")
-    paired_table(pooled_pairs(paired, values, draws=300)).save(tmp_path, "07_paired_pooled")
-    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary_pooled.csv"),
-                             read_paired(tmp_path / "tables" / "07_paired_pooled.csv"))
+    pooled = published(pooled_rows(rows, values, draws=300))
+    long_table(pooled).save(tmp_path, "07_summary")
+    paired_table(pooled_pairs(paired, values, draws=300)).save(tmp_path, "07_paired")
+    (line,) = abstract_lines("arm", read_long_table(tmp_path / "tables" / "07_summary.csv"),
+                             read_paired(tmp_path / "tables" / "07_paired.csv"))
     assert abstract_answers(tmp_path, arms) == [line] and line != seed_0
     p95 = next(r for r in pooled if r.method == "ANFIS, chosen" and r.metric == "position p95")
-    assert f"{p95.value:.3g} mm" in line and f"{p95.value:.3g} mm" not in seed_0
+    assert f"{interval_text(p95)}".split(" (")[0] + " mm" in line and f"{p95.value:.3g} mm" not in seed_0
     assert "test poses only" in seed_0 and "test poses only" not in line, "each interval's kind said beside it"
+
+
+@pytest.mark.parametrize("value", [1.23451, 0.0009995, 99.95, 14123.4, 2.5e-7])
+def test_a_published_row_reads_back_as_the_chapter_showed_it(tmp_path, value):
+    """One source: a row a chapter shows (rounded once to the long table's precision, `published`) is what a page
+    reading the published table shows (`rows_from_table`) — no double rounding (1.23451: "1.23" from the value,
+    "1.24" from the "1.235" written), a value below its floor still written as such."""
+    row = Row("inverse kinematics", "m", ROLE_CHOSEN, "position p95", "mm", value, 0.9 * value, 1.1 * value, 300, 0.95, "s")
+    floors = {"mm": 1e-6}
+    (shown_row,) = published([row])
+    long_table([shown_row], floors=floors).save(tmp_path, "t")
+    (read,) = rows_from_table(read_long_table(tmp_path / "tables" / "t.csv"))
+    assert interval_text(read, floors) == interval_text(shown_row, floors)
+    if value == 1.23451:
+        assert interval_text(row, floors).startswith("1.23 ") and interval_text(shown_row, floors).startswith("1.24 ")
+
+
+def test_a_paired_difference_is_read_either_way_round_or_refused():
+    rows = [{"task": "t", "method": "a", "against": "b", "metric": "m", "difference": "-0.5", "ci_low": "-0.75",
+             "ci_high": "-0.25"}]
+    assert paired_difference(rows, "t", "a", "b", "m") == (-0.5, -0.75, -0.25)
+    assert paired_difference(rows, "t", "b", "a", "m") == (0.5, 0.25, 0.75)
+    with pytest.raises(KeyError, match="no paired difference of 'a' against 'c'"):
+        paired_difference(rows, "t", "a", "c", "m")
 
 
 def test_the_abstract_names_methods_in_words_a_reader_knows(tmp_path):

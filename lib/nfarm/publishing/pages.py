@@ -478,9 +478,9 @@ ANSWERS_KIND = ("on held-out data; a method chapter 6 trained over several seeds
 
 
 def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
-    """Each arm's answers, read from its published ``07_summary_pooled.csv`` and its comparisons from
-    ``07_paired_pooled.csv`` (pooled over the seeds; ``07_summary.csv`` and ``07_paired.csv`` of an
-    older chapter 07; every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`):
+    """Each arm's answers, read from its published ``07_summary.csv`` and its comparisons from
+    ``07_paired.csv`` (chapter 07's section 7.7: every method pooled over the seeds chapter 06
+    trained it on; every number computed by chapter 07; :func:`nfarm.study.summary.abstract_lines`):
     what the HTML index and the PDF both print. A table an older chapter 07 wrote (or none of
     its paired differences) gives one line saying so, not a failure."""
     from ..study.summary import abstract_lines, read_long_table, read_paired
@@ -488,11 +488,8 @@ def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:
     answers = []
     for edition in arms:
         tables = figures_dir / edition.subdir / "tables"
-        # Pooled over the seeds where chapter 07 published it, else its chapter seed's rows
-        pooled = (tables / "07_summary_pooled.csv").is_file()
-        path = tables / ("07_summary_pooled.csv" if pooled else "07_summary.csv")
+        path, paired = tables / "07_summary.csv", tables / "07_paired.csv"
         if path.is_file():
-            paired = tables / ("07_paired_pooled.csv" if pooled else "07_paired.csv")
             try:
                 answers += abstract_lines(edition.name, read_long_table(path),
                                           read_paired(paired) if paired.is_file() else [])
@@ -561,9 +558,7 @@ def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     answers = abstract_answers(figures_dir, arms)
     if answers:
         parts.append(f"<p><b>Answers</b> ({html.escape(ANSWERS_KIND)}; from each arm's "
-                     "<code>tables/07_summary_pooled.csv</code> and <code>tables/07_paired_pooled.csv</code>, or "
-                     "<code>07_summary.csv</code> and <code>07_paired.csv</code> where an older chapter 7 wrote no "
-                     "pooled tables):</p><ul>")
+                     "<code>tables/07_summary.csv</code> and <code>tables/07_paired.csv</code>):</p><ul>")
         parts += [f"<li>{html.escape(line)}</li>" for line in answers]
         parts.append("</ul>")
     else:

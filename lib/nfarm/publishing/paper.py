@@ -270,7 +270,7 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
 
 #: The long tables, every row of a chapter's results for machines (:func:`nfarm.study.summary.long_table`),
 #: whose reading copies the chapters show: the PDF sets them whole in its appendix.
-LONG_TABLES = ("07_summary", "07_summary_pooled", "08_learned")
+LONG_TABLES = ("07_summary", "08_learned")
 
 
 def _appendix(figures_dir: Path, arms: list[Edition]) -> str:

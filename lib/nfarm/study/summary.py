@@ -40,14 +40,14 @@ from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_
                          resampled_quantile, resolved_joints)
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
-__all__ = ["IK_METRICS", "Row", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
+__all__ = ["IK_METRICS", "Row", "DIGITS", "SUMMARY_FLOORS", "published", "rows_from_table", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
            "verdict_table", "read_verdicts", "conclusion", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE",
            "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "Paired", "abstract_pairs", "paired_rows", "paired_table",
-           "read_paired"]
+           "read_paired", "paired_judge", "paired_difference"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
 WORST_ID = "worst resolved joint NRMSE"
@@ -466,8 +466,61 @@ def largest_difference(maxima_a: np.ndarray, maxima_b: np.ndarray, *, draws: int
                           draws=draws, level=level, seed=seed)
 
 
+#: The long tables' precision (:func:`long_table`): what every page that quotes a row reads.
+DIGITS = ".4g"
+
+#: Each unit's level of rounding in the summary tables (chapters 07 and 08): a value below it is
+#: written as such (``< 1e-06``), not as data — LM's tolerances and a float's rounding in degrees
+#: and millimetres, an NRMSE [%] at rounding level, a torque error [N·m] on a spread of about 1 N·m.
+SUMMARY_FLOORS = {"deg": 1e-6, "mm": 1e-6, "%": 1e-6, "N·m": 1e-8}
+
+
 def _floor(row: Row, floors: Mapping[str, float]) -> float:
     return floors.get(row.unit, 0.0)
+
+
+def published(rows: Sequence[Row]) -> list[Row]:
+    """``rows`` with their values and interval ends rounded to the long table's precision
+    (:data:`DIGITS`), as :func:`long_table` writes them: a chapter that shows a row (its wide
+    table, its prose) then says what every page reading the published table says — the three
+    significant digits of a reader's copy are taken from the same four, never from the full value
+    on one page and the written one on another (a double rounding: 1.23451 to 1.23 from the value,
+    to 1.24 from the "1.235" written).
+
+    Example:
+        >>> row = Row("inverse kinematics", "m", "chosen", "position p95", "mm", 1.23451, 1.2, 1.3, 2000, 0.95, "")
+        >>> published([row])[0].value
+        1.235
+    """
+    return [replace(r, value=float(format(r.value, DIGITS)), low=float(format(r.low, DIGITS)),
+                    high=float(format(r.high, DIGITS))) for r in rows]
+
+
+def rows_from_table(rows: Sequence[Mapping[str, str]], *, arm: str = "") -> list[Row]:
+    """The :class:`Row` objects of a long table's text rows (:func:`read_long_table`), for a
+    chapter that shows another's published rows (chapter 08, each arm's ``07_summary.csv``)
+    rather than computing them again. A value written below its floor (``< 1e-06``) comes back as
+    half that floor, so that it is shown as it was written with the same floors; a row without an
+    interval (a maximum) has ``n == 0``.
+
+    Example:
+        >>> text = {"task": "inverse kinematics", "method": "m", "role": "chosen", "metric": "position max",
+        ...         "unit": "mm", "value": "6.583", "ci_low": "", "ci_high": "", "n": "0", "level": "", "spread": "max"}
+        >>> r = rows_from_table([text], arm="intelbot5")[0]
+        >>> r.value, r.low, r.n, r.arm
+        (6.583, 6.583, 0, 'intelbot5')
+    """
+    def number(text: str) -> float:
+        return 0.5 * float(text[1:]) if text.strip().startswith("<") else float(text)
+
+    out = []
+    for r in rows:
+        value = number(r["value"])
+        n = int(r.get("n") or 0)
+        low, high = (number(r["ci_low"]), number(r["ci_high"])) if n else (value, value)
+        out.append(Row(r["task"], r["method"], r["role"], r["metric"], r["unit"], value, low, high, n,
+                       float(r["level"]) if r.get("level") else 0.95, r.get("spread", ""), arm or r.get("arm", "")))
+    return out
 
 
 def long_table(rows: Sequence[Row], *, floors: Mapping[str, float] | None = None, caption: str = "") -> Table:
@@ -476,7 +529,7 @@ def long_table(rows: Sequence[Row], *, floors: Mapping[str, float] | None = None
     unit's floor (``floors``: unit → level of rounding) are written as such (``< 1e-06``); a
     maximum (``n`` 0) has no interval: its ``ci_low``, ``ci_high`` and ``level`` are empty."""
     floors = floors or {}
-    fmt = lambda v, r: shown(v, ".4g", floor=_floor(r, floors))   # noqa: E731
+    fmt = lambda v, r: shown(v, DIGITS, floor=_floor(r, floors))   # noqa: E731
     arm = any(r.arm for r in rows)          # a column of arms when the rows are of several
     return Table((["arm"] if arm else []) + ["task", "method", "role", "metric", "unit", "value", "ci_low", "ci_high",
                                              "n", "level", "spread"],
@@ -625,7 +678,7 @@ def _row_text(row) -> Mapping[str, str]:
     return row
 
 
-def _paired_judge(paired: Sequence[Mapping[str, str]]):
+def paired_judge(paired: Sequence[Mapping[str, str]]):
     """The comparison :func:`abstract_lines` makes of two rows of one task and metric: -1 when
     ours is lower on the paired interval of ours less theirs (``paired``, rows of
     :func:`paired_table` as text), +1 when higher, 0 when the interval holds 0 or either row is
@@ -646,6 +699,28 @@ def _paired_judge(paired: Sequence[Mapping[str, str]]):
         low, high = _number(p["ci_low"]), _number(p["ci_high"])
         return -sign if high < 0 else sign if low > 0 else 0
     return judge
+
+
+def paired_difference(paired: Sequence[Mapping[str, str]], task: str, method: str, against: str,
+                      metric: str) -> tuple[float, float, float]:
+    """``method`` less ``against`` on ``metric`` of ``task``, and its paired interval, read from a
+    paired table's text rows (:func:`read_paired`; the pair written either way round, its sign
+    turned then); a pair the table lacks is a one-line ``KeyError`` naming it.
+
+    Example:
+        >>> row = {"task": "t", "method": "a", "against": "b", "metric": "m", "difference": "0.5",
+        ...        "ci_low": "0.25", "ci_high": "0.75"}
+        >>> paired_difference([row], "t", "b", "a", "m")
+        (-0.5, -0.75, -0.25)
+    """
+    for p in paired:
+        if (p["task"], p["metric"]) != (task, metric):
+            continue
+        if (p["method"], p["against"]) == (method, against):
+            return _number(p["difference"]), _number(p["ci_low"]), _number(p["ci_high"])
+        if (p["method"], p["against"]) == (against, method):
+            return -_number(p["difference"]), -_number(p["ci_high"]), -_number(p["ci_low"])
+    raise KeyError(f"no paired difference of {method!r} against {against!r} on {metric} ({task}) in the paired table")
 
 
 def abstract_pairs(rows) -> list[tuple[str, str, str, str]]:
@@ -744,7 +819,7 @@ def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]],
     interval of the two methods' difference over the same test units (``paired``: the rows of
     :func:`paired_table`, as text; :func:`abstract_pairs` lists the ones needed). Rows are
     found by their whole role (:data:`ROLES`)."""
-    return _abstract(arm, rows, _paired_judge(paired))
+    return _abstract(arm, rows, paired_judge(paired))
 
 
 def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str]:
