@@ -99,6 +99,7 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
     ("mlp", {"hidden": [10**6]}, "mlp: hidden must be a list of 1 to 16 layer widths from 1 to 4,096"),
     ("mlp", {"hidden": [True]}, "mlp: hidden must be a list of 1 to 16 layer widths"),
     ("linear", {"alpha": 1.0}, "unknown option 'alpha' for learner 'linear'; valid: none"),
+    ("mlp", {"angles": "sums"}, "mlp: angles must be one of joints, chain, got 'sums'"),
 ])
 def test_bad_baseline_options_are_refused_before_any_work(learner, options, message, trajectories):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -183,6 +184,29 @@ def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, resid
         (model.learner, model.residual, model.random_state, model.options_)
     np.testing.assert_array_equal(loaded.predict(*X), model.predict(*X))
     assert (tmp_path / "baseline_id.json").read_bytes().startswith(b"{")
+
+
+@pytest.mark.parametrize("learner", ["kernel", "boosting", "mlp"])
+def test_the_structure_informed_rivals_see_the_parallel_joints_angle_sums(learner, trajectories, tmp_path):
+    """``angles="chain"``: the sin, cos of the joint angles and of every stretch of parallel joints (intelbot5's
+    q2+q3, q3+q4, q2+q3+q4), what the structure-informed tier's ANFIS and ridge get — and saved, it predicts the
+    same bits."""
+    from nfarm.learning.bases import angle_sums, tier_of
+    from nfarm.learning.baselines import load_id_model
+
+    train, val = trajectories["train"], trajectories["val"]
+    options = {**SMALL[learner], "angles": "chain"}
+    model = BaselineID(learner, options, random_state=1).fit(ROBOT, train, val)
+    X = (val["q"], val["qd"], val["qdd"])
+    sums = angle_sums(ROBOT, val["q"])
+    assert sums.shape[1] == ROBOT.n + 3 and model.n_features_ == 2 * sums.shape[1] + 2 * ROBOT.n
+    np.testing.assert_array_equal(model._features(*X)[:, :sums.shape[1]], np.sin(sums))
+    plain = BaselineID(learner, SMALL[learner], random_state=1).fit(ROBOT, train, val)
+    assert plain.n_features_ == 4 * ROBOT.n and not np.array_equal(plain.predict(*X), model.predict(*X))
+    assert tier_of({**model.options_, "learner": learner}) == "structure-informed"
+    assert tier_of({**plain.options_, "learner": learner}) == "generic"
+    model.save(tmp_path)
+    np.testing.assert_array_equal(load_id_model(tmp_path, ROBOT).predict(*X), model.predict(*X))
 
 
 def test_an_edited_or_foreign_baseline_file_is_refused_in_one_line(trajectories, tmp_path):

@@ -145,5 +145,14 @@ def test_every_learned_inverse_dynamics_of_the_sweeps_has_its_tier():
     assert tier_of({"learner": "friction", "residual": True}) == TIERS["nominal"]
     assert tier_of({"learner": "identification", "residual": False}) == TIERS["identification"]
     assert tier_of({"inputs": "affine", "residual": True}) == TIERS["nominal"]
+    assert tier_of({"learner": "kernel", "angles": "chain"}) == TIERS["structure"]
+    assert tier_of({"learner": "kernel", "angles": "joints"}) == tier_of({"learner": "kernel"}) == TIERS["generic"]
+    from nfarm.study.contest import id_tier
+    contest = {}
+    for cell in load_sweep("params/sweeps/id_contest.yaml").cells:
+        contest.setdefault(id_tier(cell.params), set()).add(cell.params["learner"])
+    assert contest[TIERS["structure"]] >= {"anfis", "ridge", "kernel", "boosting", "mlp"}, \
+        "every rival of the structure-informed tier, with that tier's knowledge"
+    assert contest[TIERS["generic"]] >= {"anfis", "ridge", "kernel", "boosting", "mlp"}
     with pytest.raises(ValueError, match="needs inputs or a learner"):
         tier_of({"basis": "chain"})

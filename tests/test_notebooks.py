@@ -271,6 +271,13 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     table = (tmp_path / "out" / "tables" / f"{compare.name[:2]}_arms.csv").read_text()
     assert table.splitlines()[0] == "quantity,intelbot5,so101"
     assert "learned IK, worst joint RMSE [deg]" in table
+    # One source (issue 43): every result chapter 8 and the verdicts state is chapter 7's summary's, in the smoke run too
+    from test_one_source import results_disagreeing
+    results = {arm: d / "models_dir" / "results" / "tables" for arm, d in zip(("intelbot5", "so101"), studies.values())}
+    differing = results_disagreeing({arm: r / "07_summary.csv" for arm, r in results.items()},
+                                    tmp_path / "out" / "tables" / f"{compare.name[:2]}_learned.csv",
+                                    {arm: r / "07_verdict.csv" for arm, r in results.items()})
+    assert not differing, f"a result stated twice, differently: {differing}"
 
 
 def test_chapter_06_never_reads_a_test_split():

@@ -8,11 +8,15 @@ the arm's masses or lengths (:data:`LEARNERS`):
   ``"generic"``, 1 386 features for five joints; ``"chain"``, with the sums of parallel joints,
   3 213) — torque affine in ``q̈``, quadratic in ``q̇``, trigonometric in ``q``;
 * ``"kernel"`` — kernel ridge regression with a Gaussian kernel, approximated by Nyström's
-  method (``n_components`` landmarks, ``gamma``) on standardised ``sin q, cos q, q̇, q̈``;
+  method (``n_components`` landmarks, ``gamma``) on standardised ``sin, cos`` of the angles,
+  ``q̇, q̈``: with ``angles="joints"`` the joint angles (what every arm has: the *generic* tier),
+  with ``angles="chain"`` the joint angles and the sums of every stretch of parallel joints
+  (:func:`nfarm.learning.bases.angle_sums`: which axes are parallel, the *structure-informed*
+  tier's knowledge, the inputs its ANFIS and its ridge on the chain basis get);
 * ``"boosting"`` — gradient-boosted trees per joint (``HistGradientBoostingRegressor``:
-  ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the same inputs;
+  ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the same inputs (``angles`` too);
 * ``"mlp"`` — a multilayer perceptron (``hidden`` layer widths, ``alpha``, at most ``max_iter``
-  epochs of Adam) on the same inputs; given validation states, it keeps the epoch of least
+  epochs of Adam) on the same inputs (``angles`` too); given validation states, it keeps the epoch of least
   validation error and stops ``patience`` epochs after it — the early stopping the ANFIS gets, on
   the same validation trajectories;
 * ``"friction"`` — not a learner but the identification any engineer tries first on a real
@@ -64,11 +68,11 @@ from ..infra.limits import check_time
 from ..infra.reading import ParamsError, Validator, json_ready
 from ..model.dynamics import regressor, rnea
 from ..model.robot import Robot, robot_hash
-from .bases import BASES, basis
+from .bases import BASES, angle_sums, basis
 from .estimator import SavedModel, check_robot
 from .learned_id import ID_FILE_NAME, ID_FORMAT, LearnedID, id_states
 
-__all__ = ["LEARNERS", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label", "load_id_model", "FILE_NAME", "FORMAT"]
+__all__ = ["LEARNERS", "ANGLES", "BaselineID", "DEFAULTS", "OPTION_NAMES", "label", "load_id_model", "FILE_NAME", "FORMAT"]
 
 FILE_NAME = "baseline_id.json"
 FORMAT = "nfarm-baseline-id-1"
@@ -77,9 +81,9 @@ FORMAT = "nfarm-baseline-id-1"
 DEFAULTS: dict[str, dict[str, Any]] = {
     "linear": {},
     "ridge": {"basis": "generic", "alpha": 1e-6},
-    "kernel": {"n_components": 1000, "gamma": 0.1, "alpha": 1e-6},
-    "boosting": {"max_iter": 300, "learning_rate": 0.1, "max_leaf_nodes": 31},
-    "mlp": {"hidden": [128, 128], "alpha": 1e-4, "max_iter": 200, "patience": 10},
+    "kernel": {"n_components": 1000, "gamma": 0.1, "alpha": 1e-6, "angles": "joints"},
+    "boosting": {"max_iter": 300, "learning_rate": 0.1, "max_leaf_nodes": 31, "angles": "joints"},
+    "mlp": {"hidden": [128, 128], "alpha": 1e-4, "max_iter": 200, "patience": 10, "angles": "joints"},
     "friction": {},
     "identification": {},
 }
@@ -90,6 +94,8 @@ OPTION_NAMES = tuple(dict.fromkeys(k for options in DEFAULTS.values() for k in o
 #: holds an ``(N, n_components)`` matrix and cannot be stopped once started; boosting's trees
 #: and the MLP's widths bound the work of one iteration, which the time limit cannot split.
 MAXIMA = {"n_components": 10_000, "max_iter": 100_000, "max_leaf_nodes": 4_096, "hidden": 4_096, "patience": 100_000}
+#: The angles whose ``sin, cos`` the kernel, boosting and the MLP see (module docstring).
+ANGLES = ("joints", "chain")
 
 
 def label(params: Mapping) -> str:
@@ -99,8 +105,9 @@ def label(params: Mapping) -> str:
     return params["learner"] + (" (" + ", ".join(f"{k}={v}" for k, v in given.items()) + ")" if given else "")
 
 
-def _smooth_inputs(q, qd, qdd) -> np.ndarray:
-    return np.concatenate([np.sin(q), np.cos(q), qd, qdd], axis=1)
+def _smooth_inputs(angles, qd, qdd) -> np.ndarray:
+    """``(N, 2K + 2n)``: ``sin, cos`` of ``angles (N, K)``, then ``q̇, q̈ (N, n)``."""
+    return np.concatenate([np.sin(angles), np.cos(angles), qd, qdd], axis=1)
 
 
 class BaselineID(SavedModel):
@@ -159,6 +166,8 @@ class BaselineID(SavedModel):
                                        and not isinstance(options[key], bool) and 2 <= options[key] <= MAXIMA[key]):
                 raise ValueError(f"{self.learner}: {key} must be an integer from 2 to {MAXIMA[key]:,}, "
                                  f"got {options[key]!r}")
+        if "angles" in options and options["angles"] not in ANGLES:
+            raise ValueError(f"{self.learner}: angles must be one of {', '.join(ANGLES)}, got {options['angles']!r}")
         if "basis" in options and options["basis"] not in BASES:
             raise ValueError(f"{self.learner}: basis must be one of {', '.join(BASES)}, got {options['basis']!r}")
         if "hidden" in options:
@@ -182,7 +191,7 @@ class BaselineID(SavedModel):
             return np.concatenate([regressor(self.robot_, q, qd, qdd), drives], axis=-1)
         if self.learner == "ridge":
             return basis(self.robot_, q, qd, qdd, self.options_["basis"])[:, 1:]
-        return _smooth_inputs(q, qd, qdd)
+        return _smooth_inputs(q if self.options_["angles"] == "joints" else angle_sums(self.robot_, q), qd, qdd)
 
     def _estimator(self, options: dict):
         from sklearn.kernel_approximation import Nystroem

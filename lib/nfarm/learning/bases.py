@@ -65,14 +65,16 @@ _STRUCTURE_BASES = ("chain", "chain_linear")
 def tier_of(params) -> str:
     """The tier (a :data:`TIERS` label) of a learned inverse dynamics described by ``params``, a
     sweep cell's flat parameters: ``residual`` (true: Newton–Euler's nominal model is used), the
-    ANFIS's ``inputs`` (``learned_id`` cells) or a baseline's ``learner`` and ``basis`` (the
-    ``identification`` learner fits the inertial parameters on the known geometry).
+    ANFIS's ``inputs`` (``learned_id`` cells) or a baseline's ``learner`` and ``basis`` or
+    ``angles`` (the ``identification`` learner fits the inertial parameters on the known geometry).
 
     Example:
         >>> tier_of({"inputs": "affine"}), tier_of({"learner": "ridge", "basis": "generic"})
         ('structure-informed', 'generic')
         >>> tier_of({"inputs": "regressor"}), tier_of({"learner": "boosting", "residual": True})
         ('identification', 'nominal model + learned')
+        >>> tier_of({"learner": "mlp", "angles": "chain"})
+        'structure-informed'
     """
     if params.get("residual"):
         return TIERS["nominal"]
@@ -84,7 +86,7 @@ def tier_of(params) -> str:
         raise ValueError(f"a learned inverse dynamics needs inputs or a learner, got {dict(params)!r}")
     if params["learner"] == "identification":
         return TIERS["identification"]
-    return TIERS["structure" if params.get("basis") in _STRUCTURE_BASES else "generic"]
+    return TIERS["structure" if params.get("basis") in _STRUCTURE_BASES or params.get("angles") == "chain" else "generic"]
 
 
 @functools.lru_cache(maxsize=32)

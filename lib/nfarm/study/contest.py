@@ -8,7 +8,8 @@ how each contestant's configuration is chosen, with what budget, and how they ar
 * **Budget**: every contestant has the same number of configurations in the sweep file, tuned
   by **successive halving** (Jamieson & Talwalkar 2016) with seed 0: every configuration trains
   on a share of the training poses (:data:`RUNG_FRACTION`), and each contestant's
-  :data:`PROMOTED` best of them on validation (:func:`promoted_params`) train again on all of
+  :data:`PROMOTED` best of them on validation (:func:`promoted_params`; of configurations within
+  :data:`RUNG_TOLERANCE` of its best, the one listed first, the cheaper) train again on all of
   them — the deployment size, where the contestants are ranked; :func:`budgets` reports what each spent
   (configurations and seconds of training), so a reader sees that no one got more.
 * **Choice**, on validation only (:func:`choose`, given the cells trained on all the poses): the
@@ -56,7 +57,7 @@ from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Sweep
 
 __all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
-           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "promoted_params", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
+           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
 RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
@@ -65,6 +66,11 @@ RUNG_FRACTION = 0.25
 #: Successive halving's second rung: each contestant's configurations trained again on all the poses
 #: (one: its best of the first rung; the rung's cost is the expensive configurations', which win).
 PROMOTED = 1
+#: At the first rung, a configuration within this share of a contestant's best 95th percentile does as
+#: well: the one the sweep file lists first (the cheaper) is promoted. Less than the draws of the data
+#: move a contestant's 95th percentile at full size (chapter 6's table of the contest: its range over
+#: the seeds), so a smaller gain is no evidence for the dearer model.
+RUNG_TOLERANCE = 0.05
 #: The draws each chosen configuration is trained on besides seed 0.
 SPREAD_SEEDS = (1, 2, 3, 4)
 #: The other draws of a smoke run (chapters 6-8's ``spread_seeds`` in smoke mode): two draws in all,
@@ -161,15 +167,33 @@ def choose(results: Iterable[CellResult], *, family_of=family,
 
 
 def promoted_params(results: Iterable[CellResult], *, family_of=family, ranked_by: Sequence[str] = RANKED_BY,
-                    keep: int = PROMOTED) -> list[dict]:
+                    keep: int = PROMOTED, tolerance: float = RUNG_TOLERANCE) -> list[dict]:
     """Successive halving's second rung: each contestant's ``keep`` best seed-0 validation cells
     of the first rung (``results``, by ``ranked_by``) again, on all the training poses
-    (``fraction`` 1), in the order of the first rung."""
+    (``fraction`` 1), in the order of the first rung — where a configuration is within
+    ``tolerance`` of the contestant's best first metric, the one listed first (the sweep file
+    lists each learner's configurations from the cheapest: the smaller of two models that do
+    equally well is promoted, :data:`RUNG_TOLERANCE`).
+
+    Example (a rule count whose doubling gains less than 5 % is not promoted over the smaller):
+        >>> from nfarm.study.sweep import CellResult
+        >>> from nfarm.study.sweep_files import Cell
+        >>> rung = [CellResult(Cell({"learner": "anfis", "encoding": "arm_plane", "options": {"n_rules": n}, "seed": 0},
+        ...                         str(n)), "ok", {"position_p95_mm": p95, "orientation_p95_deg": 0.0}, 1.0, "w")
+        ...         for n, p95 in ((64, 3.61), (128, 2.93), (256, 2.82), (512, 2.81))]
+        >>> [p["options"]["n_rules"] for p in promoted_params(rung)]
+        [128]
+    """
     results = [r for r in results if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val"]
     by_family: dict[str, list[CellResult]] = {}
     for r in results:
         by_family.setdefault(family_of(r.cell.params), []).append(r)
-    kept = {id(r) for rs in by_family.values() for r in sorted(rs, key=lambda r: _key(r, ranked_by))[:keep]}
+    kept = set()
+    for rs in by_family.values():
+        limit = (1.0 + tolerance) * min(float(r.metrics[ranked_by[0]]) for r in rs)
+        order = sorted(range(len(rs)), key=lambda k: (0, k) if float(rs[k].metrics[ranked_by[0]]) <= limit
+                       else (1, _key(rs[k], ranked_by)))
+        kept |= {id(rs[k]) for k in order[:keep]}
     return [{**r.cell.params, "fraction": 1.0} for r in results if id(r) in kept]
 
 

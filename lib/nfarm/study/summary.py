@@ -1019,7 +1019,8 @@ def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | 
     """The verdicts as one table of :data:`VERDICT_COLUMNS` (machine-readable: chapter 08 and
     the index read it back with :func:`read_long_table`)."""
     floors = floors or {}
-    fmt = lambda v, unit: shown(v, ".3g", **({"floor": floors[unit]} if unit in floors else {}))   # noqa: E731
+    # three digits of the long tables' four (DIGITS), as every page reading those shows them: no double rounding
+    fmt = lambda v, unit: shown(float(format(v, DIGITS)), ".3g", **({"floor": floors[unit]} if unit in floors else {}))   # noqa: E731
     return Table(list(VERDICT_COLUMNS),
                  [[v.arm, v.task, v.metric, v.unit, v.best, fmt(v.best_value, v.unit), v.anfis, fmt(v.anfis_value, v.unit),
                    fmt(v.anfis_low, v.unit), fmt(v.anfis_high, v.unit), v.rank, v.compared, v.rival,
