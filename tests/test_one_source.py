@@ -44,8 +44,8 @@ def labelled_quantities(figures: Path, arms_present=None) -> dict[tuple[str, str
     return found
 
 
-#: The verdict's tasks (chapter 7's ``07_verdict``) as the summary tables name them.
 def _summary_task(verdict_task: str) -> str:
+    """A verdict's task (chapter 7's ``07_verdict``) as the summary tables name it."""
     if verdict_task.startswith("measured arm"):
         return "ID, measured arm"
     return "inverse dynamics" if verdict_task == "rigid-body inverse dynamics" else verdict_task
@@ -80,7 +80,7 @@ def results_disagreeing(summaries: dict[str, Path], learned: Path | None = None,
                 written = summary.get(key)
                 three = "(none)" if written is None else written if written.startswith("<") else shown(float(written), ".3g")
                 if three != value:
-                    found[key] = {"summary, to three digits": three, path.name: value}
+                    found.setdefault(key, {}).update({"summary, to three digits": three, path.name: value})
     return {key: values for key, values in found.items() if len(set(values.values())) > 1}
 
 
@@ -107,8 +107,9 @@ def test_the_check_finds_a_result_that_two_chapters_state_differently(tmp_path):
                                              + "\n", encoding="utf-8")
     differing = results_disagreeing({"a": tmp_path / "07_summary.csv"}, tmp_path / "08_learned.csv",
                                     {"a": tmp_path / "07_verdict.csv"})
-    assert differing[("a", "inverse kinematics", "ANFIS", "position p95")] == {
-        "summary, to three digits": "0.935", "07_verdict.csv": "0.936"}
+    stated = differing[("a", "inverse kinematics", "ANFIS", "position p95")]
+    assert stated["summary, to three digits"] == "0.935" and stated["07_verdict.csv"] == "0.936"
+    assert stated["08_learned.csv"] == "0.9001", "every source that disagrees is named"
     assert ("a", "inverse kinematics", "RBF", "position p95") in differing, "a verdict's number no summary holds"
     rows_only = results_disagreeing({"a": tmp_path / "07_summary.csv"}, tmp_path / "08_learned.csv")
     assert rows_only == {("a", "inverse kinematics", "ANFIS", "position p95"): {"07_summary.csv": "0.9355",

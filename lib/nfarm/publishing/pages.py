@@ -474,7 +474,8 @@ ABSTRACT_LIMITS = (
 ANSWERS_KIND = ("on held-out data; a method chapter 6 trained over several seeds pooled over them, with a two-level 95 % "
                 "bootstrap interval over the seeds and the test poses or trajectories; a method trained once, or exact, "
                 "with its interval over the test units alone, marked so; every comparison on the paired interval of the two methods' "
-                "difference, seed by seed where both have seeds, on the same poses or trajectories")
+                "difference on the same poses or trajectories, seed by seed where either has several (a method with one model "
+                "beside each of the other's seeds)")
 
 
 def abstract_answers(figures_dir: Path, arms: list[Edition]) -> list[str]:

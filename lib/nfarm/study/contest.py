@@ -64,7 +64,7 @@ RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
 #: Successive halving's first rung: the share of the training poses every configuration trains on.
 RUNG_FRACTION = 0.25
 #: Successive halving's second rung: each contestant's configurations trained again on all the poses
-#: (one: its best of the first rung; the rung's cost is the expensive configurations', which win).
+#: (one: its best of the first rung, or the first listed within :data:`RUNG_TOLERANCE` of it).
 PROMOTED = 1
 #: At the first rung, a configuration within this share of a contestant's best 95th percentile does as
 #: well: the one the sweep file lists first (the cheaper) is promoted. Less than the draws of the data
@@ -73,7 +73,7 @@ PROMOTED = 1
 RUNG_TOLERANCE = 0.05
 #: The draws each chosen configuration is trained on besides seed 0.
 SPREAD_SEEDS = (1, 2, 3, 4)
-#: The other draws of a smoke run (chapters 6-8's ``spread_seeds`` in smoke mode): two draws in all,
+#: The other draws of a smoke run (chapters 6-7's ``spread_seeds`` in smoke mode): two draws in all,
 #: a spread to exercise the code, not a measure of it.
 SMOKE_SPREAD_SEEDS = (1,)
 #: A contestant stays in contention within this factor of the best seed-0 95th percentile.
@@ -172,8 +172,8 @@ def promoted_params(results: Iterable[CellResult], *, family_of=family, ranked_b
     of the first rung (``results``, by ``ranked_by``) again, on all the training poses
     (``fraction`` 1), in the order of the first rung — where a configuration is within
     ``tolerance`` of the contestant's best first metric, the one listed first (the sweep file
-    lists each learner's configurations from the cheapest: the smaller of two models that do
-    equally well is promoted, :data:`RUNG_TOLERANCE`).
+    lists each learner's configurations from the cheapest, those that cost alike in the order
+    written: the smaller of two models that do equally well is promoted, :data:`RUNG_TOLERANCE`).
 
     Example (a rule count whose doubling gains less than 5 % is not promoted over the smaller):
         >>> from nfarm.study.sweep import CellResult

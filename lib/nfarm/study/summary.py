@@ -780,7 +780,7 @@ def paired_table(pairs: Sequence[Paired], *, floors: Mapping[str, float] | None 
     difference, ci_low, ci_high, n, level, spread``); differences below a unit's floor written
     as such."""
     floors = floors or {}
-    fmt = lambda v, p: shown(v, ".4g", floor=floors.get(p.unit, 0.0))   # noqa: E731
+    fmt = lambda v, p: shown(v, DIGITS, floor=floors.get(p.unit, 0.0))   # noqa: E731
     return Table(["task", "method", "against", "metric", "unit", "difference", "ci_low", "ci_high", "n", "level",
                   "spread"],
                  [[p.task, p.method, p.against, p.metric, p.unit, fmt(p.difference, p), fmt(p.low, p), fmt(p.high, p),
@@ -1017,7 +1017,7 @@ def targets_met(rows: Sequence[Row], limits: Sequence[float]) -> str:
 
 def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | None = None, caption: str = "") -> Table:
     """The verdicts as one table of :data:`VERDICT_COLUMNS` (machine-readable: chapter 08 and
-    the index read it back with :func:`read_long_table`)."""
+    the index read it back with :func:`read_verdicts`)."""
     floors = floors or {}
     # three digits of the long tables' four (DIGITS), as every page reading those shows them: no double rounding
     fmt = lambda v, unit: shown(float(format(v, DIGITS)), ".3g", **({"floor": floors[unit]} if unit in floors else {}))   # noqa: E731
