@@ -296,3 +296,19 @@ def test_the_saved_rivals_are_ranked_as_the_contest_ranks(data, tmp_path):
            for kind, m in rivals.items()}
     assert contest.rival_ranking(ROBOT, rivals, data["val"]) == sorted(p95, key=p95.get)
     assert contest.saved_rivals(ROBOT, tmp_path / "none") == {}
+
+
+def test_a_choice_at_the_edge_of_its_search_is_named():
+    """A chosen value that is the least or the greatest of three or more tried is at the search's edge; an option
+    with two values, a list or a flag is not judged."""
+    from nfarm.study import contest
+
+    rung = [_result("kernel_ridge", "arm_plane", 0, p95, gamma=g, components=1000, hidden=[8], flag=True)
+            for g, p95 in ((1.0, 2.0), (3.0, 3.0), (10.0, 5.0))]
+    rung += [_result("rbf", "arm_plane", 0, p95, neighbors=n, kernel="cubic") for n, p95 in ((32, 4.0), (64, 3.0), (128, 3.5))]
+    rung += [_result("knn", "arm_plane", 0, p95, neighbors=n) for n, p95 in ((3, 9.0), (5, 8.0))]
+    chosen = contest.choose(rung)
+    assert contest.at_edge(rung, chosen) == {"kernel_ridge": [("gamma", 1.0, "smallest")]}
+    # seed 1's cells are not the search
+    assert contest.at_edge(rung + [_result("rbf", "arm_plane", 1, 1.0, neighbors=16, kernel="cubic")], chosen) == \
+        {"kernel_ridge": [("gamma", 1.0, "smallest")]}

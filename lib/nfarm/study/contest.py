@@ -57,7 +57,7 @@ from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Sweep
 
 __all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
-           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
+           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
 RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
@@ -195,6 +195,41 @@ def promoted_params(results: Iterable[CellResult], *, family_of=family, ranked_b
                        else (1, _key(rs[k], ranked_by)))
         kept |= {id(rs[k]) for k in order[:keep]}
     return [{**r.cell.params, "fraction": 1.0} for r in results if id(r) in kept]
+
+
+def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
+            family_of=family) -> dict[str, list[tuple[str, Any, str]]]:
+    """Where each contestant's chosen configuration lies at the edge of what its search tried:
+    for every numerical option that all of the contestant's seed-0 configurations set, with at
+    least three distinct values, ``(option, value, "smallest" | "largest")`` when the chosen
+    value is the least or the greatest tried — a wider search in that direction might do better.
+    ``chosen``: :func:`choose`'s result (contestant → its chosen cell).
+
+    Example:
+        >>> from nfarm.study.sweep import CellResult
+        >>> from nfarm.study.sweep_files import Cell
+        >>> cells = [CellResult(Cell({"learner": "kernel_ridge", "options": {"gamma": g}, "seed": 0}, str(g)), "ok",
+        ...                     {}, 1.0, "w") for g in (1.0, 3.0, 10.0)]
+        >>> at_edge(cells, {"kernel_ridge": cells[0]})
+        {'kernel_ridge': [('gamma', 1.0, 'smallest')]}
+    """
+    tried: dict[str, list[Mapping[str, Any]]] = {}
+    for r in results:
+        if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
+            tried.setdefault(family_of(r.cell.params), []).append(dict(r.cell.params.get("options") or {}))
+    edges: dict[str, list[tuple[str, Any, str]]] = {}
+    for name, r in chosen.items():
+        options = tried.get(name, [])
+        mine = dict(r.cell.params.get("options") or {})
+        for key, value in mine.items():
+            values = [o.get(key) for o in options]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+                continue
+            distinct = sorted(set(values))
+            if len(distinct) >= 3 and value in (distinct[0], distinct[-1]):
+                edges.setdefault(name, []).append((key, value, "smallest" if value == distinct[0] else "largest"))
+    return edges
 
 
 def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, tuple[int, float, float]]:
