@@ -516,7 +516,7 @@ def test_a_paired_difference_is_read_either_way_round_or_refused():
              "ci_high": "-0.25"}]
     assert paired_difference(rows, "t", "a", "b", "m") == (-0.5, -0.75, -0.25)
     assert paired_difference(rows, "t", "b", "a", "m") == (0.5, 0.25, 0.75)
-    with pytest.raises(KeyError, match="no paired difference of 'a' against 'c'"):
+    with pytest.raises(ValueError, match="no paired difference of 'a' against 'c'"):
         paired_difference(rows, "t", "a", "c", "m")
 
 

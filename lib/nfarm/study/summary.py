@@ -681,23 +681,14 @@ def _row_text(row) -> Mapping[str, str]:
 def paired_judge(paired: Sequence[Mapping[str, str]]):
     """The comparison :func:`abstract_lines` makes of two rows of one task and metric: -1 when
     ours is lower on the paired interval of ours less theirs (``paired``, rows of
-    :func:`paired_table` as text), +1 when higher, 0 when the interval holds 0 or either row is
-    a maximum without an interval. A comparison with no paired row is an error naming it."""
-    found = {(p["task"], p["method"], p["against"], p["metric"]): p for p in paired}
-
+    :func:`paired_table` as text; :func:`paired_difference`), +1 when higher, 0 when the
+    interval holds 0 or either row is a maximum without an interval. A comparison with no paired
+    row is an error naming it."""
     def judge(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
         if "0" in (ours.get("n"), theirs.get("n")):
             return 0
-        key = (ours["task"], ours["method"], theirs["method"], ours["metric"])
-        sign = 1
-        p = found.get(key)
-        if p is None:
-            p, sign = found.get((key[0], key[2], key[1], key[3])), -1
-        if p is None:
-            raise ValueError(f"no paired difference of {key[1]!r} against {key[2]!r} on {key[3]} "
-                             f"({key[0]}) in the paired table (07_paired.csv)")
-        low, high = _number(p["ci_low"]), _number(p["ci_high"])
-        return -sign if high < 0 else sign if low > 0 else 0
+        _, low, high = paired_difference(paired, ours["task"], ours["method"], theirs["method"], ours["metric"])
+        return -1 if high < 0 else 1 if low > 0 else 0
     return judge
 
 
@@ -705,7 +696,7 @@ def paired_difference(paired: Sequence[Mapping[str, str]], task: str, method: st
                       metric: str) -> tuple[float, float, float]:
     """``method`` less ``against`` on ``metric`` of ``task``, and its paired interval, read from a
     paired table's text rows (:func:`read_paired`; the pair written either way round, its sign
-    turned then); a pair the table lacks is a one-line ``KeyError`` naming it.
+    turned then); a pair the table lacks is a one-line ``ValueError`` naming it.
 
     Example:
         >>> row = {"task": "t", "method": "a", "against": "b", "metric": "m", "difference": "0.5",
@@ -720,7 +711,8 @@ def paired_difference(paired: Sequence[Mapping[str, str]], task: str, method: st
             return _number(p["difference"]), _number(p["ci_low"]), _number(p["ci_high"])
         if (p["method"], p["against"]) == (against, method):
             return -_number(p["difference"]), -_number(p["ci_high"]), -_number(p["ci_low"])
-    raise KeyError(f"no paired difference of {method!r} against {against!r} on {metric} ({task}) in the paired table")
+    raise ValueError(f"no paired difference of {method!r} against {against!r} on {metric} ({task}) in the paired "
+                     f"table (07_paired.csv)")
 
 
 def abstract_pairs(rows) -> list[tuple[str, str, str, str]]:
