@@ -27,16 +27,23 @@ Bases (:func:`basis`; each is ``dynamic_terms ⊗ configuration terms``):
 * ``"generic_linear"``, ``"chain_linear"`` — dynamic terms times ``1`` and the ``sin, cos`` of
   the angles (and sums), *without* their products (231 and 357 features for intelbot5): what
   one first-order rule of :class:`nfarm.learning.learned_id.LearnedID` with ``inputs="affine_generic"`` or
-  ``"affine"`` sees; the products it needs are left to the fuzzy rules over ``q``.
+  ``"affine"`` sees; the products it needs are left to the fuzzy rules over ``q``;
+* any of them with ``_drives`` (``"generic_drives"``, ``"chain_linear_drives"``, …) — the same
+  columns and every joint's **drive terms** ``q̇_j, sign q̇_j`` (:func:`drive_terms`: viscous and
+  Coulomb friction; the armature's ``q̈_j`` is already a dynamic term). A built arm's joints turn
+  in bearings and gears, whatever the arm: what holds for every *driven* arm, not for this one.
+  A rigid-body basis cannot represent friction, which is odd in ``q̇`` and not smooth at rest:
+  on chapter 5's measured arm the bases without these columns miss a friction-dominated joint
+  by more than its torque's spread.
 
 All functions are pure and batched over the sample axis: ``q, qd, qdd (N, n)`` [rad, rad/s,
 rad/s²] → ``(N, F)``.
 
 **Tiers of prior knowledge** (:data:`TIERS`, :func:`tier_of`): every learned inverse dynamics of
 the study is named by what it assumes of the arm — *generic* (what holds for every rigid arm:
-functions of ``q``, affine in ``q̈``, quadratic in ``q̇``; nothing about this arm),
-*structure-informed* (which axes are parallel: the ``chain`` basis, the ``affine`` input set; no
-length or mass), *identification* (the geometry known, the inertial parameters fitted: the
+functions of ``q``, affine in ``q̈``, quadratic in ``q̇``; with ``_drives``, every driven joint's
+friction; nothing about this arm), *structure-informed* (which axes are parallel: the ``chain``
+bases, the ``affine`` input sets; no length or mass), *identification* (the geometry known, the inertial parameters fitted: the
 rigid-body regressor), or *nominal model + learned* (Newton–Euler with the nominal masses, and a
 learned or identified correction of what it misses).
 """
@@ -50,16 +57,19 @@ import numpy as np
 from ..model.kinematics import jacobian
 from ..model.robot import Robot
 
-__all__ = ["BASES", "TIERS", "tier_of", "parallel_runs", "angle_sums", "dynamic_terms", "configuration_terms",
-           "basis", "basis_width"]
+__all__ = ["BASES", "DRIVES", "TIERS", "tier_of", "parallel_runs", "angle_sums", "dynamic_terms", "drive_terms",
+           "configuration_terms", "basis", "basis_width"]
 
-BASES = ("generic", "chain", "generic_linear", "chain_linear")
+_RIGID_BASES = ("generic", "chain", "generic_linear", "chain_linear")
+BASES = _RIGID_BASES + tuple(f"{kind}_drives" for kind in _RIGID_BASES)
+#: The suffix of a basis with the joints' drive terms (:func:`drive_terms`).
+DRIVES = "_drives"
 
 #: The tiers of prior knowledge, by key, as tables name them (module docstring).
 TIERS = {"generic": "generic", "structure": "structure-informed", "identification": "identification",
          "nominal": "nominal model + learned"}
-_STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine",), ("regressor", "regressor_drives")
-_STRUCTURE_BASES = ("chain", "chain_linear")
+_STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine", "affine_drives"), ("regressor", "regressor_drives")
+_STRUCTURE_BASES = ("chain", "chain_linear", "chain_drives", "chain_linear_drives")
 
 
 def tier_of(params) -> str:
@@ -70,6 +80,8 @@ def tier_of(params) -> str:
 
     Example:
         >>> tier_of({"inputs": "affine"}), tier_of({"learner": "ridge", "basis": "generic"})
+        ('structure-informed', 'generic')
+        >>> tier_of({"inputs": "affine_drives"}), tier_of({"learner": "ridge", "basis": "generic_drives"})
         ('structure-informed', 'generic')
         >>> tier_of({"inputs": "regressor"}), tier_of({"learner": "boosting", "residual": True})
         ('identification', 'nominal model + learned')
@@ -146,22 +158,49 @@ def configuration_terms(angles: np.ndarray, *, products: bool = True) -> np.ndar
     return np.concatenate(columns, axis=1)
 
 
-def basis(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, kind: str) -> np.ndarray:
-    """The basis ``kind`` (:data:`BASES`) of states ``q, qd, qdd (N, n)``: ``(N, F)``, the
-    outer product of :func:`dynamic_terms` and the configuration terms, dynamic term major."""
+def drive_terms(qd: np.ndarray) -> np.ndarray:
+    """``(N, 2n)``: every joint's ``q̇_j`` (viscous friction), then its ``sign q̇_j`` (Coulomb
+    friction; 0 at rest).
+
+    Example:
+        >>> drive_terms(np.array([[0.5, -2.0, 0.0]]))
+        array([[ 0.5, -2. ,  0. ,  1. , -1. ,  0. ]])
+    """
+    return np.column_stack([qd, np.sign(qd)])
+
+
+def _kind(kind: str) -> tuple[str, bool]:
+    """A basis's rigid part and whether it has the drive terms."""
     if kind not in BASES:
         raise ValueError(f"basis must be one of {', '.join(BASES)}, got {kind!r}")
-    angles = q if kind.startswith("generic") else angle_sums(robot, q)
-    conf = configuration_terms(angles, products=not kind.endswith("_linear"))
+    return (kind[:-len(DRIVES)], True) if kind.endswith(DRIVES) else (kind, False)
+
+
+def basis(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, kind: str) -> np.ndarray:
+    """The basis ``kind`` (:data:`BASES`) of states ``q, qd, qdd (N, n)``: ``(N, F)``, the
+    outer product of :func:`dynamic_terms` and the configuration terms, dynamic term major
+    (its first column the constant 1); with ``_drives``, :func:`drive_terms` after them.
+
+    Example (intelbot5: 1 386 rigid-body features, and 10 drive terms for its five joints):
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> q = np.zeros((2, 5))
+        >>> basis(robot, q, q, q, "generic").shape, basis(robot, q, q, q, "generic_drives").shape
+        ((2, 1386), (2, 1396))
+    """
+    rigid, drives = _kind(kind)
+    angles = q if rigid.startswith("generic") else angle_sums(robot, q)
+    conf = configuration_terms(angles, products=not rigid.endswith("_linear"))
     dyn = dynamic_terms(qd, qdd)
-    return (dyn[:, :, None] * conf[:, None, :]).reshape(len(q), -1)
+    out = (dyn[:, :, None] * conf[:, None, :]).reshape(len(q), -1)
+    return np.concatenate([out, drive_terms(qd)], axis=1) if drives else out
 
 
 def basis_width(robot: Robot, kind: str) -> int:
     """Columns of :func:`basis` for ``robot``."""
     n = robot.n
-    if kind not in BASES:
-        raise ValueError(f"basis must be one of {', '.join(BASES)}, got {kind!r}")
-    K = n if kind.startswith("generic") else len(_sum_columns(robot))
-    conf = 1 + 2 * K + (0 if kind.endswith("_linear") else 2 * K * (2 * K + 1) // 2)
-    return (1 + n + n * (n + 1) // 2) * conf
+    rigid, drives = _kind(kind)
+    K = n if rigid.startswith("generic") else len(_sum_columns(robot))
+    conf = 1 + 2 * K + (0 if rigid.endswith("_linear") else 2 * K * (2 * K + 1) // 2)
+    return (1 + n + n * (n + 1) // 2) * conf + 2 * n * drives

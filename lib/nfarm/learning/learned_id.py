@@ -1,10 +1,10 @@
 """Learned inverse dynamics: one ANFIS per joint behind one object (chapters 06 and 07).
 
-:class:`LearnedID` maps joint states to torques. It feeds each joint's model one of six
+:class:`LearnedID` maps joint states to torques. It feeds each joint's model one of nine
 **input sets** (:func:`id_features`): the joint's own ``q, q̇, q̈`` (the likely dissertation
-design), every joint's, trigonometric features, the two ``affine`` sets — rules over the
+design), every joint's, trigonometric features, the ``affine`` sets — rules over the
 configuration, consequents over the terms every rigid arm's torque is a sum of
-(:mod:`nfarm.learning.bases`) — or the joint's row of the rigid-body regressor
+(:mod:`nfarm.learning.bases`), with or without every joint's friction terms — or the joint's row of the rigid-body regressor
 (:func:`nfarm.model.dynamics.regressor`), which needs the arm's geometry. Chapter 06 compares
 them on validation trajectories (``figures/tables/06_id_comparison``): the rules of the
 ``affine`` sets supply the products of angle functions the inertia needs, which the
@@ -43,11 +43,14 @@ __all__ = ["LearnedID", "id_features", "id_states", "regressor_columns", "INPUT_
 
 
 #: Input sets of :class:`LearnedID`: what each joint's model sees of a state ``(q, q̇, q̈)``.
-INPUT_SETS = ("own", "all", "trig", "affine_generic", "affine", "regressor", "regressor_drives")
+INPUT_SETS = ("own", "all", "trig", "affine_generic", "affine", "affine_generic_drives", "affine_drives", "regressor",
+              "regressor_drives")
 #: Input sets every joint's model sees alike: their joints can share premises.
-SHARED_INPUT_SETS = ("all", "trig", "affine_generic", "affine")
-#: Input sets whose rules are built over the configuration ``q`` only (the first n columns).
-_CONFIGURATION_PREMISES = ("affine_generic", "affine")
+SHARED_INPUT_SETS = ("all", "trig", "affine_generic", "affine", "affine_generic_drives", "affine_drives")
+#: Input sets whose rules are built over the configuration ``q`` only (the first n columns), and
+#: the basis of :mod:`nfarm.learning.bases` their consequents see (less its constant).
+_CONFIGURATION_PREMISES = {"affine_generic": "generic_linear", "affine": "chain_linear",
+                           "affine_generic_drives": "generic_linear_drives", "affine_drives": "chain_linear_drives"}
 ID_FILE_NAME = "learned_id.json"
 ID_FORMAT = "nfarm-learned-id-1"
 
@@ -71,6 +74,11 @@ def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, in
       their constant). No mass, length or inertia enters; within one rule the torque is linear
       in trigonometric functions of the angles, and the rules over ``q`` supply their products
       (chapter 06: from 37 % worst-joint NRMSE with one rule to 2.6 % with eight on intelbot5);
+    * ``"affine_generic_drives"``, ``"affine_drives"`` — those and every joint's drive terms
+      ``q̇_k, sign q̇_k`` (:func:`nfarm.learning.bases.drive_terms`: viscous and Coulomb
+      friction, which every driven joint has and no rigid-body term represents): the same
+      tiers of knowledge for a built arm (chapter 06.8's measured arm), 10 more columns for
+      five joints;
     * ``"regressor"`` — row j of the rigid-body regressor ``Y(q, q̇, q̈)``
       (:func:`nfarm.model.dynamics.regressor`): the columns of links j..n that are not zero for
       every state (:func:`regressor_columns`; for intelbot5 34, 38, 28, 17 and 8). The
@@ -90,8 +98,7 @@ def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, in
         X = np.concatenate([np.sin(q), np.cos(q), qd, qdd, qd * np.abs(qd)], axis=1)
         return [X] * robot.n
     if inputs in _CONFIGURATION_PREMISES:
-        kind = "chain_linear" if inputs == "affine" else "generic_linear"
-        X = np.concatenate([q, basis(robot, q, qd, qdd, kind)[:, 1:]], axis=1)
+        X = np.concatenate([q, basis(robot, q, qd, qdd, _CONFIGURATION_PREMISES[inputs])[:, 1:]], axis=1)
         return [X] * robot.n
     Y = regressor(robot, q, qd, qdd)
     rows = [np.ascontiguousarray(Y[:, j, cols]) for j, cols in enumerate(regressor_columns(robot))]
@@ -124,8 +131,7 @@ def _id_widths(inputs: str, robot: Robot) -> list[int]:
         return [len(cols) + 3 * (inputs == "regressor_drives") for cols in _regressor_columns(robot)]
     n = robot.n
     if inputs in _CONFIGURATION_PREMISES:
-        kind = "chain_linear" if inputs == "affine" else "generic_linear"
-        return [n + basis_width(robot, kind) - 1] * n
+        return [n + basis_width(robot, _CONFIGURATION_PREMISES[inputs]) - 1] * n
     return [{"own": 3, "all": 3 * n, "trig": 5 * n}[inputs]] * n
 
 

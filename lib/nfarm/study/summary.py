@@ -1024,10 +1024,13 @@ def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | 
 #: Configuration words a reader knows, and the learners' names in words (:func:`reader_label`).
 _CONFIG_WORDS = {"arm_plane": "in the arm's plane", "quat_xyz": "on quaternion and position",
                  "axes_xyz": "on position and two tool axes", "basis=chain": "on the chain's trigonometric basis",
-                 "basis=generic": "on the generic basis"}
+                 "basis=generic": "on the generic basis",
+                 "basis=chain_drives": "on the chain's trigonometric basis and the joints' friction terms",
+                 "basis=generic_drives": "on the generic basis and the joints' friction terms"}
 _LEARNER_WORDS = {"ridge": "ridge regression", "ANFIS, chosen": "ANFIS"}
 #: Internal names of input sets and of where a model came from: in the tables, not in prose.
-_INTERNAL = {"contest", "affine", "affine_generic", "own", "regressor", "regressor_drives"}
+_INTERNAL = {"contest", "affine", "affine_generic", "affine_drives", "affine_generic_drives", "own", "regressor",
+             "regressor_drives"}
 
 
 def reader_label(name: str) -> str:
