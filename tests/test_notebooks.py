@@ -280,6 +280,26 @@ def test_the_comparison_of_the_two_arms_runs(shared, so101_shared, tmp_path):
     assert not differing, f"a result stated twice, differently: {differing}"
 
 
+@pytest.mark.notebook
+@CHAIN
+def test_chapter_06_leaves_the_built_arm_beside_the_measured_arms_models(shared, tmp_path):
+    """The built arm the measured-arm models were trained on is a robot file beside them, which
+    loads into the same dynamics as the study's built arm (an independent engine can take it)."""
+    import numpy as np
+    from nfarm.model.dynamics import rnea
+    from nfarm.model.robot import load_robot
+    from nfarm.study import datasets, study_files
+
+    ensure_models(shared, "params/studies/intelbot5.yaml", tmp_path)
+    built = load_robot(shared / "models_dir" / "id_measured" / "built_arm.yaml")
+    study = study_files.smoke_study(study_files.load_study("params/studies/intelbot5.yaml"))
+    expected, _ = datasets.built_arm(study)
+    q, qd, qdd = np.random.default_rng(0).normal(size=(3, 20, expected.n))
+    np.testing.assert_array_equal(rnea(built, q, qd, qdd), rnea(expected, q, qd, qdd))
+    assert not np.array_equal(built.mass, study.robot.mass), "the built arm, not the model"
+    assert (shared / "models_dir" / "id_measured" / "structure_informed" / "anfis").is_dir()
+
+
 def test_chapter_06_never_reads_a_test_split():
     """Chapter 06 chooses every model on validation data: no cell of the chapter (the course's
     exercise cells aside, which the report removes) names a test split — a data set file
