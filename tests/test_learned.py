@@ -428,7 +428,7 @@ def test_id_save_load_batching_and_bad_input(id_data, tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, change, message", [
-    (dict(inputs="torques"), None, r"inputs must be one of own, all, trig, affine_generic, affine, regressor"),
+    (dict(inputs="torques"), None, r"inputs must be one of own, all, trig, affine_generic, affine, affine_generic_drives, affine_drives, regressor"),
     (dict(residual="yes"), None, r"residual must be True or False"),
     (dict(n_mfs=0), None, r"joint 1: .*n_mfs"),
     ({}, lambda d: {k: v for k, v in d.items() if k != "tau"}, r"train must be a mapping with arrays 'q', 'qd', 'qdd', 'tau'"),

@@ -900,8 +900,9 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
         if learner:
             text += (f"; the best other learner as a residual, {reader_label(learner['method'])}: {_with_interval(learner)}, "
                      f"{_verdict(learner, residual)} the ANFIS residual")
-            if _compare(learner, residual) < 0:
-                text += f" (the ANFIS residual leaves {_times_of(residual, learner)} its error)"
+            ratio = _times_of(residual, learner)
+            if _compare(learner, residual) < 0 and ratio != times(1.0):   # "about the same as" beside "better": no
+                text += f" (the ANFIS residual leaves {ratio} its error)"
         text += "."
         # The study's ≤ 5 % NRMSE target on the measured torques' spread, with and without the noise-level joints
         for metric, over in (("worst NRMSE", "over the joints a sensor resolves"),
@@ -1168,7 +1169,8 @@ def conclusion(verdicts: Sequence[Mapping[str, str]],
         gap = r.get("gap", "")
         if not gap or gap.startswith("<"):
             return ""
-        return f", by {gap.lstrip('-')} {r['unit']} of {r['metric']}"
+        unit = "percentage points" if r["unit"] == "%" else r["unit"]     # a gap of two shares: not "% of" one
+        return f", by {gap.lstrip('-')} {unit} of {r['metric']}"
 
     sentences = []
     won = grouped("ANFIS better", lambda r: r["arm"] + by(r))
