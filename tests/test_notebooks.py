@@ -295,8 +295,12 @@ def test_chapter_06_leaves_the_built_arm_beside_the_measured_arms_models(shared,
     study = study_files.smoke_study(study_files.load_study("params/studies/intelbot5.yaml"))
     expected, _ = datasets.built_arm(study)
     q, qd, qdd = np.random.default_rng(0).normal(size=(3, 20, expected.n))
-    np.testing.assert_array_equal(rnea(built, q, qd, qdd), rnea(expected, q, qd, qdd))
+    for drive in (False, True):                      # its links, and its drives' armature and friction
+        np.testing.assert_array_equal(rnea(built, q, qd, qdd, drive=drive), rnea(expected, q, qd, qdd, drive=drive))
     assert not np.array_equal(built.mass, study.robot.mass), "the built arm, not the model"
+    import yaml
+    offsets = yaml.safe_load((shared / "models_dir" / "id_measured" / "built_arm_offsets.yaml").read_text())
+    assert offsets["zero_offset_nm"] == datasets.built_arm(study)[1].tolist()
     assert (shared / "models_dir" / "id_measured" / "structure_informed" / "anfis").is_dir()
 
 
