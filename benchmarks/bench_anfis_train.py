@@ -219,7 +219,7 @@ def phase_table(old, study, data):
                                (old.ANFIS, "_predict_with", "validation error")]),
         "today": (ANFIS, [(ANFIS, "_initial_structure", "initial rules (fuzzy c-means)"),
                           (hybrid, "firing", "firing strengths"),
-                          (hybrid, "least_squares", "least squares (design, AᵀA, Cholesky)"),
+                          (hybrid, "least_squares", "least squares (normal equations, Cholesky)"),
                           (hybrid, "premise_gradient", "premise gradient"),
                           (hybrid, "_outputs", "validation error")]),
     }
@@ -244,6 +244,43 @@ def phase_table(old, study, data):
                  floatfmt=["", ".2f", ".0f", ".2f", ".0f"])
 
 
+def normal_table(study, data):
+    """The learned-IK contest's least-squares step at its own shapes (the pitch joints' shared
+    model: 6 arm-plane inputs and a constant, 2 outputs; fuzzy c-means rules on a quarter of the
+    training poses and on all of them): the normal equations from the formed design
+    (``AᵀA`` of ``N × R·7``) against :func:`nfarm.learning.hybrid.kronecker_normal` (28 blocks of
+    ``R × R``), the same firing strengths, in the same run; the largest difference of the
+    normal matrices relative to its largest entry, and of the solved consequents' fitted values
+    (metres of no unit: radians of the joints)."""
+    encoder = PoseEncoder(encoding="arm_plane", max_out_of_plane=np.radians(0.5))
+    X_all = encoder.fit_transform(study.robot, data["ik_train"]["T"])
+    lo, span = X_all.min(axis=0), np.ptp(X_all, axis=0)
+    X_all = (X_all - lo) / np.where(span > 0, span, 1.0)
+    Y_all = data["ik_train"]["q"][:, 1:3]
+    rows = []
+    for N, R in [(len(X_all) // 4, 128), (len(X_all) // 4, 512), (len(X_all), 64), (len(X_all), 128), (len(X_all), 256)]:
+        X, Y = X_all[:N], Y_all[:N]
+        mfs, rules = ANFIS(partition="fcm", n_rules=R, mf="gauss", random_state=0)._initial_structure(X, Y, None)
+        _, w_bar = hybrid.normalised(hybrid.firing("gauss", X, mfs, rules))
+        Xa = np.column_stack([X, np.ones(N)])
+        with measured() as formed:
+            A = hybrid._design(w_bar, Xa)
+            G_formed, b_formed = A.T @ A, A.T @ Y
+        del A
+        with measured() as blocks:
+            G, b = hybrid.kronecker_normal(w_bar, Xa, Y)
+        theta = [scipy.linalg.solve(g + 1e-8 * np.trace(g) / len(g) * np.eye(len(g)), r, assume_a="pos")
+                 for g, r in ((G_formed, b_formed), (G, b))]
+        fitted = [hybrid._design(w_bar[:2000], Xa[:2000]) @ t for t in theta]
+        rows.append([f"{N:,} poses, {R} rules", formed["s"], blocks["s"], formed["s"] / blocks["s"],
+                     formed["peak"] / 2**20, blocks["peak"] / 2**20,
+                     f"{np.abs(G - G_formed).max() / np.abs(G_formed).max():.1e}",
+                     f"{np.abs(fitted[1] - fitted[0]).max():.1e}"])
+    return Table(["IK least squares (7 consequent inputs, 2 outputs)", "formed design s", "blocks s", "×",
+                  "formed MiB", "blocks MiB", "max |ΔAᵀA| / max AᵀA", "max |Δ fitted| (first 2 000 poses)"], rows,
+                 floatfmt=["", ".3f", ".3f", ".2f", ".0f", ".0f", "", ""])
+
+
 def main() -> None:
     try:
         old = engine_before.load()
@@ -254,6 +291,7 @@ def main() -> None:
         study, data = study_data()
         rows = [mackey_glass_row(old), *ik_rows(old, study, data), *id_rows(old, study, data)]
         phases = phase_table(old, study, data)
+        normal = normal_table(study, data)
     print(Table(["shape", "epochs", "before s/fit", "today s/fit", "fit ×", "before s/epoch",
                  "today s/epoch", "epoch ×", "before peak MiB", "today peak MiB", "before error",
                  "today error", "fall-backs before / today", "max |Δ prediction|",
@@ -261,6 +299,8 @@ def main() -> None:
                 floatfmt=["", "", ".2f", ".2f", ".1f", ".3f", ".3f", ".1f", ".0f", ".0f", "", "", "", "", ""]).to_markdown())
     print()
     print(phases.to_markdown())
+    print()
+    print(normal.to_markdown())
 
 
 if __name__ == "__main__":

@@ -151,6 +151,43 @@ def test_early_stopping_stops_patience_epochs_after_the_best_and_keeps_it(patien
     assert model.val_loss_curve_[model.best_epoch_] == min(best)
 
 
+@pytest.mark.parametrize("patience, min_improvement", [(3, 0.01), (5, 0.05), (2, 0.2)])
+def test_early_stopping_counts_only_falls_of_min_improvement(patience, min_improvement):
+    """With ``min_improvement`` a fall of the validation error counts only if it takes it at
+    least that share below its reference (Keras's min_delta, relative): training stops where the
+    rule, replayed on the uncut run's curve, says — and never later than without it — and the
+    epoch kept is still that of the least error."""
+    rng = np.random.default_rng(7)
+    X = rng.uniform(-1, 1, (300, 2))
+    y = np.sin(3 * X[:, 0]) * X[:, 1]
+    Xv = rng.uniform(-1, 1, (100, 2))
+    yv = np.sin(3 * Xv[:, 0]) * Xv[:, 1]
+    options = dict(n_mfs=3, mf="gauss", epochs=60, step_size=0.05)
+    full = ANFIS(**options).fit(X, y, Xv, yv)
+    reference, since, expected = np.inf, 0, options["epochs"]
+    for epoch, error in enumerate(full.val_loss_curve_):
+        if error < reference * (1 - min_improvement):
+            reference, since = error, 0
+        else:
+            since += 1
+            if since >= patience:
+                expected = epoch + 1
+                break
+    assert expected < options["epochs"]                  # the rule stops this run early
+    model = ANFIS(**options, patience=patience, min_improvement=min_improvement).fit(X, y, Xv, yv)
+    plain = ANFIS(**options, patience=patience).fit(X, y, Xv, yv)
+    assert model.n_epochs_ == expected <= plain.n_epochs_
+    assert model.val_loss_curve_ == full.val_loss_curve_[:expected]
+    assert model.best_epoch_ == int(np.argmin(model.val_loss_curve_))
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.0, float("nan"), "0.01"])
+def test_min_improvement_must_be_a_share_below_one(value):
+    X, Y = _data()
+    with pytest.raises(ValueError, match="min_improvement"):
+        ANFIS(n_mfs=2, patience=2, min_improvement=value).fit(X, Y[:, 0])
+
+
 @pytest.mark.parametrize("patience", [0, -1, 1.5, True, "3"])
 def test_patience_must_be_a_positive_integer(patience):
     X, Y = _data()
@@ -247,3 +284,35 @@ def test_the_orthogonal_fall_back_is_the_minimum_norm_solution(shape, outputs):
     A[:, 7] = A[:, 1] + A[:, 2]
     y = rng.normal(size=(shape[0],) if outputs is None else (shape[0], outputs))
     np.testing.assert_allclose(hybrid._orthogonal(A, y), np.linalg.pinv(A) @ y, rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("N, R, d, k, block_rows", [(400, 40, 3, 1, None), (257, 64, 7, 2, 50), (90, 33, 5, 3, 1)])
+def test_the_normal_equations_from_their_blocks_are_the_designs(N, R, d, k, block_rows):
+    """kronecker_normal's AᵀA and AᵀY (d(d + 1)/2 symmetric R × R blocks, the off-diagonal ones
+    by polarisation) against the formed design's, summed over blocks of samples or not, with
+    inputs of either sign; and least_squares on a clustered rule base (which takes that path)
+    solves the same equations as the formed design."""
+    rng = np.random.default_rng(N + R)
+    w = rng.random((N, R)) ** 4
+    w_bar = w / w.sum(axis=1, keepdims=True)
+    Xa = np.column_stack([rng.uniform(-1, 2, (N, d - 1)), np.ones(N)])
+    Y = rng.normal(size=(N, k))
+    A = hybrid._design(w_bar, Xa)
+    G, b = hybrid.kronecker_normal(w_bar, Xa, Y, design_bytes=None if block_rows is None else 8 * R * block_rows)
+    scale = np.abs(A.T @ A).max()
+    np.testing.assert_allclose(G, A.T @ A, rtol=0, atol=1e-13 * scale)
+    np.testing.assert_allclose(b, A.T @ Y, rtol=0, atol=1e-13 * np.abs(A.T @ Y).max())
+    assert hybrid._kronecker(R, d) == (R >= 32)
+    if hybrid._kronecker(R, d):
+        theta = hybrid.least_squares(w_bar, Xa, Y, ridge=1e-10)
+        direct = A.T @ A
+        direct[np.diag_indices_from(direct)] += 1e-10 * np.trace(direct) / len(direct) + 1e-300
+        expected = np.linalg.solve(direct, A.T @ Y)
+        np.testing.assert_allclose(A @ theta, A @ expected, rtol=0, atol=1e-8)
+
+
+def test_a_clustered_rule_base_forms_no_design():
+    """The design buffer of a clustered rule base is empty (kronecker_normal needs none); a few
+    rules over many inputs (the ID designs) keep theirs."""
+    assert hybrid.design_buffer(20_000, 256, 7).size == 0
+    assert hybrid.design_buffer(1000, 8, 358).shape == (1000, 8, 358)

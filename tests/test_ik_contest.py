@@ -158,6 +158,18 @@ def test_the_mlp_keeps_its_best_validation_epoch_and_predicts_as_scikit_learn(da
                                net.predict(X) * model.y_scale_ + model.y_mean_, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("patience", [2, 4])
+def test_the_mlp_counts_only_falls_of_min_improvement(data, patience):
+    """A ``min_improvement`` no fall can reach (all but the whole error) leaves only the first
+    epoch as the reference: training stops ``patience`` epochs after it, whatever the errors do,
+    and keeps the least of those epochs; an impossible share is refused in one line."""
+    model = RivalIK("mlp", "arm_plane", {"hidden": [16, 16], "max_epochs": 40, "patience": patience,
+                                         "min_improvement": 1 - 1e-12}, random_state=0).fit(ROBOT, data["train"], data["val"])
+    assert model.epochs_ == 1 + patience and 0 <= model.best_epoch_ <= patience
+    with pytest.raises(ValueError, match="mlp: min_improvement must be below 1"):
+        RivalIK("mlp", "arm_plane", {"min_improvement": 1.0}).fit(ROBOT, data["train"], data["val"])
+
+
 def test_kernel_ridge_equals_scikit_learns_nystroem_and_ridge(data):
     from sklearn.kernel_approximation import Nystroem
     from sklearn.linear_model import Ridge

@@ -120,6 +120,10 @@ class ANFIS(Estimator):
         patience: stop once the validation error (the training error without validation
             data) has not fallen for this many epochs (``None``: train every epoch); the best
             epoch is kept either way.
+        min_improvement: for ``patience``, a fall counts only if it takes the error below its
+            least so far by at least this share of it (0: any fall; 0.005: half a per cent —
+            Keras's ``min_delta``, relative). Jang's rule can creep down by a hundredth of a
+            per cent an epoch for hundreds of epochs; this stops it where it has converged.
 
     Learned attributes: ``mfs_`` (per premise input, ``(m_i, p)`` parameters),
     ``rules_ (R, n_p)`` (the function of each premise input in each rule),
@@ -153,7 +157,8 @@ class ANFIS(Estimator):
                  error_goal: float = 0.0, solver: str = "normal", ridge: float = 1e-12,
                  memory_budget: float = 2e9, random_state: int | None = None,
                  feature_names: Sequence[str] | None = None, progress: bool = False,
-                 premise_inputs: Sequence[int] | None = None, patience: int | None = None):
+                 premise_inputs: Sequence[int] | None = None, patience: int | None = None,
+                 min_improvement: float = 0.0):
         self.n_mfs = n_mfs
         self.mf = mf
         self.partition = partition
@@ -175,6 +180,7 @@ class ANFIS(Estimator):
         self.progress = progress
         self.premise_inputs = premise_inputs
         self.patience = patience
+        self.min_improvement = min_improvement
 
     # -- validation ---------------------------------------------------------------------------
 
@@ -192,6 +198,7 @@ class ANFIS(Estimator):
         check_integer("fcm_samples", self.fcm_samples, 2, or_none=True)
         check_integer("epochs", self.epochs, 1)
         check_integer("patience", self.patience, 1, or_none=True)
+        check_number("min_improvement", self.min_improvement, 0, 1, open_lo=False)
         for name in ("error_goal", "ridge"):
             check_number(name, getattr(self, name), 0, None, open_lo=False)
         if self.partition == "fcm" and not (isinstance(self.n_rules, (int, np.integer))
@@ -354,7 +361,8 @@ class ANFIS(Estimator):
         options = hybrid.Options(mf=self.mf, epochs=int(self.epochs), step_size=self.step_size,
                                  step_increase=self.step_increase, step_decrease=self.step_decrease,
                                  error_goal=self.error_goal, solver=self.solver, ridge=self.ridge,
-                                 patience=self.patience, progress=self.progress)
+                                 patience=self.patience, min_improvement=self.min_improvement,
+                                 progress=self.progress)
         outputs, steps = hybrid.train(Xp, X, Y, mfs, rules, options, Xp_val, X_val, Y_val)
         models = [self] + [type(self)(**self.get_params()) for _ in outputs[1:]]
         for model, out in zip(models, outputs):

@@ -8,7 +8,8 @@ consequents fixed, the premise parameters take one gradient step of length k
 decreases of the training error and shrinks by ``decrease`` after two consecutive up–down
 alternations (:func:`adapted_step`). Each output keeps the epoch of its least validation error
 (MATLAB's ``chkFIS``); with ``patience`` training stops once that error has not fallen for so
-many epochs (early stopping: "epochs to convergence" costs only the epochs needed).
+many epochs — by at least ``min_improvement`` of its least value, when that is given (early
+stopping: "epochs to convergence" costs only the epochs needed).
 
 **Several outputs, one premise part** (a multiple-output ANFIS, Jang, Sun & Mizutani 1997,
 §12.4): the outputs' rules share their membership functions; each output has its own
@@ -30,7 +31,10 @@ weighed by its own spread, so a large torque does not drown a small one).
   Gaussian functions the sums over the samples are matrix products;
 * the consequents' design built into one reused buffer, its normal matrix by BLAS's
   symmetric rank-k update (what NumPy's ``A.T @ A`` calls), solved by Cholesky with a tiny
-  ridge and a rank-revealing fall-back where ill-conditioned (:func:`least_squares`);
+  ridge and a rank-revealing fall-back where ill-conditioned (:func:`least_squares`); for a
+  clustered rule base (hundreds of rules, a few inputs: learned IK) no design at all, the
+  normal matrix from its ``d(d + 1)/2`` distinct ``R × R`` blocks (:func:`kronecker_normal`,
+  about half the operations);
 * the validation error from the firing strengths and one matrix product, not a second pass
   through the training layers.
 
@@ -51,7 +55,7 @@ import scipy.linalg
 from ..infra.limits import check_time
 from .fuzzy import log_grades, mf_log_gradients
 
-__all__ = ["Options", "Output", "firing", "normalised", "least_squares", "design_buffer", "rule_outputs", "premise_gradient",
+__all__ = ["Options", "Output", "firing", "normalised", "least_squares", "kronecker_normal", "design_buffer", "rule_outputs", "premise_gradient",
            "adapted_step", "keep_valid", "network_outputs", "output_weights", "train", "DESIGN_BYTES", "BLOCK_VALUES"]
 
 #: Firing strengths computed at a time (512 kB): a block's temporaries stay in the cache.
@@ -75,6 +79,7 @@ class Options:
     solver: str
     ridge: float
     patience: int | None = None
+    min_improvement: float = 0.0
     progress: bool = False
 
 
@@ -145,7 +150,8 @@ def least_squares(w_bar: np.ndarray, Xa: np.ndarray, Y: np.ndarray, *, solver: s
     """The consequents ``Θ (R·(n + 1), k)`` minimising ``‖A Θ − Y‖`` for the design ``A`` of
     :func:`_design` and outputs ``Y (N, k)``: the normal equations ``(AᵀA + δI) Θ = AᵀY``
     (``δ = ridge · tr(AᵀA)/P``) by Cholesky, summed over blocks of at most ``design_bytes``
-    (default :data:`DESIGN_BYTES`);
+    (default :data:`DESIGN_BYTES`) — for a rule base of at least as many rules as consequent
+    inputs, block by block of the rules without forming the design (:func:`kronecker_normal`);
     where they are ill-conditioned (scipy's ``LinAlgWarning``: reciprocal condition below
     machine precision) or not positive definite, the rank-revealing QR solution (``gelsy``)
     instead — the squared condition of the normal equations would lose every digit.
@@ -154,10 +160,14 @@ def least_squares(w_bar: np.ndarray, Xa: np.ndarray, Y: np.ndarray, *, solver: s
     epoch."""
     N, R = w_bar.shape
     P = R * Xa.shape[1]
-    rows = max(1, (DESIGN_BYTES if design_bytes is None else design_bytes) // (8 * P))
+    limit = DESIGN_BYTES if design_bytes is None else design_bytes
+    rows = max(1, limit // (8 * P))
     vector = Y.shape[1] == 1
     y = Y[:, 0] if vector else Y
-    if solver == "lstsq" or N <= rows:
+    if solver != "lstsq" and _kronecker(R, Xa.shape[1]):
+        G, b = kronecker_normal(w_bar, Xa, Y, design_bytes=limit)
+        theta = _solve_normal(G, b[:, 0] if vector else b, lambda: _orthogonal(G, b[:, 0] if vector else b, N), ridge)
+    elif solver == "lstsq" or N <= rows:
         A = _design(w_bar, Xa, buffer if buffer is not None and len(buffer) >= N else None)
         if solver == "lstsq":
             theta = _orthogonal(A, y)
@@ -175,10 +185,73 @@ def least_squares(w_bar: np.ndarray, Xa: np.ndarray, Y: np.ndarray, *, solver: s
     return theta[:, None] if vector else theta
 
 
+def _kronecker(R: int, d: int) -> bool:
+    """Whether :func:`least_squares` sums the normal equations by :func:`kronecker_normal`: for
+    at least as many rules as consequent inputs (a clustered rule base), where its
+    ``d(d + 1)/2`` updates of ``R × R`` matrices are fewer operations than one of ``(R·d)²``
+    at BLAS speed (``benchmarks/bench_anfis_train.py``); a few rules over hundreds of inputs
+    (the ID designs) form the design."""
+    return R >= max(d, 32)
+
+
+def kronecker_normal(w_bar: np.ndarray, Xa: np.ndarray, Y: np.ndarray, *,
+                     design_bytes: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The normal equations ``AᵀA (P, P)`` and ``AᵀY (P, k)`` of the consequents' design
+    ``A = w̄ ⊙ [x, 1]`` (:func:`_design`, ``P = R·d``) without forming ``A``.
+
+    Entry ``((r, i), (s, j))`` of ``AᵀA`` is ``M_ij[r, s] = Σ_n w̄_nr w̄_ns x_ni x_nj``: the
+    ``d × d`` grid of ``R × R`` blocks ``M_ij = w̄ᵀ diag(x_i x_j) w̄`` has ``M_ij = M_ji`` and
+    every block symmetric, so ``d(d + 1)/2`` of them make the whole matrix. Each is a
+    symmetric rank-``N`` update (BLAS ``syrk``, what ``B.T @ B`` calls) of ``w̄`` scaled by a
+    non-negative column: ``M_ii`` by ``|x_i|``, and by polarisation
+    ``M_ij = (S_ij − M_ii − M_jj)/2`` with ``S_ij`` scaled by ``|x_i + x_j|`` —
+    ``N R² d(d + 1)/4`` multiply–adds against ``N R² d²/2`` for ``AᵀA``, and no ``N × P``
+    design in memory (blocks of at most ``design_bytes`` of ``w̄``'s rows). The polarisation
+    rounds each block to within a few units of ``Σ_n w̄_nr w̄_ns (x_ni² + x_nj²)``: of the
+    order of the design's own rounding for inputs of comparable scale (they are scaled to
+    ``[0, 1]``).
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> w_bar, Xa, Y = rng.random((50, 4)), np.column_stack([rng.random((50, 2)), np.ones(50)]), rng.random((50, 1))
+        >>> A = _design(w_bar, Xa)
+        >>> G, b = kronecker_normal(w_bar, Xa, Y)
+        >>> bool(np.allclose(G, A.T @ A, rtol=1e-13, atol=1e-13) and np.allclose(b, A.T @ Y))
+        True
+    """
+    N, R = w_bar.shape
+    d, k = Xa.shape[1], Y.shape[1]
+    rows = max(1, (DESIGN_BYTES if design_bytes is None else design_bytes) // (8 * R))
+    G, b = np.zeros((R, d, R, d)), np.zeros((R, d, k))
+    B = np.empty((min(N, rows), R))
+    for start in range(0, N, rows):
+        w, x, y = w_bar[start:start + rows], Xa[start:start + rows], Y[start:start + rows]
+        scaled = B[:len(w)]
+        squares = []
+        for i in range(d):
+            np.multiply(w, np.abs(x[:, i, None]), out=scaled)
+            squares.append(scaled.T @ scaled)
+            G[:, i, :, i] += squares[i]
+        for i in range(d):
+            for j in range(i + 1, d):
+                np.multiply(w, np.abs(x[:, i] + x[:, j])[:, None], out=scaled)
+                M = scaled.T @ scaled
+                M -= squares[i]
+                M -= squares[j]
+                M *= 0.5
+                G[:, i, :, j] += M
+                G[:, j, :, i] += M
+        b += (w.T @ (x[:, :, None] * y[:, None, :]).reshape(len(w), d * k)).reshape(R, d, k)
+    return G.reshape(R * d, R * d), b.reshape(R * d, k)
+
+
 def design_buffer(N: int, R: int, d: int, *, solver: str = "normal",
                   design_bytes: int | None = None) -> np.ndarray:
     """Room for the design block :func:`least_squares` builds for ``N`` samples, ``R`` rules
-    and ``d`` consequent inputs (with the constant)."""
+    and ``d`` consequent inputs (with the constant); none where it forms no design
+    (:func:`kronecker_normal`)."""
+    if solver != "lstsq" and _kronecker(R, d):
+        return np.empty((0, R, d))
     limit = DESIGN_BYTES if design_bytes is None else design_bytes
     rows = N if solver == "lstsq" else min(N, max(1, limit // (8 * R * d)))
     return np.empty((rows, R, d))
@@ -349,7 +422,7 @@ def train(Xp: np.ndarray, X: np.ndarray, Y: np.ndarray, mfs: list[np.ndarray], r
                 best[j] = scores[j]
                 out.mfs, out.consequents, out.best_epoch = mfs, theta[:, :, j].copy(), epoch
         score = scores[0] if k == 1 else math.sqrt(sum(c * e * e for c, e in zip(weights, scores)))
-        if score < best_combined:
+        if score < best_combined * (1.0 - options.min_improvement):   # a fall large enough to count
             best_combined, since_best = score, 0
         else:
             since_best += 1

@@ -12,8 +12,9 @@ Kinds and their options (:data:`KINDS`, the defaults):
 * ``"mlp"`` — a multilayer perceptron (``hidden`` layer widths, ``activation``, L2 penalty
   ``alpha``, Adam's ``learning_rate``) on standardised joint angles, trained epoch by epoch
   (``sklearn.neural_network.MLPRegressor.partial_fit``) for at most ``max_epochs``, keeping the
-  epoch of least validation RMSE and stopping ``patience`` epochs after it — the rule the
-  ANFIS's early stopping follows, on the same validation poses;
+  epoch of least validation RMSE and stopping once it has not fallen by ``min_improvement`` of
+  its least value for ``patience`` epochs — the rule the ANFIS's early stopping follows, on the
+  same validation poses;
 * ``"kernel_ridge"`` — kernel ridge regression with a Gaussian kernel
   ``exp(−gamma·‖x − x'‖²)`` approximated by ``components`` Nyström landmarks (the
   approximate Gaussian process of the contest; ``sklearn.kernel_approximation.Nystroem``, then
@@ -50,7 +51,7 @@ KINDS: dict[str, dict[str, Any]] = {
     "knn": {"neighbors": 5, "weights": "distance"},
     "rbf": {"neighbors": 32, "kernel": "thin_plate_spline", "smoothing": 0.0},
     "mlp": {"hidden": [128, 128], "activation": "relu", "alpha": 1e-4, "learning_rate": 1e-3,
-            "batch_size": 200, "max_epochs": 300, "patience": 10},
+            "batch_size": 200, "max_epochs": 300, "patience": 10, "min_improvement": 0.0},
     "kernel_ridge": {"components": 2000, "gamma": 10.0, "alpha": 1e-6},
 }
 _RBF_KERNELS = ("thin_plate_spline", "cubic", "quintic", "linear")
@@ -101,6 +102,9 @@ def _checked_options(kind: Any, options: Any) -> dict:
         whole("batch_size", 1, 1_000_000)
         whole("max_epochs", 1, 100_000)
         whole("patience", 1, 100_000)
+        positive("min_improvement", zero=True)
+        if o["min_improvement"] >= 1:
+            raise ValueError(f"mlp: min_improvement must be below 1 (a share of the least error), got {show(o['min_improvement'])}")
         o["hidden"] = [int(h) for h in hidden]
     if kind == "kernel_ridge":
         whole("components", 1, 50_000)
@@ -196,17 +200,19 @@ class RivalIK(SavedModel):
         net = MLPRegressor(hidden_layer_sizes=tuple(o["hidden"]), activation=o["activation"], alpha=o["alpha"],
                            learning_rate_init=o["learning_rate"], batch_size=o["batch_size"],
                            random_state=self.random_state, shuffle=True)
-        best, since = math.inf, 0
+        best, since, reference = math.inf, 0, math.inf
         for epoch in range(o["max_epochs"]):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", ConvergenceWarning)
                 net.partial_fit(X, Z)
             self.epochs_ = epoch + 1
             error = float(np.sqrt(np.mean((net.predict(X_val) - Z_val) ** 2)))
-            if error < best:
-                best, since, self.best_epoch_ = error, 0, epoch
+            if error < best:                     # the epoch kept: the least error
+                best, self.best_epoch_ = error, epoch
                 self.weights_ = [w.copy() for w in net.coefs_]
                 self.biases_ = [b.copy() for b in net.intercepts_]
+            if error < reference * (1.0 - o["min_improvement"]):     # a fall large enough to count
+                reference, since = error, 0
             else:
                 since += 1
                 if since >= o["patience"]:
