@@ -21,7 +21,7 @@ export PYTHONHASHSEED := 0
 # SIMD kernels (AVX-512 SVML for tan, pow, exp, …) and OpenBLAS picks GEMM kernels by CPU, and
 # their last bits differ; chaotic quantities (ANFIS step-size oscillations, Jacobian-transpose
 # iteration counts) then differ in the published tables. `make report` pins both to what every
-# x86-64 machine since 2013 (Haswell, Zen) runs natively; measured, see README "Reproducibility".
+# x86-64 machine since 2013 (Haswell, Zen) runs natively; measured, see docs/reproducibility.md and docs/performance.md.
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
@@ -38,7 +38,7 @@ $(STAMP): environment.lock pyproject.toml jupyter/lab-overrides.json
 	@awk '/^uv==/{on=1} on&&/^[^ #]/&&!/^uv==/{on=0} on' environment.lock > build/uv.req
 	@$(PY) -m pip install --quiet --disable-pip-version-check --require-hashes --no-deps -r build/uv.req
 	@# Bytecode compiled once here: where PYTHONDONTWRITEBYTECODE is set (as on the machines measured), every
-	@# kernel, worker and test process would compile numpy, scipy, matplotlib … from source again (README "Performance", "Bytecode").
+	@# kernel, worker and test process would compile numpy, scipy, matplotlib … from source again (docs/performance.md, "Bytecode").
 	VIRTUAL_ENV=$(VENV) $(UV) pip sync --quiet --compile-bytecode --python $(PY) environment.lock
 	VIRTUAL_ENV=$(VENV) $(UV) pip install --quiet --python $(PY) --no-deps --no-build-isolation -e .
 	$(PY) -m ipykernel install --sys-prefix --name $(KERNEL) --display-name "Python 3.11 (nfarm)" \
@@ -55,7 +55,7 @@ report: $(STAMP)
 	$(REPORT_ENV) $(PY) -m nfarm report $(if $(SCHEDULER),--scheduler "$(SCHEDULER)") $(if $(ARM),--arm "$(ARM)")
 
 # make arm URDF=path/to/arm.urdf [NAME=n] [ARM_ARGS="--tip LINK --lock JOINT=VALUE"]: a new arm's
-# robot and study files in params/, with defaults derived from its URDF (README "A new arm").
+# robot and study files in params/, with defaults derived from its URDF (docs/adding-an-arm.md).
 arm: $(STAMP)
 	@test -n "$(URDF)" || { echo "make arm: name a URDF, e.g. make arm URDF=path/to/arm.urdf [NAME=myarm]" >&2; exit 2; }
 	$(PY) -m nfarm add-arm "$(URDF)" $(if $(NAME),--name "$(NAME)") $(ARM_ARGS)
@@ -82,7 +82,7 @@ course: $(STAMP)
 	$(REPORT_ENV) $(PY) -m nfarm course
 
 # make sweep SWEEP=params/sweeps/smoke.yaml [SWEEP_ARGS="--scheduler tcp://host:8786"]: the
-# cells run with the report's numerics, so a chapter reuses them (README "Running sweeps").
+# cells run with the report's numerics, so a chapter reuses them (docs/sweeps.md).
 sweep: $(STAMP)
 	@test -n "$(SWEEP)" || { echo "make sweep: name a sweep file, e.g. make sweep SWEEP=params/sweeps/smoke.yaml" >&2; exit 2; }
 	@$(BYTECODE)

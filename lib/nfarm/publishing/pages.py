@@ -618,7 +618,7 @@ def _reproduce_html(commit: str, clean_build: Mapping | None = None) -> str:
                                f"made (set-up excluded), on {clean_build['machine']}, commit {clean_build['commit']}, "
                                f"{clean_build['finished']}")
     else:
-        rows["clean build"] = "not made in this build directory (README, make report: the times measured)"
+        rows["clean build"] = "not made in this build directory (docs/performance.md: the times measured)"
     return ("<div class='reproduce'><b>Reproduce</b><dl>"
             + "".join(f"<dt>{html.escape(k)}</dt><dd><code>{html.escape(v)}</code></dd>" for k, v in rows.items())
             + "</dl><p>Every chapter reads its inputs from this commit; <code>make report</code> reruns them "
