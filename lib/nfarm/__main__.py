@@ -92,7 +92,8 @@ def main(argv: list[str] | None = None) -> int:
     report.add_argument("--serial", action="store_true",
                         help="run the editions one after the other (default: side by side on 2+ CPUs)")
     report.add_argument("--cell-timeout", type=_seconds, default=1800, metavar="SECONDS",
-                        help="fail a cell that runs longer (default 1800; a positive number of "
+                        help="stop a cell that makes no progress for this long (default 1800; a cell "
+                             "that makes progress runs as long as it needs; a positive number of "
                              "seconds, or 'none' for no limit)")
     report.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="a running Dask scheduler (tcp://host:8786) for chapter 6's missing sweep "
@@ -230,12 +231,15 @@ def report_command(**options) -> int:
     from .infra.notebook_runs import ReportError
     from .infra.paths import shown_path
     from .publishing import report
+    from .publishing.console import Console
 
-    def say(text: str) -> None:
-        print(f"report: {text}", file=sys.stderr, flush=True)
-
+    console = Console(sys.stderr)      # the chapters as they run: cells, sweep cells, time left
+    say = console.say
     try:
-        run = report.build_report(say=say, **options)
+        try:
+            run = report.build_report(say=say, tell=console.tell, **options)
+        finally:
+            console.close()
     except report.ReportUsageError as exc:
         say(str(exc))
         return 2

@@ -1,7 +1,17 @@
 """Running a notebook headlessly: papermill in the project's own Jupyter kernel, over Unix
-sockets, with a time limit per cell, Ctrl-C that stops it, and one line naming the notebook
-and the cell when it fails (:func:`run_notebook`); the chapters in order (:func:`chapters`) and
-the names a notebook's ``parameters`` cell declares (:func:`declared_parameters`).
+sockets, with a limit on a cell that makes no progress (not on a slow one), its progress told
+as it runs, Ctrl-C that stops it, and one line naming the notebook and the cell when it fails
+(:func:`run_notebook`); the chapters in order (:func:`chapters`) and the names a notebook's
+``parameters`` cell declares (:func:`declared_parameters`).
+
+**Progress, not time.** A chapter's sweep cell runs for as long as its machine needs: on a
+slower or shared machine a cell that took 30 minutes takes an hour, and a limit on the cell's
+time failed a reproduction that was working (a fresh clone's ``make report``, in the cell that
+waited on chapter 6's sweeps). So the limit is on silence: a cell is stopped only when
+``cell_timeout`` seconds pass with no progress — no cell started or finished, and no post from
+the work inside the cell (:mod:`nfarm.infra.progress`: the sweeps post each finished cell, and
+beat while their workers run cells that are within their own time limits). The kernel is then
+killed with its process group (its local cluster's workers with it).
 
 Used by the report (:mod:`nfarm.publishing.report`) and by sweeps of notebooks
 (:mod:`nfarm.study.sweep`).
@@ -18,9 +28,11 @@ import signal
 import sys
 import tempfile
 import threading
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from . import progress as _progress
 from .paths import NOTEBOOKS, atomic_path, shown_path
 
 __all__ = ["ReportError", "run_notebook", "chapters", "declared_parameters", "KERNEL_NAME", "CHAPTER"]
@@ -64,9 +76,11 @@ def _use_project_kernel() -> None:
                           f"environment's {sys.executable}: run `make setup`")
 
 
-def _ipc_kernel_manager(directory: str):
+def _ipc_kernel_manager(directory: str, watch: "_Watch | None" = None):
     """A kernel manager whose kernel talks over Unix sockets in ``directory``: no open TCP
-    ports, and no "running over TCP without encryption" warning from every kernel."""
+    ports, and no "running over TCP without encryption" warning from every kernel. The kernel's
+    environment names ``directory/progress.json`` for its posts (:mod:`nfarm.infra.progress`),
+    and ``watch`` learns its process group."""
     from jupyter_client.manager import AsyncKernelManager
 
     class IPCKernelManager(AsyncKernelManager):
@@ -80,9 +94,92 @@ def _ipc_kernel_manager(directory: str):
             # a file: an interrupted run's shutdown otherwise prints the kernel's tracebacks
             # into the terminal. ``kernel_log(directory)`` reads it.
             kw["stderr"] = open(os.path.join(directory, "kernel.err"), "ab")   # noqa: SIM115 — the kernel's
+            kw["env"] = {**(kw.get("env") or os.environ), _progress.ENV: os.path.join(directory, "progress.json")}
             await super()._async_launch_kernel(kernel_cmd, **kw)
+            if watch is not None:
+                provisioner = getattr(self, "provisioner", None)
+                watch.launched(getattr(provisioner, "pgid", None), getattr(provisioner, "pid", None))
 
     return IPCKernelManager
+
+
+class _Watch:
+    """A notebook's progress while it runs, and its watchdog: which cell runs (source
+    numbering) and for how long, the last post of the work inside it, and the kernel killed
+    once ``limit`` seconds pass with neither a cell started or finished nor a new post.
+    ``tell`` (if given) receives the state about once a second, from the watchdog's thread."""
+
+    TICK_S = 1.0
+
+    def __init__(self, notebook: str, cells: int, posts: Path, limit: float | None,
+                 tell: Callable[[dict], None] | None):
+        self.notebook, self.cells, self.posts, self.limit, self.tell = notebook, cells, posts, limit, tell
+        self.lock = threading.Lock()
+        self.cell, self.source, self.injected = None, "", 0
+        self.cell_since = self.last = time.monotonic()
+        self.post, self.post_at = None, None
+        self.group, self.pid = None, None
+        self.stalled = False
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="nfarm-notebook-watch", daemon=True)
+
+    def launched(self, group: int | None, pid: int | None) -> None:
+        with self.lock:
+            self.group, self.pid = group, pid
+
+    def cell_start(self, cell, cell_index: int, **_) -> None:
+        if "injected-parameters" in cell.metadata.get("tags", []):
+            self.injected += 1
+        lines = cell.source.strip().splitlines() if cell.cell_type == "code" else []
+        with self.lock:
+            self.cell, self.source = cell_index - self.injected, lines[0][:80] if lines else ""
+            self.cell_since = self.last = time.monotonic()
+            self.post = None
+
+    def cell_complete(self, **_) -> None:
+        with self.lock:
+            self.last = time.monotonic()
+
+    def state(self) -> dict:
+        with self.lock:
+            now = time.monotonic()
+            return {"notebook": self.notebook, "cell": self.cell, "cells": self.cells, "source": self.source,
+                    "cell_s": now - self.cell_since, "quiet_s": now - self.last,
+                    "work": dict(self.post) if self.post else None}
+
+    def _run(self) -> None:
+        while not self.stop.wait(self.TICK_S):
+            post = _progress.read(self.posts)
+            with self.lock:
+                if post is not None and post.get("posted") != self.post_at:
+                    self.post_at, self.post, self.last = post.get("posted"), post, time.monotonic()
+                quiet = time.monotonic() - self.last
+                group, pid = self.group, self.pid
+            # Counted from the first cell's start: the kernel's start has papermill's own limit.
+            if self.limit is not None and self.cell is not None and quiet > self.limit and not self.stalled:
+                self.stalled = True
+                self._kill(group, pid)
+            if self.tell is not None:
+                with contextlib.suppress(Exception):     # a display's failure is not the notebook's
+                    self.tell(self.state())
+
+    @staticmethod
+    def _kill(group: int | None, pid: int | None) -> None:
+        """The kernel and the processes it started (a local cluster's workers): its group,
+        which it leads (Jupyter starts kernels in a session of their own)."""
+        with contextlib.suppress(OSError):
+            if group is not None and group > 1 and group != os.getpgrp():
+                os.killpg(group, signal.SIGKILL)
+            elif pid is not None:
+                os.kill(pid, signal.SIGKILL)
+
+    def __enter__(self) -> "_Watch":
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop.set()
+        self.thread.join()
 
 
 def _last_line(path: Path) -> str:
@@ -171,17 +268,22 @@ def _interruptible():
 
 def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, parameters: dict,
                  *, progress: bool = False, cell_timeout: float | None = 1800,
-                 remove_tags: Sequence[str] = ()) -> None:
+                 remove_tags: Sequence[str] = (), tell: Callable[[dict], None] | None = None) -> None:
     """Execute ``notebook`` with papermill in the project kernel, writing ``output``.
 
-    ``cell_timeout``: seconds a cell may run before the run fails (``None``: no limit).
+    ``cell_timeout``: seconds a cell may go without progress before the run fails (module
+    docstring; ``None``: no limit). A cell that makes progress is never stopped, however long
+    it runs. ``progress``: papermill's bar of cells. ``tell``: receives the run's state about
+    once a second (a dict: ``notebook``, ``cell`` and ``cells`` in source numbering, the cell's
+    first line ``source``, ``cell_s`` seconds in it, ``quiet_s`` seconds since the last
+    progress, and ``work``: the last post of the work inside the cell, or ``None``).
     ``remove_tags``: cells with any of these tags are left out (nbconvert's
     ``TagRemovePreprocessor``; the report leaves out the exercises, :mod:`nfarm.publishing.course`).
 
     Raises:
-        ReportError: the notebook is not valid, a cell failed, timed out or killed the
-            kernel; one line naming the notebook and the cell (source numbering). ``output``
-            holds the executed notebook up to the failure.
+        ReportError: the notebook is not valid, a cell failed, made no progress for
+            ``cell_timeout`` seconds or killed the kernel; one line naming the notebook and the
+            cell (source numbering). ``output`` holds the executed notebook up to the failure.
     """
     import nbformat
     import papermill
@@ -207,15 +309,21 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
         to_run = output.with_name(f".{output.stem}.source.ipynb")
         with atomic_path(to_run) as tmp:
             nbformat.write(nb, tmp)
+    if cell_timeout is not None and not (isinstance(cell_timeout, (int, float)) and not isinstance(cell_timeout, bool)
+                                         and 0 < cell_timeout < float("inf")):
+        raise ValueError(f"cell_timeout must be a positive, finite number of seconds or None, got {cell_timeout!r}")
     quiet = DropMessage("Kernel died")      # reported below, in one line
     logging.getLogger("papermill").addFilter(quiet)
-    with tempfile.TemporaryDirectory(prefix="nfarm-kernel-") as sockets, _interruptible():
+    cells = len(nbformat.read(to_run, 4).cells)
+    with tempfile.TemporaryDirectory(prefix="nfarm-kernel-") as sockets, _interruptible(), \
+            _Watch(notebook.name, cells, Path(sockets) / "progress.json", cell_timeout, tell) as watch:
         try:
             papermill.execute_notebook(
                 str(to_run), str(output), parameters=parameters, kernel_name=KERNEL_NAME,
                 language="python", cwd=str(notebook.parent), progress_bar=progress,
-                log_output=False, execution_timeout=cell_timeout,
-                kernel_manager_class=_ipc_kernel_manager(sockets))
+                log_output=False, execution_timeout=None,
+                kernel_manager_class=_ipc_kernel_manager(sockets, watch),
+                on_cell_start=watch.cell_start, on_cell_complete=watch.cell_complete)
         except PapermillExecutionError as exc:
             source = exc.source.strip().splitlines()
             first = source[0] if source else ""
@@ -233,12 +341,13 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
         except (DeadKernelError, CellTimeoutError, RuntimeError) as exc:
             where = _running_cell(output)
             at = f" in cell {where[0]} ({where[1]!r})" if where else ""
-            what = f"timed out after {cell_timeout:g} s" if isinstance(exc, CellTimeoutError) \
-                or "timed out" in str(exc).lower() else \
+            what = f"timed out: no progress for {cell_timeout:g} s" if watch.stalled \
+                or isinstance(exc, CellTimeoutError) or "timed out" in str(exc).lower() else \
                 "lost its kernel (it died: a crash, os._exit or out of memory)" \
                 if isinstance(exc, DeadKernelError) or "dead" in str(exc).lower() else \
                 f"failed: {type(exc).__name__}: {str(exc).strip().splitlines()[0][:200]}"
-            said = _last_line(Path(sockets) / "kernel.err") if isinstance(exc, DeadKernelError) else ""
+            said = _last_line(Path(sockets) / "kernel.err") if isinstance(exc, DeadKernelError) \
+                and not watch.stalled else ""
             raise ReportError(f"{notebook.name} {what}{at}{f' (its last words: {said!r})' if said else ''}; "
                               f"the executed notebook is kept at {output}") from None
         finally:

@@ -190,7 +190,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  build_dir: Path = BUILD, extra_parameters: dict | None = None,
                  cell_timeout: float | None = 1800, arms: Sequence[Edition] | None = None,
                  force: bool = False, parallel: bool | None = None, scheduler: str | None = None,
-                 arm: str | None = None, say: Callable[[str], None] = _quiet) -> ReportRun:
+                 arm: str | None = None, say: Callable[[str], None] = _quiet,
+                 tell: Callable[[dict], None] | None = None) -> ReportRun:
     """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
     export HTML and write the index.
 
@@ -215,7 +216,14 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     checked (their published files stay as they are), and the index still lists every edition.
 
     ``say`` receives a line per chapter as it starts, is found up to date, or is published
-    (``python -m nfarm report`` prints them).
+    (``python -m nfarm report`` prints them). ``tell`` receives a running chapter's state about
+    once a second (:func:`nfarm.infra.notebook_runs.run_notebook`'s, with the chapter's
+    ``label``; ``{"label": …, "finished": True}`` when it ends), from every edition's process
+    (:class:`nfarm.publishing.console.Console` shows them). ``cell_timeout``: the seconds a cell
+    may go without progress (a slow cell that makes progress is never stopped).
+
+    A failed or interrupted run resumes from what it finished: the chapters published are up to
+    date, and chapter 6's sweep cells each finished are kept (``build/sweeps/``) and not run again.
 
     Raises:
         ReportUsageError: ``only`` names no chapter, or one that does not exist; ``arm`` names no
@@ -279,38 +287,44 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         parameters = {"smoke": smoke, **own, **extra}
         key = keys[nb.name, arm.name]
         if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
-            say(f"{label}: up to date (its inputs are unchanged)")
+            relay.say(f"{label}: up to date (its inputs are unchanged)")
             return
         shutil.rmtree(stage, ignore_errors=True)
         stage.mkdir(parents=True)
-        say(f"{label} …")
+        relay.say(f"{label} …")
         try:
             where = {"sweep_scheduler": scheduler} if scheduler and "sweep_scheduler" in declared[nb.name] else {}
             run_notebook(nb, executed, {**parameters, **where, "out_dir": shown_path(stage)},
-                         progress=sys.stderr.isatty() and not side_by_side, cell_timeout=cell_timeout,
-                         remove_tags=COURSE_TAGS)
+                         progress=sys.stderr.isatty() and not side_by_side and tell is None,
+                         cell_timeout=cell_timeout, remove_tags=COURSE_TAGS,
+                         tell=None if tell is None else lambda state: relay.tell({**state, "label": label}))
             published = publish_chapter(stage, figures_dir, prefix, arm.subdir)
         except ReportError:
             stamp.unlink(missing_ok=True)
             raise
+        finally:
+            if tell is not None:
+                relay.tell({"label": label, "finished": True})
         shutil.rmtree(stage, ignore_errors=True)
         stamp.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(stamp) as tmp:
             tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
                 figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
-        say(f"{label}: {len(published)} figures and tables published in "
+        relay.say(f"{label}: {len(published)} figures and tables published in "
             f"{shown_path(figures_dir / arm.subdir)}")
 
     def in_order(sequence) -> None:
         for job in sequence:
             chapter(*job)
 
+    relay = _Relay(say, tell)                     # an edition's process sends its lines here
+
     try:
         with publishing_lock(figures_dir):
             recover_figures(figures_dir)
         install_mathjax(report_dir)
         if side_by_side:
-            _side_by_side([functools.partial(in_order, seq) for seq in sequences])
+            _side_by_side([functools.partial(in_order, seq) for seq in sequences], relay=relay)
         else:
             in_order([j for j in jobs if j[0].name not in comparing])
         in_order([j for j in jobs if j[0].name in comparing])
@@ -381,7 +395,39 @@ def _wait(children, seconds: float) -> None:
                 pass
 
 
-def _side_by_side(tasks, grace: float = 10.0) -> None:
+class _Relay:
+    """The report's ``say`` and ``tell``, called from the process that runs a chapter: in the
+    report's own process directly; in an edition's forked process (:func:`_side_by_side`) sent
+    through a queue to the report's, which shows every edition's progress in one place."""
+
+    def __init__(self, say: Callable[[str], None], tell: Callable[[dict], None] | None):
+        self._say, self._tell, self.queue = say, tell, None
+
+    def say(self, text: str) -> None:
+        if self.queue is not None:
+            self.queue.put(("say", text))
+        else:
+            self._say(text)
+
+    def tell(self, state: dict) -> None:
+        if self._tell is None:
+            return
+        if self.queue is not None:
+            self.queue.put(("tell", state))
+        else:
+            self._tell(state)
+
+    def serve(self, queue) -> None:
+        """Show what the editions' processes send, until ``None`` arrives (the report's thread)."""
+        while (item := queue.get()) is not None:
+            kind, what = item
+            try:
+                (self._say if kind == "say" else self._tell or (lambda _: None))(what)
+            except Exception:  # noqa: BLE001 — a display's failure must not stop the report
+                pass
+
+
+def _side_by_side(tasks, grace: float = 10.0, relay: _Relay | None = None) -> None:
     """Run each task (a callable) in a forked process of its own, all at once; raise
     ``KeyboardInterrupt`` when one was interrupted (:func:`build_report` says it as
     :class:`ReportInterrupted`), else a :class:`ReportError` with every failed task's line. Ctrl-C
@@ -393,12 +439,19 @@ def _side_by_side(tasks, grace: float = 10.0) -> None:
     sys.stdout.flush()
     sys.stderr.flush()
     pipes = [context.Pipe(duplex=False) for _ in tasks]
-    children = [context.Process(target=_child, args=(task, sender), daemon=False)
+    queue = context.SimpleQueue() if relay is not None else None
+    children = [context.Process(target=_child, args=(task, sender, relay, queue), daemon=False)
                 for task, (_, sender) in zip(tasks, pipes)]
     for child in children:
         child.start()
     for _, sender in pipes:
         sender.close()                              # the children hold their ends
+    shower = None
+    if queue is not None:                           # started after the forks: no thread is copied
+        import threading
+
+        shower = threading.Thread(target=relay.serve, args=(queue,), name="nfarm-report-relay", daemon=True)
+        shower.start()
     interrupted = False
     while True:
         try:
@@ -414,6 +467,9 @@ def _side_by_side(tasks, grace: float = 10.0) -> None:
             for child in children:
                 if child.is_alive():
                     os.kill(child.pid, signal.SIGINT)
+    if shower is not None:
+        queue.put(None)
+        shower.join()
     ends = []
     for (receiver, _), child in zip(pipes, children):
         try:
@@ -437,7 +493,9 @@ def _cannot_write(exc: OSError) -> str:
     return f"cannot write{where}: {exc.strerror or exc}"
 
 
-def _child(task, sender) -> None:
+def _child(task, sender, relay: _Relay | None = None, queue=None) -> None:
+    if relay is not None:
+        relay.queue = queue                         # this process's lines go to the report's
     try:
         task()
         end = ("ok", "")

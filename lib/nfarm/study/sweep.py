@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..infra import progress as _progress
 from ..infra import provenance
 from ..infra.limits import time_limit
 from ..infra.paths import BUILD, PARAMS, ROOT, atomic_path, project_path, shown_path
@@ -499,9 +500,18 @@ def run_sweeps(sweeps: Sequence[Sweep], outs: Sequence[str | os.PathLike | None]
                 results[where] = done
             else:
                 pending[where] = (i, cell)
+    step = ", ".join(dict.fromkeys(s.name for s in sweeps))
     bar = tqdm(total=len(results) + len(pending), initial=len(results), unit="cell",
-               disable=not progress, desc=", ".join(dict.fromkeys(s.name for s in sweeps)),
-               file=sys.stderr, dynamic_ncols=True)
+               disable=not progress, desc=step, file=sys.stderr, dynamic_ncols=True)
+    # Whoever runs this (make report's chapter) is told the cells done and the time left
+    # (nfarm.infra.progress); the cells found finished are the run being resumed.
+    reused, total, started = len(results), len(results) + len(pending), time.monotonic()
+    told = {"eta_s": None, "at": started}
+
+    def state() -> tuple:
+        eta_s = told["eta_s"]
+        left = None if eta_s is None else max(0.0, eta_s - (time.monotonic() - told["at"]))
+        return step, len(results), total, reused, left
 
     def finish(i: int, cell: Cell, record: dict) -> None:
         sweep = sweeps[i]
@@ -510,11 +520,19 @@ def run_sweeps(sweeps: Sequence[Sweep], outs: Sequence[str | os.PathLike | None]
                                                   record["seconds"], record["worker"],
                                                   record.get("error", ""))
         bar.update()
+        now = time.monotonic()
+        told.update(eta_s=_progress.eta(len(results) - reused, total - len(results), now - started), at=now)
+        _progress.post(*state()[:3], reused=reused, eta_s=state()[4])
         if record["status"] != "ok":
             bar.write(f"{sweep.name}: cell {cell.key} failed: {_error_line(record['error'])}",
                       file=sys.stderr)
 
     todo = list(pending.values())
+    limits = [_timeout(sweeps[i], timeout) for i, _ in todo]
+    # While the cells run elsewhere (a cluster's workers), this process waits; its beats say so,
+    # until every cell under way should have ended by its own time limit.
+    alive_for = None if any(t is None for t in limits) else max(limits, default=0.0) + 60.0
+    _progress.post(step, reused, total, reused=reused)
     try:
         if todo and prepare:
             for job in dict.fromkeys(sweeps[i].job for i, _ in todo):
@@ -525,7 +543,8 @@ def run_sweeps(sweeps: Sequence[Sweep], outs: Sequence[str | os.PathLike | None]
                 finish(i, cell, execute_cell(sweeps[i].job, sweeps[i].notebook, dict(cell.params),
                                              sweeps[i].metrics, _timeout(sweeps[i], timeout)))
         elif todo:
-            _run_on_dask(sweeps, todo, scheduler, workers, client, timeout, finish)
+            with _progress.heartbeat(state, alive_for_s=alive_for):
+                _run_on_dask(sweeps, todo, scheduler, workers, client, timeout, finish)
     finally:
         bar.close()
     every = []
