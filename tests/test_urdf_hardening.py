@@ -245,8 +245,13 @@ def test_names_with_xml_characters_are_escaped_and_read_back(tmp_path):
             assert root.get("name") == prefix + name
             revolute = [j.get("name") for j in root.iter("joint") if j.get("type") == "revolute"]
             assert revolute == [prefix + name + "0", prefix + name + "1"]
-            again = read(tmp_path, text, "named.urdf", tip=prefix + "tool")
-            assert again.name == prefix + name and again.joint_names == tuple(revolute)
+            # such a <robot name> cannot name directories: read back under a robot name (a robot
+            # file's or add-arm's), refused without one (tests/test_hardening4.py)
+            (tmp_path / "named.urdf").write_text(text)
+            again = from_urdf(tmp_path / "named.urdf", tip=prefix + "tool", name="again")
+            assert again.name == "again" and again.joint_names == tuple(revolute)
+            with pytest.raises(ParamsError, match=r"<robot name>: must be 1-64 letters"):
+                read(tmp_path, text, "named.urdf", tip=prefix + "tool")
             np.testing.assert_allclose(again.a, robot.a, atol=1e-12)
 
 

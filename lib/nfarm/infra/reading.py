@@ -38,7 +38,7 @@ import yaml
 
 __all__ = ["ParamsError", "ParamsWarning", "read_bytes", "load_yaml", "load_json", "Validator",
            "show", "json_ready", "with_content_digest", "checked_content", "MAX_BYTES", "MAX_DEPTH",
-           "MAX_NODES", "MAX_DIGITS"]
+           "MAX_NODES", "MAX_DIGITS", "listed", "MAX_LISTED"]
 
 MAX_BYTES = 1 << 20        # 1 MiB: a robot file is ~2 KB, a saved 128-rule model ~100 KB
 MAX_DEPTH = 32             # nesting levels (a robot file uses 4)
@@ -63,6 +63,25 @@ def show(value: Any) -> str:
     whatever the value: a nested or shared structure is cut at two levels and four items)."""
     text = _repr.repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+#: Names a message lists before it counts the rest (a list in a message stays one short line).
+MAX_LISTED = 8
+
+
+def listed(names, limit: int = MAX_LISTED) -> str:
+    """``names`` joined by commas for a message, each shortened (:func:`show` of a long one), at
+    most ``limit`` of them and then how many more: a file of 40 000 roots is one short line.
+
+    Example:
+        >>> listed(["a", "b"]), listed(f"l{k}" for k in range(40_001))
+        ('a, b', 'l0, l1, l2, l3, l4, l5, l6, l7 and 39,993 more')
+    """
+    items = list(names)
+    shown_items = [x if isinstance(x, str) and len(x) <= 40 and x.isprintable() else show(x)
+                   for x in items[:limit]]
+    more = f" and {len(items) - limit:,} more" if len(items) > limit else ""
+    return ", ".join(shown_items) + more
 
 
 # --------------------------------------------------------------------------------------------
@@ -143,6 +162,11 @@ class _Loader(yaml.SafeLoader):
         if self.check_event(yaml.AliasEvent):
             event = self.peek_event()
             anchor = event.anchor
+            if anchor in self.anchors and id(self.anchors[anchor]) not in self._sizes:
+                # its anchor's node is still being composed: the alias is inside it
+                raise yaml.composer.ComposerError(
+                    None, None, f"a recursive alias *{anchor} (inside the value it names)",
+                    event.start_mark)
             if anchor in self.anchors:
                 self._count(self._sizes.get(id(self.anchors[anchor]), 1), event.start_mark)
             return super().compose_node(parent, index)
@@ -206,8 +230,31 @@ _Loader.add_implicit_resolver("tag:yaml.org,2002:null", _NULL, ["~", "n", "N", "
 MAX_DIGITS = 100
 
 
-def _construct_int(loader, node):
+class _Unbuildable(yaml.constructor.ConstructorError):
+    """A value whose tag the loader cannot build (``!!int 0x10``, ``!!bool maybe``, a date): one
+    line naming the tag and the text, from :func:`load_yaml`."""
+
+
+def _refuse(node, rule: str):
+    value = show(node.value) if isinstance(node, yaml.ScalarNode) else \
+        "a list" if isinstance(node, yaml.SequenceNode) else "a mapping"
+    raise _Unbuildable(None, None, f"{node.tag.rsplit(':', 1)[-1]} {value}: {rule}", node.start_mark)
+
+
+def _tagged_text(loader, node, pattern: re.Pattern, rule: str) -> str:
+    """The text of a scalar tagged explicitly (``!!int …``), which must read as that tag's plain
+    values do (the same grammar as an untagged value): otherwise one line naming the tag."""
+    if not isinstance(node, yaml.ScalarNode):
+        _refuse(node, f"must be a single value ({rule})")
     text = loader.construct_scalar(node)
+    if not pattern.match(text):
+        _refuse(node, rule)
+    return text
+
+
+def _construct_int(loader, node):
+    text = _tagged_text(loader, node, _INT, "a whole number is plain decimal digits (no 0x, 0o, "
+                                             "leading zeros, '_' or ':')")
     if len(text.lstrip("+-")) > MAX_DIGITS:
         raise yaml.constructor.ConstructorError(
             None, None, f"an integer of {len(text.lstrip('+-')):,} digits (at most {MAX_DIGITS})",
@@ -215,8 +262,12 @@ def _construct_int(loader, node):
     return int(text)
 
 
+#: What ``!!float`` accepts: a plain float or a plain whole number (``!!float 3`` is 3.0).
+_TAGGED_FLOAT = re.compile(rf"(?:{_FLOAT.pattern})|^[-+]?(?:0|[1-9][0-9]*)$", re.X)
+
+
 def _construct_float(loader, node):
-    text = loader.construct_scalar(node).lower()
+    text = _tagged_text(loader, node, _TAGGED_FLOAT, "a number is plain decimal (1, -0.25, 1.5e-3, .inf)").lower()
     if text.lstrip("+-") == ".inf":
         return -math.inf if text.startswith("-") else math.inf
     if text == ".nan":
@@ -224,8 +275,31 @@ def _construct_float(loader, node):
     return float(text)
 
 
+def _construct_bool(loader, node):
+    return _tagged_text(loader, node, _BOOL, "a truth value is true or false").lower() == "true"
+
+
+def _construct_null(loader, node):
+    _tagged_text(loader, node, _NULL, "null is null, ~ or nothing")
+    return None
+
+
+def _not_read(rule: str):
+    def construct(loader, node):
+        _refuse(node, rule)
+    return construct
+
+
 _Loader.add_constructor("tag:yaml.org,2002:int", _construct_int)
 _Loader.add_constructor("tag:yaml.org,2002:float", _construct_float)
+_Loader.add_constructor("tag:yaml.org,2002:bool", _construct_bool)
+_Loader.add_constructor("tag:yaml.org,2002:null", _construct_null)
+# Tags of YAML 1.1 no parameter file has a use for: refused by name rather than built.
+for _tag, _what in (("timestamp", "dates are not read (write the value as text or a number)"),
+                    ("binary", "binary data is not read"), ("set", "sets are not read (write a list)"),
+                    ("omap", "ordered maps are not read (write a mapping)"),
+                    ("pairs", "pairs are not read (write a mapping)")):
+    _Loader.add_constructor(f"tag:yaml.org,2002:{_tag}", _not_read(_what))
 
 
 def load_yaml(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES, what: str = "parameter file"
@@ -239,12 +313,18 @@ def load_yaml(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES, what: str 
         mark = getattr(exc, "problem_mark", None)
         where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        if isinstance(exc, _Unbuildable):
+            raise ParamsError(f"{where}: a value tagged !!{problem}") from None
         if problem.startswith(("duplicate key", "nested deeper", "more than", "merge keys",
-                               "a key must", "an integer of")):
+                               "a key must", "an integer of", "a recursive alias")):
             raise ParamsError(f"{where}: {problem}") from None
         raise ParamsError(f"{where}: YAML syntax error: {problem}") from None
-    except RecursionError:  # pragma: no cover — the depth bound comes first
-        raise ParamsError(f"{path}: nested too deeply") from None
+    except RecursionError:  # a recursive alias (&a [*a]) the composer cannot close
+        raise ParamsError(f"{path}: nested too deeply (a recursive alias?)") from None
+    except (ValueError, TypeError, KeyError, AttributeError, OverflowError) as exc:   # pragma: no cover
+        # a constructor PyYAML ships that met a value it cannot build: still one line
+        raise ParamsError(f"{path}: a value the YAML loader cannot build ({type(exc).__name__}: "
+                          f"{show(str(exc))})") from None
 
 
 # --------------------------------------------------------------------------------------------

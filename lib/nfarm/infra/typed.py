@@ -61,18 +61,118 @@ from typing import Annotated, Any, Literal, Union
 
 from .reading import Validator
 
-__all__ = ["read_typed", "Range", "Length", "JOINTS", "ORDERED", "TEXT", "ReadBy", "section_keys"]
+__all__ = ["read_typed", "Range", "Length", "JOINTS", "ORDERED", "TEXT", "ReadBy", "section_keys",
+           "MASS", "INERTIA", "GRAVITY", "LENGTH", "ANGLE", "VELOCITY", "EFFORT", "DRIVE", "SPEED_DEG_S",
+           "ACCELERATION_DEG_S2", "CURRENT_PER_COUNT", "TORQUE_CONSTANT", "EPOCHS", "N_MFS", "N_RULES",
+           "ITERATIONS", "COUNT"]
 
 
 @dataclass(frozen=True)
 class Range:
     """Every number under the annotation lies in ``[lo, hi]`` (``lo < x`` with ``lo_open``,
-    ``x < hi`` with ``hi_open``); ``None``: no bound."""
+    ``x < hi`` with ``hi_open``); ``None``: no bound. ``unit`` follows a bound in the message
+    and ``why`` (the reason for the bound) ends it: the plausibility bounds below carry both.
+
+    Example:
+        >>> v = Validator("r.yaml")
+        >>> MASS.check(v, 2.5, "joints[0].mass")
+        2.5
+        >>> MASS.check(v, 1e308, "joints[0].mass")
+        Traceback (most recent call last):
+        ...
+        nfarm.infra.reading.ParamsError: r.yaml: joints[0].mass: must be <= 10000 kg, got 1e+308 (heavier than any arm's link: grams by mistake?)
+    """
 
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
     hi_open: bool = False
+    unit: str = ""
+    why: str = ""
+    floor: float | None = None
+    why_floor: str = ""
+
+    def check(self, v: Validator, value: Any, at: str, *, integer: bool = False) -> Any:
+        """``value`` as a finite number (a whole number with ``integer``) within the range, or
+        one line through ``v`` naming ``at`` and the rule: below ``lo`` (the physical bound,
+        such as a mass's 0) as any range says it; below ``floor`` (the least plausible value of
+        a quantity that is positive, such as a speed) or beyond ``hi``, with the unit and the
+        reason (``why_floor``, ``why``)."""
+        if integer:
+            x = v.integer(value, at)
+        else:
+            x = v.number(value, at)
+        unit = f" {self.unit}" if self.unit else ""
+        got = x if integer else repr(x)
+        if self.lo is not None and (x <= self.lo if self.lo_open else x < self.lo):
+            v.fail(at, f"must be {'>' if self.lo_open else '>='} {self.lo:g}, got {got}")
+        if self.floor is not None and x < self.floor:
+            v.fail(at, f"must be >= {self.floor:g}{unit}, got {got}"
+                       + (f" ({self.why_floor})" if self.why_floor else ""))
+        why = f" ({self.why})" if self.why else ""
+        if self.hi is not None and (x >= self.hi if self.hi_open else x > self.hi):
+            shown_x = got if not integer or abs(x) < 10 ** 15 else f"{float(x):.3g}"
+            v.fail(at, f"must be {'<' if self.hi_open else '<='} {self.hi:g}{unit}, got {shown_x}{why}")
+        return x
+
+
+# --------------------------------------------------------------------------------------------
+# Plausibility bounds: one per quantity, each with its unit and its reason. A value beyond one is
+# a unit slip, a typo or a hostile file, never an arm; the bounds keep every later computation
+# finite (no overflow, no division by a subnormal). Every reader of that quantity uses the same
+# constant: robot files, URDFs, study files, sweep files.
+
+#: A link's mass [kg]: 10 t is heavier than the links of any arm (an industrial arm's are < 1 t).
+MASS = Range(lo=0.0, hi=1e4, unit="kg", why="heavier than any arm's link: grams by mistake?")
+#: A moment or product of inertia [kg·m²]: a 10 t body 1 m from its centre is 1e4 kg·m².
+INERTIA = Range(floor=-1e4, hi=1e4, unit="kg·m²", why="beyond a 10 t link 1 m long: g·mm² by mistake?",
+                why_floor="beyond a 10 t link 1 m long: g·mm² by mistake?")
+#: A component of gravity [m/s²]: ten times the Earth's.
+GRAVITY = Range(floor=-100.0, hi=100.0, unit="m/s²", why="ten times the Earth's 9.81: not gravity",
+                why_floor="ten times the Earth's 9.81: not gravity")
+#: A length or a coordinate [m] (DH a and d, centres of mass, base, tool, URDF origins): a
+#: thousand kilometres is no arm, nor the common normal of a CAD export's nearly parallel axes
+#: (tens of kilometres away, kept exactly); lengths beyond 10 m already warn (millimetres?).
+LENGTH = Range(floor=-1e6, hi=1e6, unit="m", why="a thousand kilometres: no arm's length",
+               why_floor="a thousand kilometres: no arm's length")
+#: An angle that is no joint limit [rad] (DH alpha and offset, URDF rpy): within a hundred turns
+#: (beyond 2π already warns: degrees by mistake?).
+ANGLE = Range(floor=-200 * 3.141592653589793, hi=200 * 3.141592653589793, unit="rad",
+              why="a hundred turns: not an angle in radians", why_floor="a hundred turns: not an angle in radians")
+#: A joint's speed limit [rad/s] (a URDF's ``<limit velocity>``, a robot file's ``velocity``):
+#: 1e4 rad/s is 95 000 rpm, beyond any motor's shaft.
+VELOCITY = Range(lo=0.0, lo_open=True, floor=1e-4, hi=1e4, unit="rad/s", why="95 000 rpm, beyond any joint drive",
+                 why_floor="a turn in 17 hours: no joint drive's limit")
+#: A joint's torque limit [N·m] (a URDF's ``<limit effort>``, a robot file's ``effort``).
+EFFORT = Range(lo=0.0, lo_open=True, hi=1e6, unit="N·m", why="beyond any arm's drive")
+#: A joint-drive term (viscous N·m·s/rad, Coulomb N·m, armature kg·m², noise N·m, offsets N·m).
+DRIVE = Range(lo=0.0, hi=1e6, why="beyond any arm's drive: a unit slip?")
+#: A speed of a trajectory or a friction model [deg/s]: 1e-3 deg/s is a turn in four days; a
+#: smaller one only divides time into nothing (5e-324 deg/s divided by zero).
+SPEED_DEG_S = Range(lo=0.0, lo_open=True, floor=1e-3, hi=1e6, unit="deg/s", why="no arm's joint turns faster",
+                    why_floor="a turn in four days: no trajectory moves slower")
+#: An acceleration of a trajectory [deg/s²].
+ACCELERATION_DEG_S2 = Range(lo=0.0, lo_open=True, floor=1e-3, hi=1e8, unit="deg/s²",
+                            why="no arm's joint accelerates faster",
+                            why_floor="a trajectory would take days to reach its speed")
+#: A sensor's current per count [A]: a nanoampere per count is below any servo's ADC, a kiloampere
+#: above any arm's current.
+CURRENT_PER_COUNT = Range(lo=0.0, lo_open=True, floor=1e-9, hi=1e3, unit="A",
+                          why="above any arm's current", why_floor="below any servo's resolution")
+#: A motor's torque constant at the joint [N·m/A].
+TORQUE_CONSTANT = Range(lo=0.0, lo_open=True, floor=1e-6, hi=1e4, unit="N·m/A",
+                        why="above any geared motor's", why_floor="below any motor's")
+#: Training epochs (and an early stop's patience, in epochs): 10 000 epochs is days for a cell.
+EPOCHS = Range(lo=1, hi=10_000, why="beyond 10 000 epochs a cell trains for days")
+#: Membership functions per input of a grid partition: the rules are their product over the
+#: inputs (8 on 7 inputs is 2 million rules).
+N_MFS = Range(lo=1, hi=8, why="the grid's rules are their product over the inputs")
+#: Rules of a clustered rule base.
+N_RULES = Range(lo=1, hi=4096, why="the contest's largest is 512; more do not fit the memory of one cell")
+#: Iterations of an iterative learner (an MLP's, boosting's).
+ITERATIONS = Range(lo=1, hi=100_000, why="beyond that a cell runs for days")
+#: A stride through the training states, or a count of kernel components.
+COUNT = Range(lo=1, hi=10_000_000, why="beyond any data set here")
 
 
 @dataclass(frozen=True)
@@ -239,6 +339,8 @@ class _Reader:
         raise TypeError(f"{at}: unsupported annotation {hint!r}")
 
     def number(self, value: Any, at: str, b: Range, *, integer: bool) -> float:
+        if b.unit or b.why or b.floor is not None:          # a plausibility bound: its message says the unit and why
+            return b.check(self.v, value, at, integer=integer)
         if integer:
             x = self.v.integer(value, at, lo=None if b.lo_open else b.lo, hi=None if b.hi_open else b.hi)
         else:

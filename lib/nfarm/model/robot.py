@@ -45,7 +45,7 @@ import numpy as np
 from ..infra.paths import project_path, shown_path
 from ..infra.reading import ParamsError, ParamsWarning, Validator, load_yaml, show
 from ..infra.reading import read_bytes as _read_bytes
-from ..infra.typed import TEXT, Range, ReadBy, read_typed
+from ..infra.typed import ANGLE, DRIVE, EFFORT, GRAVITY, INERTIA, LENGTH, MASS, TEXT, VELOCITY, Range, ReadBy, read_typed
 from .rotations import log_so3
 
 __all__ = [
@@ -63,6 +63,8 @@ __all__ = [
     "DRIVE_DEFAULTS",
     "register_reader",
     "with_provenance",
+    "robot_name",
+    "is_robot_name",
 ]
 
 Convention = Literal["standard", "modified"]
@@ -243,12 +245,43 @@ def load_robot(path: str | Path) -> Robot:
 ROBOT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 
 
-def _robot_name(v, value) -> str:
+#: The rule :data:`ROBOT_NAME` states, as messages say it.
+ROBOT_NAME_RULE = ("must be 1-64 letters, digits, '_', '-' or '.', starting with a letter or digit "
+                   "and without '..' (it names directories and files)")
+
+
+def _robot_name(v, value, at: str = "name", hint: str = "") -> str:
     """``value`` as a robot's name (:data:`ROBOT_NAME`), or a one-line error naming the field."""
-    if not isinstance(value, str) or not ROBOT_NAME.fullmatch(value) or ".." in value:
-        v.fail("name", f"must be 1-64 letters, digits, '_', '-' or '.', starting with a letter or digit "
-                       f"and without '..' (it names directories and files), got {show(value)}")
+    if not is_robot_name(value):
+        v.fail(at, f"{ROBOT_NAME_RULE}, got {show(value)}{hint}")
     return value
+
+
+def is_robot_name(value: Any) -> bool:
+    """Whether ``value`` can be a robot's name (:data:`ROBOT_NAME`, no ``..``): one path
+    component that names nothing but itself.
+
+    Example:
+        >>> [is_robot_name(x) for x in ("so101", "so-101.v2", "../x", "/tmp/x", "a..b", ".hidden", 3)]
+        [True, True, False, False, False, False, False]
+    """
+    return isinstance(value, str) and ROBOT_NAME.fullmatch(value) is not None and ".." not in value
+
+
+def robot_name(value: Any, source: str, at: str = "name", hint: str = "") -> str:
+    """``value`` as a robot's name, whatever gave it (a robot file, a URDF's ``<robot name>``,
+    ``add-arm --name``, a robot built in Python before its name names a path), or a one-line
+    :class:`ParamsError` naming ``source``, ``at`` and the rule (then ``hint``).
+
+    Example:
+        >>> robot_name("so101", "x.urdf")
+        'so101'
+        >>> robot_name("../../elsewhere/pwned", "x.urdf", "<robot name>")
+        Traceback (most recent call last):
+        ...
+        nfarm.infra.reading.ParamsError: x.urdf: <robot name>: must be 1-64 letters, digits, '_', '-' or '.', starting with a letter or digit and without '..' (it names directories and files), got '../../elsewhere/pwned'
+    """
+    return _robot_name(Validator(source), value, at, hint)
 
 
 def _from_described_urdf(data: dict, path: Path) -> Robot:
@@ -268,7 +301,7 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
     robot = _READERS[urdf.suffix.lower()](urdf, tip=tip, lock=lock, name=name)
     changes: dict[str, Any] = {"source": shown_path(path)}
     if data.get("gravity") is not None:
-        changes["gravity"] = np.array(v.vector(data["gravity"], "gravity", 3))
+        changes["gravity"] = np.array(_vector(3, GRAVITY)(v, data["gravity"], "gravity"))
     if "description" in data:
         changes["description"] = v.string(data["description"], "description", allow_empty=True)
     if data.get("poses_deg") is not None:
@@ -279,7 +312,7 @@ def _from_described_urdf(data: dict, path: Path) -> Robot:
             values = value if isinstance(value, list) else [value] * robot.n
             if len(values) != robot.n:
                 v.fail(f"drive.{key}", f"must be one number or {robot.n}, got {len(values)}")
-            numbers = [v.number(x, f"drive.{key}", lo=0.0, lo_open=key == "coulomb_velocity")
+            numbers = [(VELOCITY if key == "coulomb_velocity" else DRIVE).check(v, x, f"drive.{key}")
                        for x in values]
             changes[key] = np.array(numbers)
     robot = dataclasses.replace(robot, **changes)
@@ -312,9 +345,12 @@ def _as_given(v: Validator, value: Any, at: str) -> Any:
     return value
 
 
-def _vector(length: int):
-    """A reader of a list of ``length`` finite numbers (one error: "must be a list of 3 numbers")."""
-    return lambda v, value, at: v.vector(value, at, length)
+def _vector(length: int, bound: Range):
+    """A reader of a list of ``length`` finite numbers (one error: "must be a list of 3 numbers"),
+    each within the plausibility ``bound`` (:mod:`nfarm.infra.typed`)."""
+    def read(v, value, at):
+        return [bound.check(v, x, f"{at}[{k}]") for k, x in enumerate(v.vector(value, at, length))]
+    return read
 
 
 def _limits(v: Validator, value: Any, at: str) -> tuple[float, float]:
@@ -342,21 +378,21 @@ class JointSection:
     the effort [N·m] and speed [rad/s] limits (``inf``: none) and the ``fixed`` 4×4 transform
     after the DH row (``None``: identity; standard DH only)."""
 
-    a: float
-    alpha: float
-    d: float
-    offset: float
+    a: Annotated[float, LENGTH]
+    alpha: Annotated[float, ANGLE]
+    d: Annotated[float, LENGTH]
+    offset: Annotated[float, ANGLE]
     qlim: Annotated[tuple[float, float], ReadBy(_limits)]
-    mass: Annotated[float, Range(lo=0.0)]
-    com: Annotated[list[float], ReadBy(_vector(3))]
+    mass: Annotated[float, MASS]
+    com: Annotated[list[float], ReadBy(_vector(3, LENGTH))]
     inertia: Annotated[np.ndarray, ReadBy(_inertia)]
     name: str = ""                  # left out: q1, q2, … by position
-    viscous: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["viscous"]
-    coulomb: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["coulomb"]
-    coulomb_velocity: Annotated[float, Range(lo=0.0, lo_open=True)] = DRIVE_DEFAULTS["coulomb_velocity"]
-    armature: Annotated[float, Range(lo=0.0)] = DRIVE_DEFAULTS["armature"]
-    effort: Annotated[float, Range(lo=0.0, lo_open=True)] = math.inf
-    velocity: Annotated[float, Range(lo=0.0, lo_open=True)] = math.inf
+    viscous: Annotated[float, DRIVE] = DRIVE_DEFAULTS["viscous"]
+    coulomb: Annotated[float, DRIVE] = DRIVE_DEFAULTS["coulomb"]
+    coulomb_velocity: Annotated[float, VELOCITY] = DRIVE_DEFAULTS["coulomb_velocity"]
+    armature: Annotated[float, DRIVE] = DRIVE_DEFAULTS["armature"]
+    effort: Annotated[float, EFFORT] = math.inf
+    velocity: Annotated[float, VELOCITY] = math.inf
     fixed: Annotated[Optional[np.ndarray], ReadBy(_pose)] = None
 
 
@@ -368,7 +404,7 @@ class RobotFile:
 
     name: Annotated[str, ReadBy(_name)]
     convention: Convention
-    gravity: Annotated[list[float], ReadBy(_vector(3))]
+    gravity: Annotated[list[float], ReadBy(_vector(3, GRAVITY))]
     joints: Annotated[list[JointSection], ReadBy(_joints)]
     tool: Annotated[Optional[np.ndarray], ReadBy(_pose)] = None
     base: Annotated[Optional[np.ndarray], ReadBy(_pose)] = None
@@ -662,6 +698,8 @@ class _Validator(Validator):
         T = np.array([self.vector(row, f"{at}[{r}]", 4) for r, row in enumerate(value)])
         if not np.array_equal(T[3], [0.0, 0.0, 0.0, 1.0]):
             self.fail(f"{at}[3]", f"last row must be [0, 0, 0, 1], got {T[3].tolist()}")
+        for r in range(3):
+            LENGTH.check(self, float(T[r, 3]), f"{at}[{r}][3]")
         R = T[:3, :3]
         err = float(np.abs(R.T @ R - np.eye(3)).max())
         if err > ORTHONORMAL_TOL:
@@ -675,7 +713,7 @@ class _Validator(Validator):
         if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 6:
             self.fail(at, f"must be a list of 6 numbers [Ixx, Iyy, Izz, Ixy, Iyz, Ixz], "
                           f"got {show(value)}")
-        ixx, iyy, izz, ixy, iyz, ixz = (self.number(x, f"{at}[{k}]") for k, x in enumerate(value))
+        ixx, iyy, izz, ixy, iyz, ixz = (INERTIA.check(self, x, f"{at}[{k}]") for k, x in enumerate(value))
         inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
         principal = np.linalg.eigvalsh(inertia)
         # Relative to the inertia's own scale: a 1e-20 kg m² part is as much a body as a

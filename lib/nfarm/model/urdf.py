@@ -31,9 +31,10 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from ..infra.reading import MAX_BYTES, ParamsError, ParamsWarning, Validator, read_bytes, show
+from ..infra.reading import MAX_BYTES, ParamsError, ParamsWarning, Validator, listed, read_bytes, show
+from ..infra.typed import ANGLE, DRIVE, EFFORT, INERTIA, LENGTH, MASS, VELOCITY, Range
 from .kinematics import dh_transform, joint_placements
-from .robot import MAX_PLAUSIBLE_LENGTH, Robot, register_reader, robot_from_dict, with_provenance
+from .robot import MAX_PLAUSIBLE_LENGTH, Robot, register_reader, robot_from_dict, robot_name, with_provenance
 from .rotations import matrix_to_rpy
 
 __all__ = ["to_urdf", "from_urdf", "urdf_outline"]
@@ -279,9 +280,10 @@ class _Reader:
             self.v.fail(f"<{kind}>", "needs a non-empty name attribute")
         return name
 
-    def _numbers(self, text, at: str, count: int, default=None) -> np.ndarray:
+    def _numbers(self, text, at: str, count: int, default=None, bound: Range | None = None) -> np.ndarray:
         """``count`` numbers of URDF's grammar (:data:`_NUMBER`, separated by XML white
-        space), each finite."""
+        space), each finite and within the plausibility ``bound`` (:mod:`nfarm.infra.typed`; a
+        0 of a drive limit is "none", outside its bound)."""
         if text is None:
             if default is None:
                 self.v.fail(at, "is required")
@@ -297,14 +299,18 @@ class _Reader:
         values = np.array([float(x) for x in words])
         if not np.isfinite(values).all():
             self.v.fail(at, f"must be {what}, got {show(text)}")
+        if bound is not None:
+            for x in values:
+                if not (x == 0 and bound in (VELOCITY, EFFORT)):
+                    bound.check(self.v, float(x), at)
         return values
 
     def _origin(self, element, at: str) -> np.ndarray:
         T = np.eye(4)
         origin = element.find("origin")
         if origin is not None:
-            xyz = self._numbers(origin.get("xyz"), f"{at} <origin xyz>", 3, (0, 0, 0))
-            rpy = self._numbers(origin.get("rpy"), f"{at} <origin rpy>", 3, (0, 0, 0))
+            xyz = self._numbers(origin.get("xyz"), f"{at} <origin xyz>", 3, (0, 0, 0), LENGTH)
+            rpy = self._numbers(origin.get("rpy"), f"{at} <origin rpy>", 3, (0, 0, 0), ANGLE)
             T[:3, :3], T[:3, 3] = _rpy_matrix(*rpy), xyz
         return T
 
@@ -315,12 +321,14 @@ class _Reader:
         mass_el = inertial.find("mass")
         mass = self._numbers(None if mass_el is None else mass_el.get("value"),
                              f"{at} <inertial><mass value>", 1)[0]
+        if mass >= 0:
+            MASS.check(self.v, float(mass), f"{at} <inertial><mass value>")
         if mass < 0:
             self.v.fail(f"{at} <inertial><mass value>", f"must be >= 0, got {float(mass)!r}")
         el = inertial.find("inertia")
         keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
         values = {k: self._numbers(None if el is None else el.get(k, "0"),
-                                   f"{at} <inertial><inertia {k}>", 1)[0] for k in keys}
+                                   f"{at} <inertial><inertia {k}>", 1, bound=INERTIA)[0] for k in keys}
         I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
                       [values["ixy"], values["iyy"], values["iyz"]],
                       [values["ixz"], values["iyz"], values["izz"]]])
@@ -367,6 +375,8 @@ class _Reader:
                 if out[key] < 0:
                     self.v.fail(f"{at} <limit {key}>", f"must be > 0 (or 0 for no limit), got "
                                                        f"{show(limit.get(key))}")
+                if out[key] > 0:
+                    (EFFORT if key == "effort" else VELOCITY).check(self.v, float(out[key]), f"{at} <limit {key}>")
         return out
 
     def _mimic(self, joint, at: str, kind: str) -> tuple[str, float, float] | None:
@@ -511,6 +521,13 @@ def from_urdf(path: str | os.PathLike, tip: str | None = None,
     path = Path(path)
     raw = read_bytes(path, max_bytes=max_bytes, what="URDF")
     r = _Reader(str(path), _parse(path, raw))
+    # The robot's name names directories and files (data sets, models, recordings): the URDF's
+    # own, when no other is given, obeys a robot file's rule.
+    if name is not None:
+        robot_name(name, str(path), "name")
+    else:
+        robot_name(r.name, str(path), "<robot name>", ": name the robot in a robot file that names "
+                   "this URDF (params/README.md), or add it with add-arm --name")
     tree = _tree(r)
     tip, chain, moving = _chain(r, tree, tip)
     lock = _locks(r, chain, lock)
@@ -555,14 +572,14 @@ def _tree(r: _Reader) -> _Tree:
         children[j["parent"]].append(jname)
     roots = [l for l in r.links if l not in parent_joint]
     if len(roots) != 1:
-        v.fail("<robot>", f"must have one root link, got {len(roots)}: {', '.join(roots) or 'none (a loop)'}")
+        v.fail("<robot>", f"must have one root link, got {len(roots)}: {listed(roots) or 'none (a loop)'}")
     root = roots[0]
     order = [root]                              # links, parents before children
     for link in order:
         order += [r.joints[jname]["child"] for jname in children[link]]
     if len(order) != len(r.links):
         v.fail("<robot>", f"links not connected to the root {root!r} (a loop): "
-                          f"{', '.join(sorted(set(r.links) - set(order)))}")
+                          f"{listed(sorted(set(r.links) - set(order)))}")
     return _Tree(root, order, children, parent_joint)
 
 
@@ -573,11 +590,11 @@ def _chain(r: _Reader, tree: _Tree, tip: str | None) -> tuple[str, list[str], li
     leaves = sorted(l for l in r.links if not tree.children[l])
     if tip is None:
         if len(leaves) != 1:
-            v.fail("tip", f"the URDF has {len(leaves)} leaf links ({', '.join(leaves)}): name the "
+            v.fail("tip", f"the URDF has {len(leaves)} leaf links ({listed(leaves)}): name the "
                           f"chain's last link")
         tip = leaves[0]
     elif tip not in r.links:
-        v.fail("tip", f"no link {tip!r} in the URDF (leaves: {', '.join(leaves)})")
+        v.fail("tip", f"no link {tip!r} in the URDF (leaves: {listed(leaves)})")
     chain, link = [], tip                       # joint names from the root to the tip
     while link != tree.root:
         chain.append(tree.parent_joint[link])
@@ -640,7 +657,7 @@ def _mimic_positions(r: _Reader, chain: list[str], lock: Mapping[str, float]) ->
             driver = mimics[trail[-1]][0]
             if driver in trail:
                 v.fail(f"joint {jname!r} <mimic joint>",
-                       f"mimic joints drive each other in a loop: {' → '.join(trail + [driver])}")
+                       f"mimic joints drive each other in a loop: {_trail(trail + [driver])}")
             trail.append(driver)
         value = float(positions.get(trail[-1], 0.0))
         for follower in reversed(trail[:-1]):
@@ -651,6 +668,12 @@ def _mimic_positions(r: _Reader, chain: list[str], lock: Mapping[str, float]) ->
                                                       f"{value!r} + {offset!r} is not finite")
             positions[follower] = value = driven
     return positions
+
+
+def _trail(names: list[str]) -> str:
+    """A path of joints for a message: all of a short one, the ends of a long one."""
+    shown = names if len(names) <= 8 else [*names[:4], f"… {len(names) - 7} more …", *names[-3:]]
+    return " → ".join(shown)
 
 
 def _world_poses(r: _Reader, tree: _Tree, chain: list[str], lock: Mapping[str, float]
@@ -1015,8 +1038,8 @@ def urdf_outline(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> URDF
         limit = el.find("limit")
         values = {}
         if j["type"] == "prismatic" and limit is not None:
-            lo = r._numbers(limit.get("lower", "0"), f"{at} <limit lower>", 1)[0]
-            hi = r._numbers(limit.get("upper", "0"), f"{at} <limit upper>", 1)[0]
+            lo = r._numbers(limit.get("lower", "0"), f"{at} <limit lower>", 1, bound=LENGTH)[0]
+            hi = r._numbers(limit.get("upper", "0"), f"{at} <limit upper>", 1, bound=LENGTH)[0]
             limits = (lo, hi) if lo < hi else None
         if j["type"] in _MOVING and limit is not None:
             for key in ("effort", "velocity"):
@@ -1025,6 +1048,11 @@ def urdf_outline(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> URDF
         if j["type"] in _MOVING and dynamics is not None:
             for key in ("damping", "friction"):
                 values[key] = float(r._numbers(dynamics.get(key, "0"), f"{at} <dynamics {key}>", 1)[0])
+        for key, x in values.items():       # beyond its bound, a positive value (others mean none)
+            if x > 0:
+                bound = {"effort": EFFORT, "velocity": VELOCITY}.get(key, DRIVE)
+                where = f"{at} <{'limit' if key in ('effort', 'velocity') else 'dynamics'} {key}>"
+                bound.check(r.v, x, where)
         values = {k: x if x > 0 else 0.0 for k, x in values.items()}
         joints[jname] = URDFJoint(jname, j["type"], j["parent"], j["child"],
                                   None if limits is None else (float(limits[0]), float(limits[1])),

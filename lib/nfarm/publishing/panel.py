@@ -55,7 +55,7 @@ from ..model.kinematics import fk, fk_all
 from .panel_compute import (PROFILES, PanelInputError, ik_answers, joint_trajectory, parse_pose_matrix,
                             pose_readout, shipped_robots, target_pose, torque_parts, trained_models)
 from ..infra.paths import BUILD, shown_path
-from ..model.robot import Robot, load_robot, sample_configurations
+from ..model.robot import Robot, is_robot_name, load_robot, sample_configurations
 from ..model.rotations import matrix_to_rpy
 from ..presentation.recording import RecordingTooLarge, record_trajectory
 
@@ -517,6 +517,9 @@ class TrajectoryPage:
             raise PanelInputError("recording: compute a trajectory first")
         dynamics = self.panel.dynamics
         parts = dynamics.parts if dynamics.trajectory is self.trajectory else None
+        if not is_robot_name(self.panel.robot.name):      # it names the file: nothing outside the directory
+            raise PanelInputError(f"recording: the robot's name {self.panel.robot.name!r} cannot name a file "
+                                  f"(letters, digits, '_', '-' or '.', no '..')")
         path = self.panel.recordings_dir / f"{self.panel.robot.name}-panel-trajectory.rrd"
         try:
             record_trajectory(self.panel.robot, self.trajectory, path, tau=None if parts is None else parts.total,

@@ -30,7 +30,7 @@ from ..learning.learned import LearnedIK
 from ..learning.learned_id import LearnedID
 from ..model.dynamics import coriolis, gravity_torques, mass_matrix, rnea
 from ..model.kinematics import fk, manipulability, min_singular_value
-from ..model.robot import Robot, robot_hash
+from ..model.robot import Robot, is_robot_name, robot_hash
 from ..model.rotations import matrix_to_quat, matrix_to_rpy, pose_error, rpy_to_matrix
 from ..solvers.geometric_ik import class_refusal, closed_form
 from ..solvers.ik import check_targets, solve
@@ -423,6 +423,9 @@ def trained_models(robot: Robot, models_dir: Path | None = None) -> Models:
     """Chapter 06's chosen learned IK and model-free learned ID for ``robot``, from
     ``models_dir`` (default ``build/models/<robot name>/``), each ``None`` with a one-line note
     when it is missing or was trained for another robot file."""
+    if models_dir is None and not is_robot_name(robot.name):     # it would name a directory elsewhere
+        note = f"no trained model: the robot's name {robot.name!r} cannot name a directory under build/models/"
+        return Models(None, None, note, note)
     directory = Path(models_dir) if models_dir else BUILD / "models" / robot.name
     found, notes = {}, {}
     for key, cls, sub in (("ik", LearnedIK, "ik"), ("id", LearnedID, "id_model_free")):

@@ -15,15 +15,19 @@ joints follow their drivers, and must land inside theirs too), converts the chai
 
 Every file is written first into a scratch directory and loaded there by
 :func:`~nfarm.model.robot.load_robot` and :func:`~nfarm.study.study_files.load_study`; only then
-are they written into the parameter directory, each atomically
-(:func:`~nfarm.infra.paths.atomic_path`): a refused arm leaves nothing behind.
+are they written into the parameter directory: the destination checked before anything is
+written (:func:`_check_destination`), each file beside its place first, then all renamed
+(:func:`_install`): a refused arm leaves nothing behind. Licence files are copied only as
+regular files (not through a symbolic link) of at most :data:`MAX_LICENCE_BYTES`.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
-import shutil
+import os
+import stat
 import tempfile
 import time
 import warnings
@@ -33,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..infra.paths import PARAMS, atomic_path, shown_path
-from ..infra.reading import ParamsError, ParamsWarning
+from ..infra.paths import PARAMS, shown_path
+from ..infra.reading import ParamsError, ParamsWarning, listed, read_bytes
 from ..model.kinematics import fk
 from ..model.robot import ROBOT_NAME, Robot, load_robot
 from ..model.urdf import URDFOutline, from_urdf, urdf_outline
@@ -48,6 +52,18 @@ __all__ = ["add_arm", "AddedArm", "JOINTS"]
 JOINTS = 5
 #: Files beside a URDF that carry its licence, copied with it.
 LICENCE_NAMES = ("LICENSE", "LICENCE", "COPYING", "NOTICE")
+#: The largest licence file copied [bytes]: the longest licence texts are tens of KB (GPL-3.0
+#: 35 KB, Apache-2.0 11 KB) and a NOTICE of many third-party notices a few hundred; a file over
+#: 1 MiB beside a URDF is no licence (a 3 GiB sparse NOTICE.bin took 45 s to copy).
+MAX_LICENCE_BYTES = 1 << 20
+#: The narrowest range of a chain joint [deg]: the IK region is written in whole degrees inside
+#: the limits less an inset at each end, which leaves no range below about 2.3°.
+MIN_RANGE_DEG = 3.0
+#: The least share of the region's sampled targets the check must solve (each is the pose of a
+#: configuration in the region, so each has a solution): a check that finds no solution for more
+#: than 1 % has not checked the region (an arm of absurd geometry), which is then refused rather
+#: than declared single-valued.
+MIN_SOLVED_SHARE = 0.99
 #: The measured arm's drive values when the URDF gives none: a hobby servo's (the SO-101's
 #: STS3215, params/studies/so101.yaml).
 SERVO = {"viscous": 0.60, "coulomb": 0.052, "armature": 0.028}
@@ -82,8 +98,12 @@ def _number(x: float) -> str:
 
 
 def _text(value: str) -> str:
-    """A string as YAML text (JSON's quoting is YAML's)."""
-    return json.dumps(value, ensure_ascii=False)
+    """A string as YAML text that reads back as itself: JSON's quoting (which is YAML's
+    double-quoted style), every character YAML may not hold raw or reads as a line break (C0
+    and C1 controls, DEL, U+2028/2029, a BOM, surrogates) escaped."""
+    quoted = json.dumps(value, ensure_ascii=False)
+    return "".join(c if c.isprintable() or c == " " else
+                   f"\\u{ord(c):04x}" if ord(c) <= 0xFFFF else f"\\U{ord(c):08x}" for c in quoted)
 
 
 def _choose_name(path: Path, name: str | None) -> str:
@@ -98,11 +118,11 @@ def _choose_name(path: Path, name: str | None) -> str:
 def _choose_tip(outline: URDFOutline, tip: str | None) -> tuple[str, str]:
     if tip is not None:
         if tip not in outline.parent_joint and tip != outline.root:
-            _fail(outline.source, f"--tip {tip!r}: no such link (leaves: {', '.join(outline.leaves)})")
+            _fail(outline.source, f"--tip {tip!r}: no such link (leaves: {listed(outline.leaves)})")
         return tip, "the tip asked for"
     if len(outline.leaves) != 1:
         _fail(outline.source, f"{len(outline.leaves)} leaf links, which is the tip? "
-                              f"{', '.join(outline.leaves)}: give --tip LINK")
+                              f"{listed(outline.leaves)}: give --tip LINK")
     return outline.leaves[0], "the URDF's only leaf link"
 
 
@@ -116,7 +136,7 @@ def _check_chain(outline: URDFOutline, tip: str) -> list[str]:
                               f"{outline.joints[other].type}: a study's arm is {JOINTS} revolute joints")
     if len(revolute) != JOINTS:
         _fail(outline.source, f"the chain {outline.root} → {tip} has {len(revolute)} revolute joints "
-                              f"({', '.join(revolute) or 'none'}), not {JOINTS}: a study's arm is a "
+                              f"({listed(revolute) or 'none'}), not {JOINTS}: a study's arm is a "
                               f"{JOINTS}-joint chain")
     return chain
 
@@ -125,19 +145,33 @@ def _mimic_positions(outline: URDFOutline, lock: Mapping[str, float]) -> dict[st
     """Every joint off the chain that moves: its lock, or its driver's position through its
     ``<mimic>`` (drivers with no lock at 0), as :func:`nfarm.model.urdf.from_urdf` places it."""
     out = dict(lock)
+    joints = outline.joints
 
-    def position(jname: str, seen: tuple = ()) -> float:
-        if jname in out:
-            return out[jname]
-        mimic = outline.joints[jname].mimic
-        if mimic is None or mimic[0] in seen or mimic[0] not in outline.joints:
-            return 0.0
-        value = mimic[1] * position(mimic[0], seen + (jname,)) + mimic[2]
-        out[jname] = value
-        return value
+    def position(jname: str) -> None:
+        # The recursion "a mimic's position is its driver's, scaled" unrolled onto a stack: a
+        # chain of thousands of mimic joints is no RecursionError. A driver met again (a loop)
+        # or missing counts as 0, as from_urdf refuses such files anyway.
+        stack, seen = [jname], set()
+        while True:
+            current = stack[-1]
+            if current in out:
+                value = out[current]
+                stack.pop()
+                break
+            mimic = joints[current].mimic
+            if mimic is None or mimic[0] in seen or mimic[0] not in joints:
+                value = 0.0
+                stack.pop()
+                break
+            seen.add(current)
+            stack.append(mimic[0])
+        for follower in reversed(stack):
+            _, multiplier, offset = joints[follower].mimic
+            value = multiplier * value + offset
+            out[follower] = value
 
-    for jname in outline.joints:
-        if outline.joints[jname].mimic is not None:
+    for jname in joints:
+        if joints[jname].mimic is not None:
             position(jname)
     return out
 
@@ -162,7 +196,7 @@ def _choose_locks(outline: URDFOutline, chain: list[str], asked: Mapping[str, fl
     for jname, value in asked.items():
         at = f"--lock {jname}={value:g}"
         if jname not in outline.joints:
-            _fail(src, f"{at}: no joint {jname!r} (joints off the chain: {', '.join(side) or 'none'})")
+            _fail(src, f"{at}: no joint {jname!r} (joints off the chain: {listed(side) or 'none'})")
         if jname in chain:
             _fail(src, f"{at}: {jname!r} is on the chain to the tip; only joints off it are locked")
         joint = outline.joints[jname]
@@ -194,7 +228,7 @@ def _choose_locks(outline: URDFOutline, chain: list[str], asked: Mapping[str, fl
                 break
         else:
             _fail(src, f"joint {jname!r}: no lock within its limits puts the joints that mimic it "
-                       f"({', '.join(followers)}) within theirs: give --lock {jname}=VALUE")
+                       f"({listed(followers)}) within theirs: give --lock {jname}=VALUE")
         lock[jname] = float(value)
         mimics = f"; {', '.join(followers)} follow{'s' if len(followers) == 1 else ''} it (mimic)" if followers else ""
         why.append(f"{jname} = {value:g} {unit} ({reason}, limits [{lo:g}, {hi:g}]{mimics})")
@@ -347,10 +381,11 @@ def _one_or_list(values: list[float]) -> str:
 
 def _robot_text(name: str, urdf_name: str, tip: str, lock: Mapping[str, float], robot: Robot,
                 drive: dict[str, list[float]], poses: dict[str, list[float]], source: str) -> str:
-    lines = [f"# {name}: made by `python -m nfarm add-arm {source}` from its URDF (in {name}/, unchanged);",
+    shown_source = "".join(c if c.isprintable() else "?" for c in source)     # a comment is one line
+    lines = [f"# {name}: made by `python -m nfarm add-arm {shown_source}` from its URDF (in {name}/, unchanged);",
              "# every value below was chosen by add-arm and may be edited (params/README.md, \"Robots from a URDF\").",
              f"name: {name}",
-             f"urdf: {name}/{urdf_name}",
+             f"urdf: {_text(f'{name}/{urdf_name}')}",
              f"tip: {_text(tip)}",
              "lock: {" + ", ".join(f"{_text(k)}: {_number(v)}" for k, v in lock.items()) + "}",
              f"description: {_text(f'{name}: five joints from its URDF ({urdf_name}), chain to {tip}')}"]
@@ -413,9 +448,111 @@ def _study_text(name: str, robot_file: str, robot: Robot, region: IKRegion, chec
     return "\n".join(lines) + "\n"
 
 
-def _licences(urdf: Path) -> list[Path]:
-    return sorted(p for p in urdf.parent.iterdir()
-                  if p.is_file() and p.name.upper().split(".")[0] in LICENCE_NAMES)
+def _licences(urdf: Path) -> tuple[list[tuple[str, bytes]], list[str]]:
+    """The licence files beside the URDF (:data:`LICENCE_NAMES`) to copy, ``(name, bytes)``, and
+    why the others are not copied, one line each: only a regular file (not a symlink, whose
+    target may be any file of the machine; opened with ``O_NOFOLLOW``) of at most
+    :data:`MAX_LICENCE_BYTES` is copied."""
+    copies, skipped = [], []
+    try:
+        entries = sorted(os.scandir(urdf.parent), key=lambda e: e.name)
+    except OSError:
+        return [], []
+    for entry in entries:
+        if entry.name.upper().split(".")[0] not in LICENCE_NAMES:
+            continue
+        shown = shown_path(Path(urdf.parent, entry.name))
+        try:
+            fd = os.open(entry.path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+        except OSError as exc:
+            why = "a symbolic link" if entry.is_symlink() else exc.strerror or type(exc).__name__
+            skipped.append(f"{shown} ({why}: only a regular file beside the URDF is copied)")
+            continue
+        with os.fdopen(fd, "rb") as f:
+            info = os.fstat(f.fileno())
+            if not stat.S_ISREG(info.st_mode):
+                skipped.append(f"{shown} (not a regular file: only a regular file beside the URDF is copied)")
+                continue
+            if info.st_size > MAX_LICENCE_BYTES:
+                skipped.append(f"{shown} ({info.st_size:,} bytes, over the {MAX_LICENCE_BYTES:,}-byte limit of "
+                               f"a licence file: not a licence text; copy it by hand if it is one)")
+                continue
+            data = f.read(MAX_LICENCE_BYTES + 1)
+        if len(data) > MAX_LICENCE_BYTES:          # grew since fstat
+            skipped.append(f"{shown} (over the {MAX_LICENCE_BYTES:,}-byte limit of a licence file)")
+            continue
+        copies.append((entry.name, data))
+    return copies, skipped
+
+
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _check_destination(params: Path, name: str, src: str) -> None:
+    """Everything :func:`_install` will write can be written, checked before anything is: the
+    parameter directory and its ``robots/``, ``studies/`` and ``robots/<name>/`` are
+    directories (or do not exist yet, under a writable one), and no file to write is a
+    directory; else one line naming the path."""
+    wanted_dirs = [params, params / "robots", params / "studies", params / "robots" / name]
+    for directory in wanted_dirs:
+        if directory.is_symlink() and not directory.is_dir():
+            _fail(shown_path(directory), "is a broken symbolic link, not a directory: add-arm writes there")
+        if directory.exists() and not directory.is_dir():
+            _fail(shown_path(directory), "exists and is not a directory: add-arm writes there")
+    for path in (params / "robots" / f"{name}.yaml", params / "studies" / f"{name}.yaml"):
+        if path.is_dir():
+            _fail(shown_path(path), "is a directory: add-arm would write the file there (remove it first)")
+    for directory in wanted_dirs:
+        existing = next(p for p in (directory, *directory.parents) if p.exists())
+        if not existing.is_dir():
+            _fail(shown_path(existing), "is not a directory: add-arm writes under it")
+        if not os.access(existing, os.W_OK | os.X_OK):
+            _fail(shown_path(existing), "cannot be written (no permission): add-arm writes there")
+
+
+def _install(params: Path, outputs: list[tuple[Path, bytes]], src: str) -> list[Path]:
+    """Write every ``(path, bytes)`` of ``outputs`` as one step: each first to a temporary file
+    beside it, then all renamed into place; a failure anywhere (a full disk, a directory that
+    changed under us) removes every temporary file and directory made, puts back the files
+    replaced, and is one line. The destination was checked before (:func:`_check_destination`)."""
+    made_dirs: list[Path] = []
+    staged: list[tuple[Path, Path]] = []
+    replaced: list[tuple[Path, bytes | None]] = []
+    try:
+        for path, data in outputs:
+            missing = [p for p in (path.parent, *path.parent.parents) if not p.exists()]
+            for directory in reversed(missing):
+                directory.mkdir()
+                made_dirs.append(directory)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
+            staged.append((Path(tmp), path))
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+            os.chmod(tmp, 0o644)
+        for tmp, path in staged:
+            old = path.read_bytes() if path.is_file() and not path.is_symlink() else None
+            os.replace(tmp, path)
+            replaced.append((path, old))
+    except OSError as exc:
+        for path, old in reversed(replaced):
+            try:
+                if old is None:
+                    path.unlink(missing_ok=True)
+                else:
+                    path.write_bytes(old)
+            except OSError:
+                pass
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        for directory in reversed(made_dirs):
+            try:
+                directory.rmdir()
+            except OSError:
+                pass
+        where = shown_path(exc.filename) if exc.filename else shown_path(params)
+        _fail(where, f"cannot be written ({exc.strerror or type(exc).__name__}): nothing was added")
+    return [path for _, path in staged]
 
 
 def _existing(params: Path, name: str) -> Path | None:
@@ -460,7 +597,9 @@ def add_arm(urdf: str | Path, *, name: str | None = None, tip: str | None = None
     if not force and (existing := _existing(params, name)) is not None:
         _fail(shown_path(existing), f"exists: robot {name!r} is already there; choose another --name "
                                     f"or pass --force to replace it")
+    _check_destination(params, name, src)
     outline = urdf_outline(urdf)
+    outline_digest = _digest(read_bytes(urdf, what="URDF"))
     tip, tip_why = _choose_tip(outline, tip)
     chain = _check_chain(outline, tip)
     lock, lock_why = _choose_locks(outline, chain, dict(lock or {}))
@@ -475,15 +614,28 @@ def add_arm(urdf: str | Path, *, name: str | None = None, tip: str | None = None
     tell("  limits [deg]: " + "; ".join(f"{j} {_deg(lo)}…{_deg(hi)}" for j, (lo, hi) in zip(revolute, robot.qlim)))
     tell("  locks: " + ("; ".join(lock_why) if lock_why else "none (no moving joint off the chain)"))
 
+    for j, (lo, hi) in zip(revolute, robot.qlim):
+        if math.degrees(hi - lo) < MIN_RANGE_DEG:
+            _fail(src, f"joint {j!r}: its limits span {math.degrees(hi - lo):.3g}°, under the {MIN_RANGE_DEG:g}° "
+                       f"a study's IK region needs (written in whole degrees inside them): widen them, or make "
+                       f"the joint fixed in the URDF")
     refusal = class_refusal(robot)
     if refusal is None:
         method = f"the closed form (every solution) on {targets} targets"
     else:
         method = f"LM from {starts} starts over the full limits on each of {targets} targets"
     try:
-        region, check, region_why = choose_region(robot, targets=targets, starts=starts, seed=seed)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)     # judged below by what was solved
+            region, check, region_why = choose_region(robot, targets=targets, starts=starts, seed=seed)
     except ValueError as exc:
         _fail(src, f"IK region: {exc} (counted by {method}); write ik.region by hand")
+    solved = int(np.sum(np.asarray(check.solved) > 0))
+    if solved < MIN_SOLVED_SHARE * len(check.q):
+        _fail(src, f"IK region: {method} solved {solved} of {len(check.q)} targets (each the pose of a "
+                   f"configuration in the region, so each has a solution; at least "
+                   f"{MIN_SOLVED_SHARE:.0%} must be solved): the region was not checked, so it is not "
+                   f"declared single-valued; check the URDF's geometry, or write ik.region by hand")
     tell(f"  IK region, checked by {method}"
          + ("" if refusal is None else f" (outside the closed form's class: {refusal})") + ":")
     for line in region_why:
@@ -500,7 +652,8 @@ def add_arm(urdf: str | Path, *, name: str | None = None, tip: str | None = None
         if any(values):
             drive[key] = values
     velocity = [outline.joints[j].velocity for j in revolute]
-    velocity_deg_s = [min(120.0, math.floor(math.degrees(v))) if v > 0 else 120.0 for v in velocity]
+    velocity_deg_s = [(min(120.0, math.floor(math.degrees(v))) if math.degrees(v) >= 1
+                       else float(f"{math.degrees(v):.3g}")) if v > 0 else 120.0 for v in velocity]
     if drive:
         measured = {**{k: drive.get(k, [0.0] * JOINTS) for k in ("viscous", "coulomb")}, "armature": [0.0]}
         measured_from = "the URDF's <dynamics> (no armature given: 0)"
@@ -516,13 +669,20 @@ def add_arm(urdf: str | Path, *, name: str | None = None, tip: str | None = None
     tell(f"  poses_deg: {', '.join(poses)} (whole degrees within the limits)")
 
     robot_file_final = params / "robots" / f"{name}.yaml"
-    licences = _licences(urdf)
+    study_final = params / "studies" / f"{name}.yaml"
+    urdf_bytes = read_bytes(urdf, what="URDF")       # the bytes converted above are the bytes copied
+    if _digest(urdf_bytes) != outline_digest:
+        _fail(src, "changed while add-arm read it: run add-arm again")
+    licences, skipped = _licences(urdf)
+    for line in skipped:
+        tell(f"  not copied: {line}")
+    copies = [(urdf.name, urdf_bytes), *licences]
     with tempfile.TemporaryDirectory(prefix="nfarm-add-arm-") as scratch:
         scratch = Path(scratch)
         (scratch / "robots" / name).mkdir(parents=True)
         (scratch / "studies").mkdir()
-        for path in [urdf, *licences]:
-            shutil.copyfile(path, scratch / "robots" / name / path.name)
+        for file_name, data in copies:
+            (scratch / "robots" / name / file_name).write_bytes(data)
         robot_text = _robot_text(name, urdf.name, tip, lock, robot, drive, poses, src)
         (scratch / "robots" / f"{name}.yaml").write_text(robot_text, encoding="utf-8")
         study_args = (name, robot, region, check, measured, measured_from, velocity_deg_s)
@@ -533,21 +693,14 @@ def add_arm(urdf: str | Path, *, name: str | None = None, tip: str | None = None
                 warnings.simplefilter("ignore", ParamsWarning)       # told above
                 loaded = load_robot(scratch / "robots" / f"{name}.yaml")
                 load_study(scratch / "studies" / f"{name}.yaml")
-        except ParamsError as exc:      # a bug of ours: nothing is written
-            raise ParamsError(f"{src}: the files add-arm made do not load ({exc}); please report it") from None
-        study_text = _study_text(study_args[0], shown_path(robot_file_final), *study_args[1:])
-        outputs = [(scratch / "robots" / name / p.name, params / "robots" / name / p.name)
-                   for p in [urdf, *licences]]
-        outputs += [(scratch / "robots" / f"{name}.yaml", robot_file_final)]
-        files = []
-        for from_, to in outputs:
-            with atomic_path(to) as tmp:
-                shutil.copyfile(from_, tmp)
-            files.append(to)
-        study_final = params / "studies" / f"{name}.yaml"
-        with atomic_path(study_final) as tmp:
-            tmp.write_text(study_text, encoding="utf-8")
-        files.append(study_final)
+        except ParamsError as exc:      # a rule of the study's (its work bound, say): nothing is written
+            reason = str(exc).splitlines()[0].replace(str(scratch), shown_path(params))
+            raise ParamsError(f"{src}: the files add-arm would write are refused: {reason}; edit the URDF "
+                              f"(its limits) or write them by hand") from None
+    study_text = _study_text(study_args[0], shown_path(robot_file_final), *study_args[1:])
+    outputs = [(params / "robots" / name / file_name, data) for file_name, data in copies]
+    outputs += [(robot_file_final, robot_text.encode("utf-8")), (study_final, study_text.encode("utf-8"))]
+    files = _install(params, outputs, src)
     tell("  wrote " + ", ".join(shown_path(f) for f in files))
     tell(f"  edit: the poses' names; ik.region (then chapter 05 checks it); id.measured (the sensed arm's "
          f"drives{'' if drive else ', a hobby servo here'}); height_m: [z, null] keeps the tool above a table; "

@@ -42,7 +42,7 @@ from ..infra.paths import BUILD, atomic_path, project_path
 from ..infra.provenance import code_digest
 from ..infra.reading import ParamsError, Validator, load_json, show
 from ..model.dynamics import rnea, stribeck_drive_torques
-from ..model.robot import Robot, robot_hash
+from ..model.robot import Robot, robot_hash, robot_name
 from .id_trajectories import current_sensed, measured_states, random_trajectories, true_arm, with_payload
 from .regions import STREAMS, IKRegion, ik_samples
 from .study_files import SPLITS, Study
@@ -86,7 +86,9 @@ def dataset_dir(study: Study, out: str | os.PathLike | None = None) -> Path:
         base = project_path(out)
     else:
         smoke = "-smoke" if study.name.endswith("(smoke)") else ""
-        base = BUILD / "datasets" / f"{study.robot.name}{smoke}"
+        # the robot's name names the directory: a name that could leave build/ is refused
+        name = robot_name(study.robot.name, study.robot.source)
+        base = BUILD / "datasets" / f"{name}{smoke}"
     return base / f"draw{study.draw}" if study.draw else base
 
 
