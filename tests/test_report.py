@@ -6,7 +6,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import random
 import re
 import shutil
 import signal
@@ -65,6 +64,15 @@ def project(tmp_path):
     return tmp_path, dirs
 
 
+def _head() -> str:
+    """The checkout's commit as the index gives it ("" outside a git checkout)."""
+    try:
+        return subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                              timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+
+
 def digest(path):
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
@@ -76,7 +84,9 @@ def test_default_run_publishes_atomically_with_index_manifest_and_offline_html(p
     stale = figures / "01_removed_since.png"
     stale.parent.mkdir(parents=True)
     stale.write_bytes(b"old")
+    heads = {_head()}
     assert build_report(**dirs) == 0
+    heads.add(_head())                                  # (another commit may land while the report is built)
     assert not stale.exists(), "a chapter's old outputs are replaced by its new ones"
     assert (figures / "tables" / "01_params.csv").read_text() == "smoke\nFalse\n"
     manifest = (figures / "MANIFEST.sha256").read_text().splitlines()
@@ -90,7 +100,10 @@ def test_default_run_publishes_atomically_with_index_manifest_and_offline_html(p
     assert index.index("Chapter 01_first") < index.index("Chapter 02_second")
     assert index.count("figures/01_line.png") == 1, "each figure once"
     assert "A line of chapter 02" in index and "Was it a smoke run?" in index, "captions shown"
-    assert re.search(r"<dt>commit</dt><dd>[0-9a-f]{7,}", index) or "unknown" in index
+    # The checkout's commit (12 digits, as `git rev-parse --short=12 HEAD`), or "unknown" outside a checkout
+    commit = re.search(r"<dt>commit</dt><dd>([^<]*)</dd>", index).group(1)
+    assert re.fullmatch(r"(?:[0-9a-f]{12}|unknown)(?: \(with uncommitted changes\))?", commit), commit
+    assert commit.split()[0] in {h or "unknown" for h in heads}, (commit, heads)
     page = (build / "report" / "02_second.html").read_text()
     assert "01_first.html" in page and "03_third.html" in page, "navigation between chapters"
     for html in [index] + [p.read_text() for p in (build / "report").glob("*.html")]:
@@ -106,8 +119,17 @@ def test_default_run_publishes_atomically_with_index_manifest_and_offline_html(p
     first = (figures / "MANIFEST.sha256").read_bytes()
     record = (build / "stamps" / "clean_build.json").read_text()
     assert re.search(r"<dt>clean build</dt><dd><code>\d+ min \d+ s for every chapter", index), "the clean build timed"
+    # Byte-reproducible: every chapter run again (force, into fresh directories: nothing to reuse) publishes
+    # the same bytes, every file of figures/ and its manifest
+    again = {**dirs, "figures_dir": root / "again" / "figures", "build_dir": root / "again" / "build"}
+    assert build_report(force=True, **again) == 0
+    assert sorted(p.name for p in (again["build_dir"] / "notebooks").glob("*.ipynb")) == [
+        "01_first.ipynb", "02_second.ipynb", "03_third.ipynb"], "every chapter ran again"
+    files = lambda d: {str(p.relative_to(d)): p.read_bytes() for p in sorted(d.rglob("*")) if p.is_file()}  # noqa: E731
+    assert (again["figures_dir"] / "MANIFEST.sha256").read_bytes() == first, "figures are byte-reproducible"
+    assert files(again["figures_dir"]) == files(figures), "figures are byte-reproducible"
     assert build_report(**dirs) == 0
-    assert (figures / "MANIFEST.sha256").read_bytes() == first, "figures are byte-reproducible"
+    assert (figures / "MANIFEST.sha256").read_bytes() == first
     assert (build / "stamps" / "clean_build.json").read_text() == record, "a run that reuses its work is not a clean build"
 
 
@@ -239,26 +261,68 @@ def test_publishing_is_atomic_at_every_step(tmp_path, monkeypatch):
     assert not list(tmp_path.glob(".figures.*"))
 
 
+#: A run of the command line's report that stops, alive, in the middle of publishing chapter ``pause``: the
+#: chapter's new figures staged beside figures/ with their manifest, not yet swapped in. It says so by
+#: creating ``marker``, then sleeps until it is killed.
+PAUSED_REPORT = """
+import sys, time
+from pathlib import Path
+from nfarm.publishing import manifest
+from nfarm.__main__ import report_command
+write, publish, chapter = manifest.write_manifest, manifest._publish_locked, []
+
+def publishing(stage, made, figures_dir, prefix, subdir):
+    chapter[:] = [prefix]
+    return publish(stage, made, figures_dir, prefix, subdir)
+
+def pausing(directory, *args, **kwargs):
+    written = write(directory, *args, **kwargs)
+    if Path(directory).name.endswith(".new") and chapter == [{pause!r}]:     # the chapter's publish, staged
+        Path({marker!r}).write_text(str(directory))
+        time.sleep(600)
+    return written
+
+manifest.write_manifest, manifest._publish_locked = pausing, publishing
+sys.exit(report_command(notebooks_dir=Path({notebooks!r}), figures_dir=Path({figures!r}), build_dir=Path({build!r})))
+"""
+
+
 @pytest.mark.notebook
-def test_killing_a_real_run_at_random_moments_keeps_figures_consistent(project):
-    """``python -m nfarm report`` killed with SIGKILL at seeded random moments: figures/ and
-    its manifest agree after every kill."""
+def test_killing_a_real_run_in_the_middle_of_publishing_keeps_figures_consistent(project, tmp_path):
+    """``python -m nfarm report`` killed with SIGKILL at chosen moments, each observed before the kill
+    (the run paused in a chapter's publish, its new files staged): the first chapter's first publish
+    (nothing published: no figures/), the second chapter's (the first's published, the second's not),
+    the third's (two published); figures/ and its manifest agree after every kill, and a run after
+    them publishes everything."""
     root, dirs = project
-    script = (f"import sys; from pathlib import Path; from nfarm.__main__ import report_command as build_report; "
-              f"sys.exit(build_report(notebooks_dir=Path({str(dirs['notebooks_dir'])!r}), "
-              f"figures_dir=Path({str(dirs['figures_dir'])!r}), "
-              f"build_dir=Path({str(dirs['build_dir'])!r})))")
-    rng = random.Random(7)
-    for _ in range(3):
-        process = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.DEVNULL,
-                                   start_new_session=True)
-        time.sleep(rng.uniform(2.0, 12.0))
-        os.killpg(process.pid, signal.SIGKILL)
-        process.wait()
-        if dirs["figures_dir"].exists():
-            assert verify_manifest(dirs["figures_dir"]) == []
+    figures = dirs["figures_dir"]
+    published = lambda: sorted(p.name for p in (figures / "tables").glob("*_params.csv"))  # noqa: E731
+    # (kill in the publish of this chapter, the chapters published before it)
+    for k, (pause, before) in enumerate([("01", None), ("02", ["01_params.csv"]), ("03", ["01_params.csv", "02_params.csv"])]):
+        marker = tmp_path / f"paused_{k}"
+        script = PAUSED_REPORT.format(pause=pause, marker=str(marker), notebooks=str(dirs["notebooks_dir"]),
+                                      figures=str(figures), build=str(dirs["build_dir"]))
+        process = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.DEVNULL, start_new_session=True)
+        try:
+            deadline = time.monotonic() + 300
+            while not marker.exists():
+                assert process.poll() is None, f"the run ended (status {process.returncode}) before chapter {pause}'s publish"
+                assert time.monotonic() < deadline, f"the run never reached chapter {pause}'s publish"
+                time.sleep(0.05)
+            assert process.poll() is None, "alive, in the middle of its publish"
+        finally:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+        assert Path(marker.read_text()).is_dir(), "the chapter's files were staged when it was killed"
+        if before is None:
+            assert not figures.exists(), "killed before its first publish: nothing published"
+        else:
+            assert verify_manifest(figures) == [], f"kill {k}"
+            assert published() == before, f"kill {k}"
     assert build_report(**dirs) == 0
-    assert verify_manifest(dirs["figures_dir"]) == []
+    assert verify_manifest(figures) == []
+    assert published() == ["01_params.csv", "02_params.csv", "03_params.csv"]
+    assert not list(root.glob(".figures.*")), "the staged files of the killed runs cleared"
 
 
 def test_verify_reports_every_kind_of_difference(tmp_path):
