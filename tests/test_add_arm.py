@@ -14,6 +14,8 @@ import pytest
 from nfarm.__main__ import main
 from nfarm.infra.paths import PARAMS, ROOT
 from nfarm.infra.reading import ParamsError, ParamsWarning, load_yaml
+from nfarm.model.dynamics import rnea
+from nfarm.model.kinematics import fk
 from nfarm.model.robot import load_robot
 from nfarm.model.urdf import from_urdf
 from nfarm.study.add_arm import add_arm
@@ -83,10 +85,20 @@ def test_the_so101_urdf_gives_the_shipped_chain(tmp_path):
                                 "studies/so101.yaml"]
     robot = load_robot(params / "robots" / "so101.yaml")
     study = load_study(params / "studies" / "so101.yaml")
-    shipped = load_robot(PARAMS / "robots" / "so101.yaml")
     assert robot.name == "so101" and study.robot.n == 5
-    for key in ("a", "alpha", "d", "offset", "qlim", "base", "tool", "mass", "com", "inertia"):
-        np.testing.assert_allclose(getattr(robot, key), getattr(shipped, key), rtol=0, atol=1e-12, err_msg=key)
+    # The chain is the URDF's as Pinocchio parses it (buildModelFromUrdf, the gripper locked at 0), not as
+    # the converter that made the shipped file reads it: the tool frame's pose, the torques, the limits
+    import pinocchio as pin
+    full = pin.buildModelFromUrdf(str(source / "so101.urdf"))
+    model = pin.buildReducedModel(full, [full.getJointId("gripper")], pin.neutral(full))
+    data, tool = model.createData(), model.getFrameId("gripper_frame_link")
+    model.gravity.linear = robot.gravity
+    assert [model.names[i] for i in range(1, model.njoints)] == list(robot.joint_names)
+    np.testing.assert_allclose(np.c_[model.lowerPositionLimit, model.upperPositionLimit], robot.qlim, rtol=0, atol=1e-12)
+    for q, qd, qdd in np.random.default_rng(0).uniform(robot.qlim[:, 0], robot.qlim[:, 1], (50, 3, robot.n)):
+        pin.framesForwardKinematics(model, data, q)
+        np.testing.assert_allclose(fk(robot, q), data.oMf[tool].homogeneous, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(rnea(robot, q, qd, qdd), pin.rnea(model, data, q, qd, qdd), rtol=0, atol=1e-12)
     assert load_yaml(params / "robots" / "so101.yaml")["lock"] == {"gripper": 0}
     # The region: inside the limits, in front of the base axis, and single-valued as checked.
     box = study.ik_region.box
@@ -96,6 +108,31 @@ def test_the_so101_urdf_gives_the_shipped_chain(tmp_path):
     assert any("2000 sampled targets" in line for line in lines)
     for q in robot.poses.values():
         assert np.all((q >= robot.qlim[:, 0]) & (q <= robot.qlim[:, 1]))
+
+
+def test_add_arm_gives_the_robot_written_by_hand(tmp_path, capsys):
+    """`add-arm` on :func:`write_arm`'s URDF, through the command line, gives the robot of
+    tests/data/hand_written_arm.yaml (its DH frames, masses and inertias derived by hand from the URDF,
+    not by the converter): the same tool pose, Jacobian, torques and mass matrix everywhere, limits,
+    joint names and masses."""
+    from nfarm.model.dynamics import mass_matrix
+    from nfarm.model.kinematics import jacobian
+
+    urdf = write_arm(tmp_path / "test_arm.urdf")
+    params = tmp_path / "params"
+    assert main(["add-arm", str(urdf), "--tip", "tool_link", "--params", str(params)]) == 0
+    assert "test_arm" in capsys.readouterr().out
+    robot = load_robot(params / "robots" / "test_arm.yaml")
+    expected = load_robot(ROOT / "tests" / "data" / "hand_written_arm.yaml")
+    assert robot.joint_names == expected.joint_names == ("yaw", "shoulder", "elbow", "wrist", "roll")
+    np.testing.assert_array_equal(robot.qlim, expected.qlim)
+    np.testing.assert_allclose(robot.mass, expected.mass, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(fk(robot, np.zeros(5))[:3, 3], [0, 0, 0.66], rtol=0, atol=1e-15)
+    q, qd, qdd = np.random.default_rng(1).uniform(-2, 2, (3, 200, 5))
+    np.testing.assert_allclose(fk(robot, q), fk(expected, q), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(jacobian(robot, q), jacobian(expected, q), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(rnea(robot, q, qd, qdd), rnea(expected, q, qd, qdd), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(mass_matrix(robot, q), mass_matrix(expected, q), rtol=0, atol=1e-12)
 
 
 def test_mimic_fingers_are_locked_within_their_limits(tmp_path):

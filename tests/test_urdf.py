@@ -16,9 +16,8 @@ from hypothesis import strategies as st
 
 from conftest import random_chains
 from nfarm.model.dynamics import gravity_torques, mass_matrix, rnea
-from nfarm.model.kinematics import fk, jacobian
+from nfarm.model.kinematics import fk, fk_all, jacobian
 from nfarm.infra.paths import PARAMS
-from nfarm.model.pinocchio_ref import pinocchio_from_urdf, pinocchio_model
 from nfarm.infra.reading import ParamsError, ParamsWarning
 from nfarm.model.rotations import quat_to_matrix, matrix_to_rpy
 from nfarm.model.robot import load_robot
@@ -29,18 +28,32 @@ TOL = 1e-12
 
 @given(random_chains())
 def test_urdf_loads_into_pinocchio_as_the_same_robot(robot):
-    """to_urdf → Pinocchio gives the same kinematics and dynamics as the model built from DH."""
-    direct, urdf = pinocchio_model(robot), pinocchio_from_urdf(to_urdf(robot))
-    urdf.model.gravity.linear = robot.gravity
+    """to_urdf → Pinocchio's own parse of the text (``pin.buildModelFromXML``, nothing of nfarm's
+    joint placements) gives nfarm's DH kinematics and Newton–Euler dynamics: every DH frame and the
+    tool where nfarm's fk puts them, its Jacobian, and rnea, M(q) and g(q) from Pinocchio's algorithms."""
+    model = pin.buildModelFromXML(to_urdf(robot))
+    data = model.createData()
+    model.gravity.linear = robot.gravity
+    assert model.nq == model.nv == robot.n
+    frames = [model.getFrameId(f"dh_frame{i}") for i in range(robot.n + 1)]
+    tool = model.getFrameId("tool")
+    assert tool < model.nframes and all(f < model.nframes for f in frames)
     rng = np.random.default_rng(0)
     for q, v, a in rng.uniform(-2, 2, (5, 3, robot.n)):
-        np.testing.assert_allclose(urdf.fk_all(q), direct.fk_all(q), atol=TOL)
-        np.testing.assert_allclose(urdf.fk(q), direct.fk(q), atol=TOL)
-        tau_urdf = pin.rnea(urdf.model, urdf.data, q, v, a)
-        tau_direct = pin.rnea(direct.model, direct.data, q, v, a)
-        np.testing.assert_allclose(tau_urdf, tau_direct, rtol=1e-10, atol=1e-10)
-    np.testing.assert_allclose(urdf.model.lowerPositionLimit, robot.qlim[:, 0])
-    np.testing.assert_allclose(urdf.model.upperPositionLimit, robot.qlim[:, 1])
+        pin.framesForwardKinematics(model, data, q)
+        np.testing.assert_allclose(np.stack([data.oMf[f].homogeneous for f in frames]), fk_all(robot, q), atol=TOL)
+        np.testing.assert_allclose(data.oMf[tool].homogeneous, fk(robot, q), atol=TOL)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        J = pin.getFrameJacobian(model, data, tool, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, robot.n)
+        np.testing.assert_allclose(J, jacobian(robot, q), atol=1e-11)
+        np.testing.assert_allclose(pin.rnea(model, data, q, v, a), rnea(robot, q, v, a), rtol=1e-10, atol=1e-10)
+        M = pin.crba(model, data, q)
+        np.testing.assert_allclose(np.triu(M) + np.triu(M, 1).T, mass_matrix(robot, q), rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(pin.computeGeneralizedGravity(model, data, q), gravity_torques(robot, q),
+                                   rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(model.lowerPositionLimit, robot.qlim[:, 0])
+    np.testing.assert_allclose(model.upperPositionLimit, robot.qlim[:, 1])
 
 
 def test_urdf_structure(robot):
