@@ -67,7 +67,12 @@ def test_hybrid_learning_lowers_the_training_error_on_sinc():
     X, z = jang.sinc_data()
     model = ANFIS(n_mfs=4, epochs=100).fit(X, z)
     assert len(model.rules_) == 16
-    assert model.loss_curve_[-1] < 0.7 * model.loss_curve_[0]
+    # Jang's 16-rule set-up: the least-squares start at 0.105 RMSE; after 100 epochs 0.036–0.049 over the last
+    # ten (Jang's step oscillating; 0.034 after his 250, chapter 4): their mean below 0.045, the last below half
+    # the start and below the 50th epoch's
+    curve = np.asarray(model.loss_curve_)
+    assert curve[0] == pytest.approx(0.105, abs=0.005)
+    assert curve[-10:].mean() < 0.045 and curve[-1] < 0.5 * curve[0] and curve[-1] < curve[49]
 
 
 def jang_step(step, errors, increase, decrease):
