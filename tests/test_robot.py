@@ -219,8 +219,16 @@ def test_a_fixed_transform_after_a_row_is_kept_and_hashed_and_an_identity_one_is
     data["joints"][1]["fixed"] = E.tolist()
     moved = robot_from_dict(data)
     np.testing.assert_array_equal(moved.fixed[1], E)
-    q = np.zeros(plain.n)
-    assert not np.allclose(fk(moved, q), fk(plain, q))
+    # fk moves by the transform, inserted after row 2: T = (base A1 A2) E (A3 … An tool), at every q
+    from nfarm.model.kinematics import fk_all
+    for q in np.random.default_rng(0).uniform(-2, 2, (20, plain.n)):
+        T_02 = fk_all(plain, q)[2]
+        expected = T_02 @ E @ np.linalg.solve(T_02, fk(plain, q))
+        np.testing.assert_allclose(fk(moved, q), expected, rtol=0, atol=1e-14)
+        frames = fk_all(moved, q)                     # the frames before it unmoved, frame 2 carried by it
+        np.testing.assert_allclose(frames[:2], fk_all(plain, q)[:2], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(frames[2], T_02 @ E, rtol=0, atol=1e-15)
+    assert not np.allclose(fk(moved, np.zeros(plain.n)), fk(plain, np.zeros(plain.n)))
     assert robot_hash(moved) != robot_hash(plain)
     assert robot_from_dict(robot_to_dict(moved)).fixed.tolist() == moved.fixed.tolist()
     data["joints"][1]["fixed"] = np.eye(4).tolist()
