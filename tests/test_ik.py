@@ -290,3 +290,27 @@ def test_chunks_do_not_change_any_target_s_result(intelbot5):
     parts = solve(intelbot5, T, chunk=8)
     for field in ("q", "success", "iterations", "restarts", "pos_error", "rot_error", "reason"):
         np.testing.assert_array_equal(getattr(parts, field), getattr(whole, field), err_msg=field)
+
+
+def test_solve_path_stays_on_the_branch_it_starts_on(intelbot5):
+    """solve_path follows a tool path from the previous solution: on a path whose every pose has
+    other solutions (the elbow flipped, the arm turned over), it keeps the start's branch at every
+    point, recovers the path's own configurations, and takes no step larger than the path's."""
+    from nfarm.solvers.arm_class import BRANCHES, branch_of
+    from nfarm.solvers.geometric_ik import closed_form
+    from nfarm.solvers.iterative import solve_path
+
+    # [rad]: front, elbow down at every point, where LM from the home configuration finds the elbow up
+    q_path = np.linspace([0.3, -0.9, 1.9, -0.8, 0.1], [1.2, -0.7, 1.6, -0.5, -0.4], 60)
+    T = fk(intelbot5, q_path)
+    branch = branch_of(intelbot5, q_path)
+    assert len(set(branch.tolist())) == 1
+    other = np.delete(closed_form(intelbot5, T).reaches, branch[0], axis=-1)
+    assert other.any(axis=-1).all(), "every pose has another branch's solution (joint limits aside)"
+    assert (solve(intelbot5, T, np.zeros(5), restarts=0).branch != branch[0]).all()
+    result = solve_path(intelbot5, T, q_path[0])
+    assert result.success.all()
+    assert set(result.branch.tolist()) == {int(branch[0])}, BRANCHES[branch[0]]
+    np.testing.assert_allclose(result.q, q_path, rtol=0, atol=1e-6)
+    steps = np.abs(np.diff(result.q, axis=0)).max()
+    assert steps <= np.abs(np.diff(q_path, axis=0)).max() + 1e-6
