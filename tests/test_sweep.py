@@ -541,10 +541,23 @@ def test_ctrl_c_stops_a_sweep_on_a_cluster_in_one_line(tmp_path):
 
     sweep_file = write(tmp_path, {"name": "slow", "job": "idle", "fixed": {"seconds": 60.0},
                                   "grid": {"value": [1, 2]}, "metrics": ["value"]})
+    from nfarm.infra import progress
+
+    posts = tmp_path / "progress.json"
     run = subprocess.Popen([sys.executable, "-m", "nfarm", "sweep", str(sweep_file), "--workers", "2",
                             "--out", str(tmp_path / "out")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True, start_new_session=True, cwd=ROOT)
-    time.sleep(15)                      # the cluster is up and both cells sleep
+                           text=True, start_new_session=True, cwd=ROOT, env={**os.environ, progress.ENV: str(posts)})
+    # Polled, not slept: the sweep posts once before its cluster starts, then beats only while it waits on the
+    # cluster's workers, whose cells sleep for a minute — the second post says the cells are under way.
+    deadline, first = time.monotonic() + 120, None
+    while run.poll() is None and time.monotonic() < deadline:
+        state = progress.read(posts)
+        if state is not None and first is None:
+            first = state["posted"]
+        if state is not None and state["posted"] != first:
+            break
+        time.sleep(0.2)
+    assert run.poll() is None and state["posted"] != first and state["done"] == 0, "the cells run on the cluster"
     os.killpg(run.pid, signal.SIGINT)
     _, err = run.communicate(timeout=90)
     assert run.returncode == 130 and err.strip() == "nfarm: interrupted", err
