@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import warnings
@@ -107,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     sweep.add_argument("file", metavar="FILE", help="params/sweeps/<name>.yaml")
     sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
-    sweep.add_argument("--workers", type=int, default=None, metavar="N",
+    sweep.add_argument("--workers", type=_whole_option("--workers", None), default=None, metavar="N",
                        help="local cluster's worker processes (default: one per core; 0: run the "
                             "cells one by one in this process)")
     sweep.add_argument("--out", default=None, metavar="DIR",
@@ -122,7 +121,8 @@ def main(argv: list[str] | None = None) -> int:
     verify = sub.add_parser("verify", help="check figures/ against figures/MANIFEST.sha256")
     verify.add_argument("--figures", default=None, metavar="DIR")
     panel = sub.add_parser("panel", help="serve the arm panel as a local web page (Voilà)")
-    panel.add_argument("--port", type=int, default=8866, metavar="PORT", help="default 8866")
+    panel.add_argument("--port", type=_whole_option("--port", 1, 65535), default=8866, metavar="PORT",
+                       help="default 8866")
     args = parser.parse_args(argv)
     if args.command == "panel":
         return panel_command(args.port)
@@ -151,16 +151,24 @@ def add_arm_command(urdf: str, name: str | None, tip: str | None, locks: list[st
     from .infra.reading import ParamsError
     from .study.add_arm import add_arm
 
+    from .infra.typed import parse_number
+
     lock = {}
     for item in locks:
         joint, sep, value = item.partition("=")
-        try:
-            if not sep or not joint:
-                raise ValueError
-            lock[joint] = float(value)
-        except ValueError:
+        if not sep or not joint:
             print(f"{urdf}: --lock {item!r}: must be JOINT=VALUE, VALUE a number [rad or m]", file=sys.stderr)
             return 2
+        try:
+            number = parse_number(value, f"--lock {joint}", integer=False)
+        except ParamsError as exc:
+            print(f"{urdf}: {exc} [rad or m]", file=sys.stderr)
+            return 2
+        if joint in lock:
+            print(f"{urdf}: --lock {joint}: given twice ({lock[joint]:g} and {number:g}): give each joint "
+                  f"one lock", file=sys.stderr)
+            return 2
+        lock[joint] = number
     problem = _output_directory("--params", params)
     if problem:
         print(problem, file=sys.stderr)
@@ -230,6 +238,7 @@ def report_command(**options) -> int:
     choice of chapters; 130 when interrupted)."""
     from .infra.notebook_runs import ReportError
     from .infra.paths import shown_path
+    from .infra.reading import ParamsError
     from .publishing import report
     from .publishing.console import Console
 
@@ -249,22 +258,47 @@ def report_command(**options) -> int:
     except ReportError as exc:
         say(str(exc))
         return 1
+    except ParamsError as exc:       # a parameter file the report reads breaks a rule
+        say(str(exc).splitlines()[0])
+        return 2
     say(f"{shown_path(run.index)}; figures in {shown_path(run.figures_dir)}")
     return 0
 
 
 def _seconds(text: str) -> float | None:
-    """``--cell-timeout``: a positive, finite number of seconds, or ``none`` (no limit)."""
-    if text.strip().lower() == "none":
-        return None
+    """``--cell-timeout``: a positive number of seconds (a fraction such as ``2.5`` too; at most a
+    week, :data:`nfarm.infra.typed.CELL_TIMEOUT_S`), or ``none`` (no limit), read by the one
+    parser of typed numbers (:func:`nfarm.infra.typed.parse_number`); else argparse's usage
+    error with the rule."""
+    from .infra.reading import ParamsError
+    from .infra.typed import CELL_TIMEOUT_S, parse_number
+
     try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number of seconds or 'none', got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number of seconds (or 'none' for no "
-                                         f"limit), got {text!r}")
-    return value
+        return parse_number(text, "--cell-timeout", CELL_TIMEOUT_S, none="none")
+    except ParamsError:
+        try:
+            float(text)
+        except ValueError:          # no number at all
+            raise argparse.ArgumentTypeError(f"must be a number of seconds or 'none', got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"must be a positive number of seconds in plain decimal, at most {CELL_TIMEOUT_S.hi:g} (a week), "
+            f"or 'none' for no limit, got {text!r}") from None
+
+
+def _whole_option(option: str, lo: int | None, hi: int | None = None):
+    """An argparse type for a whole-number option (``--workers``, ``--port``): plain decimal
+    digits within ``[lo, hi]`` by :func:`nfarm.infra.typed.parse_number` (``1_0`` and ``٣`` are no
+    numbers here, though Python's ``int`` reads them)."""
+    def parse(text: str) -> int:
+        from .infra.reading import ParamsError
+        from .infra.typed import Range, parse_number
+
+        try:
+            return parse_number(text, option, Range(lo=lo, hi=hi), integer=True)
+        except ParamsError as exc:
+            raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[1]) from None
+    parse.__name__ = option.lstrip("-")
+    return parse
 
 
 def _output_directory(option: str, out: str | None) -> str | None:

@@ -53,18 +53,20 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
+import re
 import types
 import typing
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union
 
-from .reading import Validator
+from .reading import ParamsError, Validator, show
 
 __all__ = ["read_typed", "Range", "Length", "JOINTS", "ORDERED", "TEXT", "ReadBy", "section_keys",
            "MASS", "INERTIA", "GRAVITY", "LENGTH", "ANGLE", "VELOCITY", "EFFORT", "DRIVE", "SPEED_DEG_S",
-           "ACCELERATION_DEG_S2", "CURRENT_PER_COUNT", "TORQUE_CONSTANT", "EPOCHS", "N_MFS", "N_RULES",
-           "ITERATIONS", "COUNT"]
+           "ACCELERATION_DEG_S2", "TIME_S", "CURRENT_PER_COUNT", "TORQUE_CONSTANT", "EPOCHS", "N_MFS", "N_RULES",
+           "ITERATIONS", "COUNT", "CELL_TIMEOUT_S", "PORT", "parse_number"]
 
 
 @dataclass(frozen=True)
@@ -147,14 +149,20 @@ VELOCITY = Range(lo=0.0, lo_open=True, floor=1e-4, hi=1e4, unit="rad/s", why="95
 EFFORT = Range(lo=0.0, lo_open=True, hi=1e6, unit="N·m", why="beyond any arm's drive")
 #: A joint-drive term (viscous N·m·s/rad, Coulomb N·m, armature kg·m², noise N·m, offsets N·m).
 DRIVE = Range(lo=0.0, hi=1e6, why="beyond any arm's drive: a unit slip?")
-#: A speed of a trajectory or a friction model [deg/s]: 1e-3 deg/s is a turn in four days; a
-#: smaller one only divides time into nothing (5e-324 deg/s divided by zero).
-SPEED_DEG_S = Range(lo=0.0, lo_open=True, floor=1e-3, hi=1e6, unit="deg/s", why="no arm's joint turns faster",
-                    why_floor="a turn in four days: no trajectory moves slower")
-#: An acceleration of a trajectory [deg/s²].
-ACCELERATION_DEG_S2 = Range(lo=0.0, lo_open=True, floor=1e-3, hi=1e8, unit="deg/s²",
+#: A speed of a trajectory or a friction model [deg/s]: above 1e6 deg/s no joint turns; below
+#: 1e-12 deg/s (a turn in 10^7 years) the time a trajectory takes overflows what is computed
+#: from it (5e-324 deg/s divided by zero); a slow speed above that is refused by the study's work
+#: bound (its trajectories' samples) instead.
+SPEED_DEG_S = Range(lo=0.0, lo_open=True, floor=1e-12, hi=1e6, unit="deg/s", why="no arm's joint turns faster",
+                    why_floor="a turn in ten million years: the trajectories' times overflow")
+#: An acceleration of a trajectory [deg/s²] (bounds as :data:`SPEED_DEG_S`'s).
+ACCELERATION_DEG_S2 = Range(lo=0.0, lo_open=True, floor=1e-12, hi=1e8, unit="deg/s²",
                             why="no arm's joint accelerates faster",
-                            why_floor="a trajectory would take days to reach its speed")
+                            why_floor="the trajectories' times overflow")
+#: A time of a trajectory [s] (a segment's duration, a sampling step): below a microsecond no
+#: controller samples, beyond 11 days no segment of a data set lasts.
+TIME_S = Range(lo=0.0, lo_open=True, floor=1e-6, hi=1e6, unit="s", why="no segment of a trajectory lasts longer",
+               why_floor="no joint controller samples faster")
 #: A sensor's current per count [A]: a nanoampere per count is below any servo's ADC, a kiloampere
 #: above any arm's current.
 CURRENT_PER_COUNT = Range(lo=0.0, lo_open=True, floor=1e-9, hi=1e3, unit="A",
@@ -162,13 +170,20 @@ CURRENT_PER_COUNT = Range(lo=0.0, lo_open=True, floor=1e-9, hi=1e3, unit="A",
 #: A motor's torque constant at the joint [N·m/A].
 TORQUE_CONSTANT = Range(lo=0.0, lo_open=True, floor=1e-6, hi=1e4, unit="N·m/A",
                         why="above any geared motor's", why_floor="below any motor's")
-#: Training epochs (and an early stop's patience, in epochs): 10 000 epochs is days for a cell.
-EPOCHS = Range(lo=1, hi=10_000, why="beyond 10 000 epochs a cell trains for days")
+#: A notebook cell's or a sweep cell's time limit [s]: a week; no limit is "none" (``null``).
+CELL_TIMEOUT_S = Range(lo=0.0, lo_open=True, hi=7 * 24 * 3600.0, unit="s",
+                       why="a week; 'none' for no limit")
+#: A port of this machine.
+PORT = Range(lo=1, hi=65535, why="a TCP port")
+#: Training epochs (and an early stop's patience, in epochs): a hundred million epochs of the
+#: smallest fit take years, so more are a typo (10^12); a long run within the bound is stopped by a
+#: cell's time limit (a study file's learned_ik.epochs keeps its own tighter budget, 10 000).
+EPOCHS = Range(lo=1, hi=100_000_000, why="more epochs than any cell could train: a typo?")
 #: Membership functions per input of a grid partition: the rules are their product over the
 #: inputs (8 on 7 inputs is 2 million rules).
 N_MFS = Range(lo=1, hi=8, why="the grid's rules are their product over the inputs")
-#: Rules of a clustered rule base.
-N_RULES = Range(lo=1, hi=4096, why="the contest's largest is 512; more do not fit the memory of one cell")
+#: Rules of a clustered rule base (at most; fewer than 1 is the learner's to refuse, in its cell).
+N_RULES = Range(hi=4096, why="the contest's largest is 512; more do not fit the memory of one cell")
 #: Iterations of an iterative learner (an MLP's, boosting's).
 ITERATIONS = Range(lo=1, hi=100_000, why="beyond that a cell runs for days")
 #: A stride through the training states, or a count of kernel components.
@@ -358,3 +373,55 @@ class _Reader:
 
 def _join(at: str, key: str) -> str:
     return f"{at}.{key}" if at else key
+
+
+#: A number as a user types it on the command line: plain decimal, as a parameter file's (no
+#: ``1_0``, ``0x10``, ``inf``, ``nan``, non-ASCII digits, all of which Python's ``int`` or
+#: ``float`` accept).
+_TYPED_INT = re.compile(r"[-+]?[0-9]{1,100}")
+_TYPED_FLOAT = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]{1,4})?")
+
+
+def parse_number(text: str, what: str, bound: Range = Range(), *, integer: bool = False,
+                 none: str | None = None) -> float | int | None:
+    """A number typed on the command line (``--cell-timeout 2.5``, ``--lock j=0.1``,
+    ``--workers 2``): the one parser of every number a user types, by a parameter file's grammar
+    (plain decimal; a whole number for ``integer``), finite and within ``bound``; the word
+    ``none`` (any case) is ``None`` when given. Else a :class:`ParamsError` of one line,
+    ``"<what>: <rule>, got '<text>'"``.
+
+    Example:
+        >>> parse_number("2.5", "--cell-timeout", CELL_TIMEOUT_S, none="none")
+        2.5
+        >>> parse_number("None", "--cell-timeout", CELL_TIMEOUT_S, none="none") is None
+        True
+        >>> parse_number("1_0", "--workers", integer=True)
+        Traceback (most recent call last):
+        ...
+        nfarm.infra.reading.ParamsError: --workers: must be a whole number in plain decimal digits, got '1_0'
+        >>> parse_number("1e308", "--cell-timeout", CELL_TIMEOUT_S, none="none")
+        Traceback (most recent call last):
+        ...
+        nfarm.infra.reading.ParamsError: --cell-timeout: must be <= 604800 s, got 1e+308 (a week; 'none' for no limit)
+    """
+    v = _Bare(what)
+    raw = text if isinstance(text, str) else str(text)
+    word = raw.strip()
+    if none is not None and word.lower() == none:
+        return None
+    or_none = f" (or '{none}')" if none is not None else ""
+    kind = "a whole number in plain decimal digits" if integer else \
+        "a number in plain decimal (such as 2, 0.5 or 1e-3)"
+    if not (_TYPED_INT if integer else _TYPED_FLOAT).fullmatch(word):
+        v.fail("", f"must be {kind}{or_none}, got {show(raw)}")
+    value = int(word) if integer else float(word)
+    if not integer and not math.isfinite(value):
+        v.fail("", f"must be a finite number{or_none}, got {show(raw)}")
+    return bound.check(v, value, "", integer=integer)
+
+
+class _Bare(Validator):
+    """Failures as ``"<what>: <rule>"`` (a command-line option, no file)."""
+
+    def fail(self, field: str, rule: str):
+        raise ParamsError(f"{self.source}: {rule}")

@@ -47,6 +47,7 @@ cell run again after a change to the code retrains nothing whose inputs are unch
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import math
@@ -62,7 +63,8 @@ import numpy as np
 from . import datasets, id_trajectories, study_files
 
 from ..infra.paths import BUILD, project_path, shown_path
-from ..infra.reading import ParamsError, show
+from ..infra.reading import ParamsError, Validator, show
+from ..infra.typed import COUNT, EPOCHS, ITERATIONS, N_MFS, N_RULES, Range
 from ..learning import jang
 from ..learning.anfis import ANFIS
 from ..learning.baselines import DEFAULTS as BASELINE_OPTIONS
@@ -147,7 +149,50 @@ class Job:
         for key in self.paths:
             if isinstance(params[key], str):
                 params[key] = shown_path(project_path(params[key]))
+        _bounded(params)
         return params
+
+
+#: The plausibility bounds of the counts a cell's parameters give, by parameter name, wherever
+#: they stand (a job's own parameter, a joint's options, a learner's ``options``): one
+#: declaration per quantity (:mod:`nfarm.infra.typed`), so that ``epochs: -1``, ``10^12`` epochs
+#: or ``n_mfs: 10^6`` are refused when the sweep file is read, not hours into a cell.
+#: Counts below 1 of a rule base (``n_mfs``, ``n_rules``) are the learner's to refuse, in its cell: a
+#: sweep may hold a cell that fails on purpose; the upper bounds are the sweep file's.
+PARAMETER_BOUNDS: dict[str, Range] = {"epochs": EPOCHS, "patience": EPOCHS,
+                                      "n_mfs": dataclasses.replace(N_MFS, lo=None),
+                                      "n_rules": N_RULES, "max_iter": ITERATIONS, "n_estimators": ITERATIONS,
+                                      "stride": COUNT, "n_components": COUNT, "samples": COUNT}
+
+
+class _Named(Validator):
+    """Failures as ``"<name>: <rule>"`` (:meth:`Job.complete`'s contract)."""
+
+    def __init__(self):
+        super().__init__("")
+
+    def fail(self, field: str, rule: str):
+        raise ParamsError(f"{field}: {rule}")
+
+
+def _bounded(params: Mapping[str, Any]) -> None:
+    """Every bounded count (:data:`PARAMETER_BOUNDS`) in ``params``, at any depth, within its
+    bound: ``None`` (a default) passes, a number or each number of a list is checked; else a
+    ``ParamsError`` ``"<name>: <rule>"`` (``joint_options[1].epochs: ...`` for a nested one)."""
+    v = _Named()
+    stack: list[tuple[str, Any]] = [(k, x) for k, x in params.items()]
+    while stack:
+        at, value = stack.pop()
+        key = at.rsplit(".", 1)[-1]
+        if "[" not in key and key in PARAMETER_BOUNDS and value is not None:
+            items = value if isinstance(value, list) else [value]
+            for k, x in enumerate(items):
+                PARAMETER_BOUNDS[key].check(v, x, at if not isinstance(value, list) else f"{at}[{k}]",
+                                            integer=True)
+        elif isinstance(value, Mapping):
+            stack.extend((f"{at}.{k}", x) for k, x in value.items())
+        elif isinstance(value, list):
+            stack.extend((f"{at}[{k}]", x) for k, x in enumerate(value))
 
 
 def _whole(value: Any) -> Any:

@@ -29,7 +29,8 @@ import numpy as np
 
 from ..infra.paths import project_path
 from ..infra.reading import ParamsError, Validator, load_yaml
-from ..infra.typed import JOINTS, ORDERED, TEXT, Length, Range, read_typed, section_keys
+from ..infra.typed import (ACCELERATION_DEG_S2, CURRENT_PER_COUNT, DRIVE, JOINTS, MASS, N_MFS, ORDERED,
+                           SPEED_DEG_S, TEXT, TIME_S, TORQUE_CONSTANT, Length, Range, read_typed, section_keys)
 from ..model.kinematics import fk
 from ..model.robot import Robot, load_robot
 from ..solvers.ik import in_class
@@ -83,9 +84,10 @@ Bounds = Annotated[tuple[Optional[float], Optional[float]], ORDERED]
 PerJoint = Union[float, Annotated[list[float], JOINTS]]
 #: The largest per-joint drive, noise, speed or acceleration value a study may give: every
 #: plausible one is far below, and 1.7e308 would turn the data sets' torques into inf.
-PER_JOINT_MAX = 1e6
-_DRIVE = Range(lo=0.0, hi=PER_JOINT_MAX)                       # >= 0
-_RATE = Range(lo=0.0, lo_open=True, hi=PER_JOINT_MAX)          # > 0
+PER_JOINT_MAX = DRIVE.hi
+#: Drive terms and noise [N·m, N·m·s/rad, kg·m²] (>= 0); speeds and accelerations have their own
+#: plausibility bounds (nfarm.infra.typed: SPEED_DEG_S, ACCELERATION_DEG_S2).
+_DRIVE = DRIVE
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -136,7 +138,7 @@ class TrueArmSection:
     mass_sd: Annotated[float, Range(lo=0.0, hi=1 / 3, hi_open=True)] = 0.0      # relative
     com_sd_m: Annotated[float, Range(lo=0.0, hi=0.1)] = 0.0                     # m, per coordinate
     inertia_sd: Annotated[float, Range(lo=0.0, hi=1 / 3, hi_open=True)] = 0.0   # relative
-    payload_kg: Annotated[float, Range(lo=0.0, hi=PER_JOINT_MAX)] = 0.0
+    payload_kg: Annotated[float, MASS] = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -144,8 +146,8 @@ class SensorSection:
     """``id.measured.sensor``: the torque read from the motor current — its count, the torque
     per ampere at the joint, each joint's zero offset (drawn once from the study's seed)."""
 
-    current_per_count_a: Annotated[PerJoint, _RATE]             # A per count of the reading
-    torque_constant_nm_a: Annotated[PerJoint, _RATE]            # N·m at the joint per A
+    current_per_count_a: Annotated[PerJoint, CURRENT_PER_COUNT]             # A per count of the reading
+    torque_constant_nm_a: Annotated[PerJoint, TORQUE_CONSTANT]            # N·m at the joint per A
     offset_sd_nm: Annotated[PerJoint, _DRIVE] = 0.0             # N·m
 
 
@@ -155,11 +157,11 @@ class MeasuredSection:
 
     viscous: Annotated[PerJoint, _DRIVE]                    # N·m·s/rad
     coulomb: Annotated[PerJoint, _DRIVE]                    # N·m
-    coulomb_velocity_deg_s: Annotated[PerJoint, _RATE]
+    coulomb_velocity_deg_s: Annotated[PerJoint, SPEED_DEG_S]
     armature: Annotated[PerJoint, _DRIVE]                   # kg·m²
     noise_nm: Annotated[PerJoint, _DRIVE]
     stribeck: Optional[Annotated[PerJoint, _DRIVE]] = None
-    stribeck_velocity_deg_s: Optional[Annotated[PerJoint, _RATE]] = None
+    stribeck_velocity_deg_s: Optional[Annotated[PerJoint, SPEED_DEG_S]] = None
     load_coefficient: Optional[Annotated[PerJoint, Range(lo=0.0, hi=1.0, hi_open=True)]] = None
     encoder_counts: Optional[Annotated[int, Range(lo=16, hi=2 ** 31)]] = None
     filter_window: Annotated[int, Range(lo=5, hi=101)] = 7
@@ -173,11 +175,11 @@ class IDSection:
 
     trajectories: Annotated[dict[Split, int], Range(lo=1, hi=1_000_000)]
     via_points: Annotated[int, Range(lo=2, hi=10_000)]
-    segment_time_s: Annotated[tuple[float, float], Range(lo=0.0, lo_open=True), ORDERED]
-    dt_s: Annotated[float, Range(lo=0.0, lo_open=True)]
+    segment_time_s: Annotated[tuple[float, float], TIME_S, ORDERED]
+    dt_s: Annotated[float, TIME_S]
     margin_deg: Annotated[float, Range(lo=0.0)] = 0.0
-    max_velocity_deg_s: Annotated[PerJoint, _RATE]
-    max_acceleration_deg_s2: Annotated[PerJoint, _RATE]
+    max_velocity_deg_s: Annotated[PerJoint, SPEED_DEG_S]
+    max_acceleration_deg_s2: Annotated[PerJoint, ACCELERATION_DEG_S2]
     measured: Optional[MeasuredSection] = None
 
 
@@ -185,7 +187,7 @@ class IDSection:
 class LearnedIKSection:
     """``learned_ik``: the chosen learned IK's functions per input and epochs."""
 
-    n_mfs: Optional[Annotated[Union[int, Annotated[list[int], Length(1, 16)]], Range(lo=1, hi=8)]] = None
+    n_mfs: Optional[Annotated[Union[int, Annotated[list[int], Length(1, 16)]], N_MFS]] = None
     epochs: Optional[Annotated[Union[int, Annotated[list[int], JOINTS]], Range(lo=1, hi=10_000)]] = None
 
 

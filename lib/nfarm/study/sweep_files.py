@@ -40,7 +40,7 @@ from typing import Annotated, Any, Optional
 
 from ..infra.paths import PARAMS, project_path, shown_path
 from ..infra.reading import ParamsError, Validator, json_ready, load_yaml, show
-from ..infra.typed import TEXT, Length, Range, ReadBy, read_typed, section_keys
+from ..infra.typed import CELL_TIMEOUT_S, TEXT, Length, Range, ReadBy, read_typed, section_keys
 from .jobs import JOBS
 
 __all__ = ["Sweep", "Cell", "SweepFile", "SmokeSection", "load_sweep", "sweep_from_dict", "SWEEPS", "MAX_CELLS"]
@@ -265,7 +265,7 @@ class SweepFile:
     seeds: Seeds = field(default_factory=list)
     metrics: Annotated[list[str], Length(lo=1)]
     smoke: SmokeSection = field(default_factory=SmokeSection)
-    cell_timeout_s: Optional[Annotated[float, Range(lo=0.0, lo_open=True, hi=7 * 24 * 3600.0)]] = None
+    cell_timeout_s: Optional[Annotated[float, CELL_TIMEOUT_S]] = None
 
 
 def sweep_from_dict(data: Any, source: str = "<dict>", *, smoke: bool = False) -> Sweep:
