@@ -394,14 +394,14 @@ def verify_figures(figures: str | None) -> int:
     from pathlib import Path
 
     from .infra.paths import FIGURES
-    from .publishing.manifest import verify_manifest
+    from .publishing.manifest import manifest_entries, verify_manifest
 
     directory = Path(figures) if figures else FIGURES
     problems = verify_manifest(directory)
     for line in problems:
         print(f"{directory}: {line}", file=sys.stderr)
     if not problems:
-        count = len((directory / "MANIFEST.sha256").read_text().splitlines())
+        count = manifest_entries(directory)
         print(f"{directory}: {count} files match MANIFEST.sha256")
     return 1 if problems else 0
 

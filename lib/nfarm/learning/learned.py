@@ -262,6 +262,12 @@ class LearnedIK(PerJointModel):
             with np.errstate(over="ignore", invalid="ignore"):
                 for _ in map_chunks(chunk, range(0, len(flat), CHUNK)):
                     pass
+            bad = ~np.isfinite(out).all(axis=1)
+            if bad.any():        # as LearnedID's torques: no inf or NaN angles handed on
+                i = int(np.argmax(bad))
+                raise ValueError(f"the joint angles of {int(bad.sum())} of {len(out)} poses overflow (first: pose "
+                                 f"{i}, its inputs {beyond[i]:.3g} training ranges beyond the training poses'): "
+                                 f"poses far outside the data the model learned from, or a damaged model")
             warn_far(beyond, far, "poses")
             return out.reshape(*T.shape[:-2], self.n_joints_)
 

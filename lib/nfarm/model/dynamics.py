@@ -147,6 +147,10 @@ def _check(robot: Robot, **arrays) -> tuple[tuple, dict]:
     out = {}
     for name, value in arrays.items():
         out[name] = joint_array(robot, value, name)
+        if not np.isfinite(out[name]).all():        # NaN in, plausible torques out: refused
+            bad = np.argwhere(~np.isfinite(out[name]))[0]
+            raise ValueError(f"{robot.name}: {name} must hold finite numbers, got "
+                             f"{float(out[name][tuple(bad)])!r} at index {tuple(int(i) for i in bad)}")
     try:
         batch = np.broadcast_shapes(*(v.shape[:-1] for v in out.values()))
     except ValueError:
@@ -260,11 +264,17 @@ def rnea(robot: Robot, q, qd, qdd, *, gravity=None, f_tip=None, drive: bool = Fa
     links = _links(robot)
     for start in range(0, N, CHUNK):
         sl = slice(start, min(start + CHUNK, N))
-        tau[:, sl] = _rnea_T(links, *(x[:, sl] for x in flat), g,
-                             None if wrench is None else wrench[:, sl])
+        with np.errstate(over="ignore", invalid="ignore"):      # an overflow is refused below
+            tau[:, sl] = _rnea_T(links, *(x[:, sl] for x in flat), g,
+                                 None if wrench is None else wrench[:, sl])
     tau = tau.T.reshape(*batch, robot.n)
     if drive:
-        tau = tau + joint_drive_torques(robot, a["qd"], a["qdd"])
+        with np.errstate(over="ignore", invalid="ignore"):
+            tau = tau + joint_drive_torques(robot, a["qd"], a["qdd"])
+    if not np.isfinite(tau).all():       # speeds of 1e200 rad/s: the torques overflow
+        raise ValueError(f"{robot.name}: the torques of {int((~np.isfinite(tau)).any(axis=-1).sum())} states "
+                         f"overflow: q, qd, qdd far beyond any arm's (|qd| up to "
+                         f"{float(np.abs(a['qd']).max()):.3g} rad/s, |qdd| up to {float(np.abs(a['qdd']).max()):.3g} rad/s²)")
     return tau
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from ..infra.notebook_runs import ReportError
 from ..infra.paths import FIGURES, atomic_path
 
-__all__ = ["write_manifest", "verify_manifest", "chapter_files", "publish_chapter", "publishing_lock",
+__all__ = ["write_manifest", "verify_manifest", "manifest_entries", "chapter_files", "publish_chapter", "publishing_lock",
            "recover_figures"]
 
 
@@ -58,32 +58,102 @@ def write_manifest(figures_dir: Path = FIGURES) -> Path:
     return manifest
 
 
+#: The largest manifest read [bytes]: ``figures/``'s lists 271 files in 27 KB; a manifest of 64 MiB
+#: would list half a million, none of which this project publishes.
+MAX_MANIFEST_BYTES = 64 << 20
+#: The longest line read [bytes]: a digest, two spaces and a path of at most :data:`MAX_NAME_BYTES`.
+MAX_NAME_BYTES = 4096
+#: Problems listed before the rest are counted in one line (a manifest of a million bad lines is
+#: not a million lines of output).
+MAX_PROBLEMS = 100
+
+
+def _entries(manifest: Path, problems: list[str]):
+    """The manifest's lines ``(number, digest, name)``, read one at a time (memory bounded by
+    the longest line, :data:`MAX_NAME_BYTES`), each checked; a line that is no entry (not UTF-8,
+    a NUL byte, too long, no ``sha256  path``) adds one problem and is not checked further."""
+    with open(manifest, "rb") as f:
+        number = 0
+        while True:
+            raw = f.readline(MAX_NAME_BYTES + 70)
+            if not raw:
+                return
+            number += 1
+            if len(raw) > MAX_NAME_BYTES + 68 and not raw.endswith(b"\n"):
+                problems.append(f"{manifest}:{number}: longer than {MAX_NAME_BYTES + 67:,} bytes: not a "
+                                f"'sha256  path' line")
+                while raw and not raw.endswith(b"\n"):          # skip the rest of the line
+                    raw = f.readline(1 << 16)
+                continue
+            raw = raw.rstrip(b"\n").rstrip(b"\r")
+            try:
+                line = raw.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                problems.append(f"{manifest}:{number}: not UTF-8 text (byte {exc.start}): not a 'sha256  path' line")
+                continue
+            digest, sep, name = line.partition("  ")
+            if not sep or not re.fullmatch(r"[0-9a-f]{64}", digest) or not name:
+                problems.append(f"{manifest}:{number}: not a 'sha256  path' line")
+                continue
+            if "\x00" in name or not name.isprintable():
+                problems.append(f"{manifest}:{number}: the path holds a NUL or control character: not checked")
+                continue
+            if any(len(part.encode("utf-8")) > 255 for part in name.split("/")):
+                problems.append(f"{manifest}:{number}: a name in the path is longer than 255 bytes: not checked")
+                continue
+            yield number, digest, name
+
+
 def verify_manifest(figures_dir: Path = FIGURES) -> list[str]:
     """What differs between ``figures_dir`` and its manifest (empty when they agree): files
-    whose hash differs, listed files that are missing, files the manifest does not list."""
+    whose hash differs, listed files that are missing, files the manifest does not list, and
+    lines that are no entry (one line each: not UTF-8, a NUL byte, an over-long name, a path
+    outside the directory or through a symbolic-link loop, a file listed twice — refused, not
+    counted once). The manifest is streamed (at most :data:`MAX_MANIFEST_BYTES`); at most
+    :data:`MAX_PROBLEMS` problems are listed, then how many more."""
     manifest = figures_dir / "MANIFEST.sha256"
     if not manifest.is_file():
         return [f"{manifest}: missing"]
-    problems, listed = [], set()
+    size = manifest.stat().st_size
+    if size > MAX_MANIFEST_BYTES:
+        return [f"{manifest}: {size:,} bytes, over the {MAX_MANIFEST_BYTES:,}-byte limit of a manifest: not read"]
+    problems: list[str] = []
+    listed: dict[str, int] = {}
     root = figures_dir.resolve()
-    for number, line in enumerate(manifest.read_text(encoding="utf-8").splitlines(), 1):
-        digest, sep, name = line.partition("  ")
-        if not sep or not re.fullmatch(r"[0-9a-f]{64}", digest):
-            problems.append(f"{manifest}:{number}: not a 'sha256  path' line")
-            continue
+    for number, digest, name in _entries(manifest, problems):
         path = figures_dir / name
-        if Path(name).is_absolute() or not path.resolve().is_relative_to(root):
+        try:
+            outside = Path(name).is_absolute() or not path.resolve().is_relative_to(root)
+        except (OSError, RuntimeError):       # a symbolic-link loop (3.11's resolve), a name too long
+            problems.append(f"{manifest}:{number}: {name!r} cannot be resolved (a symbolic-link loop?): not checked")
+            continue
+        if outside:
             problems.append(f"{manifest}:{number}: {name!r} lies outside the figures directory: not checked")
             continue
-        listed.add(name)
-        if not path.is_file():
+        if name in listed:
+            problems.append(f"{manifest}:{number}: {name!r} is listed twice (first at line {listed[name]})")
+            continue
+        listed[name] = number
+        try:
+            is_file = path.is_file()
+        except OSError:
+            is_file = False
+        if not is_file:
             problems.append(f"{name}: listed but missing")
         elif _file_sha256(path) != digest:
             problems.append(f"{name}: differs from the manifest")
     for path in _published_files(figures_dir):
         if path.relative_to(figures_dir).as_posix() not in listed:
             problems.append(f"{path.relative_to(figures_dir).as_posix()}: not in the manifest")
+    if len(problems) > MAX_PROBLEMS:
+        problems = problems[:MAX_PROBLEMS] + [f"… and {len(problems) - MAX_PROBLEMS:,} more problems"]
     return problems
+
+
+def manifest_entries(figures_dir: Path = FIGURES) -> int:
+    """How many entries ``figures_dir``'s manifest holds (its lines, streamed)."""
+    with open(figures_dir / "MANIFEST.sha256", "rb") as f:
+        return sum(1 for _ in iter(lambda: f.readline(1 << 16), b"") )
 
 
 _RENAME_EXCHANGE = 2

@@ -49,10 +49,14 @@ def local_host(host: str | None) -> bool:
         >>> [local_host(h) for h in ("127.0.0.1:8866", "localhost", "[::1]:8866", "evil.example:8866", None)]
         [True, True, True, False, False]
     """
-    if not host:
+    if not host or not isinstance(host, str):
         return False
-    match = re.fullmatch(r"(.*?)(:\d+)?", host.strip())
-    name = match.group(1) if match else host
+    # A Host is a name and an optional port in plain ASCII: no percent-encoding (an IPv6 zone
+    # such as ``[::1%2Ftmp]`` would still parse as a loopback address), no white space, no path.
+    match = re.fullmatch(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9.-]+)(?::([0-9]{1,5}))?", host)
+    if match is None or (match.group(2) is not None and not 0 < int(match.group(2)) <= 65535):
+        return False
+    name = match.group(1)
     if name.startswith("[") and name.endswith("]"):
         name = name[1:-1]
     try:

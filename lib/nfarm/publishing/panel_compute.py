@@ -482,7 +482,9 @@ def joint_trajectory(robot: Robot, q0_deg, qf_deg, v0_deg_s, vf_deg_s, *, t0: fl
         v = _reals(name, value, (robot.n,))
         worst = int(np.argmax(np.abs(v)))
         if abs(v[worst]) > bound:
-            raise PanelInputError(f"{name}: {shown(v[worst])} for {robot.joint_names[worst]} is beyond the "
+            # as many digits as tell the value from the bound (3600.0000001 is not "3600")
+            digits = next((d for d in range(6, 18) if float(shown(v[worst], d)) != bound * np.sign(v[worst])), 17)
+            raise PanelInputError(f"{name}: {shown(v[worst], digits)} for {robot.joint_names[worst]} is beyond the "
                                   f"bound of ±{shown(bound)}")
         arrays.append(np.radians(v))
     t0 = _real("start time", t0, "s", low=-max_time_s, high=max_time_s)
@@ -496,8 +498,11 @@ def joint_trajectory(robot: Robot, q0_deg, qf_deg, v0_deg_s, vf_deg_s, *, t0: fl
     if not 0 < dt <= tf - t0:
         raise PanelInputError(f"time step {shown(dt)} s must be > 0 and at most the duration {shown(tf - t0)} s")
     steps = (tf - t0) / dt
-    if not steps + 2 <= max_samples:
-        count = np.floor(steps + 1e-9) + 1
+    # The samples the trajectory has (nfarm.solvers.trajectory's times): every step from the
+    # start, and the end time when it falls between two.
+    whole = np.floor(steps + 1e-9)
+    count = whole + 1 + (1 if np.isfinite(whole) and (tf - (t0 + dt * whole)) > 1e-9 * dt else 0)
+    if not count <= max_samples:
         count = f"{int(count):,}" if count < 1e15 else f"about {shown(count, 3)}" if np.isfinite(count) else \
             "more than 1e308"
         raise PanelInputError(f"time step {shown(dt)} s over {shown(tf - t0)} s gives {count} samples; the "

@@ -488,6 +488,11 @@ def _wrap_joint(x: np.ndarray, lo: float, hi: float, limit_tol: float) -> np.nda
     return inside
 
 
+#: The farthest target the closed form takes [m from the base, per coordinate]: within it no NaN
+#: is produced (the squares of positions stay finite, module docstring); beyond it no arm reaches.
+MAX_TARGET_DISTANCE = 1e150
+
+
 def closed_form(robot: Robot, T_target, *, tol_pos: float = 1e-9, tol_rot: float = 1e-9,
                 weights=None, refine: bool = True, refine_iter: int = 200,
                 axis_tol: float = 1e-10, limit_tol: float = 1e-12, ortho_tol: float = 1e-9,
@@ -561,6 +566,12 @@ def _closed_form(robot, arm, T_target, pool, tol_pos, tol_rot, w, refine, refine
     T = check_targets(T_target, ortho_tol, map_chunks=map_chunks)   # every pose first
     batch, flat = T.shape[:-2], T.reshape(-1, 4, 4)
     N = flat.shape[0]
+    if N:
+        distance = np.abs(flat[:, :3, 3] - robot.base[:3, 3]).max(axis=1)
+        if distance.max() > MAX_TARGET_DISTANCE:
+            k = int(np.argmax(distance))
+            raise ValueError(f"T_target: pose {k}'s position lies {distance[k]:.3g} m from the base, beyond the "
+                             f"{MAX_TARGET_DISTANCE:g} m within which the closed form computes (no arm reaches it)")
     # Written in component layout (joint, branch, target) and handed out as its transposed
     # view: the chunks write contiguous rows instead of every fifth number.
     q_c, inside_c = np.empty((5, 4, N)), np.empty((4, N), bool)
