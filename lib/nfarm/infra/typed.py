@@ -159,10 +159,11 @@ SPEED_DEG_S = Range(lo=0.0, lo_open=True, floor=1e-12, hi=1e6, unit="deg/s", why
 ACCELERATION_DEG_S2 = Range(lo=0.0, lo_open=True, floor=1e-12, hi=1e8, unit="deg/s²",
                             why="no arm's joint accelerates faster",
                             why_floor="the trajectories' times overflow")
-#: A time of a trajectory [s] (a segment's duration, a sampling step): below a microsecond no
-#: controller samples, beyond 11 days no segment of a data set lasts.
-TIME_S = Range(lo=0.0, lo_open=True, floor=1e-6, hi=1e6, unit="s", why="no segment of a trajectory lasts longer",
-               why_floor="no joint controller samples faster")
+#: A time of a trajectory [s] (a segment's duration, a sampling step): below a picosecond, or
+#: beyond 30 years, the samples' count overflows what is computed from it (5e-324 s divided into
+#: nothing); a merely absurd one within (a nanosecond's step) is refused by the study's work bound.
+TIME_S = Range(lo=0.0, lo_open=True, floor=1e-12, hi=1e9, unit="s", why="no segment of a trajectory lasts longer",
+               why_floor="the trajectories' samples overflow")
 #: A sensor's current per count [A]: a nanoampere per count is below any servo's ADC, a kiloampere
 #: above any arm's current.
 CURRENT_PER_COUNT = Range(lo=0.0, lo_open=True, floor=1e-9, hi=1e3, unit="A",
