@@ -107,6 +107,8 @@ def test_heartbeats_stop_when_the_counts_stay_still_for_too_long(tmp_path, monke
 def test_the_estimate_of_time_left():
     assert progress.eta(4, 6, 120.0) == pytest.approx(180.0)
     assert progress.eta(0, 6, 120.0) is None
+    assert progress.eta(1, 61, 540.0) is None, "one of 62 cells says nothing of the rest"
+    assert progress.eta(7, 55, 600.0) == pytest.approx(55 * 600 / 7)
     assert duration(30) == "30 s" and duration(61) == "1 min" and duration(7260) == "2 h 01 min"
 
 
@@ -121,8 +123,8 @@ def test_a_log_is_told_of_long_cells_only_and_a_terminal_redraws_one_line_per_ch
     console.tell(long)
     console.tell({**long, "cell_s": 301.0})             # within EVERY_S: not repeated
     lines = log.getvalue().splitlines()
-    assert lines == ["report: 06_anfis_training.ipynb (so101): 20 of 120 sweep cells of ik_contest found finished "
-                     "by an earlier run, reused", f"report: {status_line(long)}"]
+    assert lines == ["report: 06_anfis_training.ipynb (so101): 20 of 120 sweep cells of ik_contest already finished "
+                     "(by an earlier chapter, or a run that stopped), reused", f"report: {status_line(long)}"]
     assert "cell 7 of 20 for 5 min (x = 1): sweep cells of ik_contest 37 of 120 done (20 found done), " \
            "about 11 min left" in lines[1]
     screen = io.StringIO()
@@ -173,5 +175,5 @@ def test_an_interrupted_report_resumes_from_the_sweep_cells_it_finished(tmp_path
     assert {p: p.stat().st_mtime_ns for p in kept} == kept, "the finished cells were not run again"
     assert len(finished()) == 6
     assert (figures / "tables" / "01_values.csv").read_text() == "value\n" + "".join(f"{k}\n" for k in range(6))
-    assert f"01_sweeps.ipynb: {len(kept)} of 6 sweep cells of tiny found finished by an earlier run, " \
-           f"reused" in again.stderr, again.stderr
+    assert f"01_sweeps.ipynb: {len(kept)} of 6 sweep cells of tiny already finished (by an earlier " \
+           f"chapter, or a run that stopped), reused" in again.stderr, again.stderr
