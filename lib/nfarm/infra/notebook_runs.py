@@ -130,9 +130,10 @@ class _Watch:
     def cell_start(self, cell, cell_index: int, **_) -> None:
         if "injected-parameters" in cell.metadata.get("tags", []):
             self.injected += 1
-        lines = cell.source.strip().splitlines() if cell.cell_type == "code" else []
+        lines = [line.strip() for line in cell.source.splitlines() if line.strip()] if cell.cell_type == "code" else []
+        code = [line for line in lines if not line.startswith("#")] or lines     # what it does, not its comment
         with self.lock:
-            self.cell, self.source = cell_index - self.injected, lines[0][:80] if lines else ""
+            self.cell, self.source = cell_index - self.injected, code[0][:80] if code else ""
             self.cell_since = self.last = time.monotonic()
             self.post = None
 

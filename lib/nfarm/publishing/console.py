@@ -95,8 +95,8 @@ class Console:
         work = state.get("work") or {}
         if work.get("reused") and (label, work.get("step")) not in self.resumed:
             self.resumed.add((label, work.get("step")))
-            self.say(f"{label}: {work['reused']} of {work['total']} sweep cells of {work['step']} found finished "
-                     f"by an earlier run, reused")
+            self.say(f"{label}: {work['reused']} of {work['total']} sweep cells of {work['step']} already finished "
+                     f"(by an earlier chapter, or a run that stopped), reused")
         with self.lock:
             if state.get("finished"):
                 bar = self.bars.pop(label, None)
