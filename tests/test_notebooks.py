@@ -264,15 +264,20 @@ def check_single_valued(tables: Path) -> None:
 
 def check_verdict(tables: Path, arm: str) -> None:
     """Chapter 7: a verdict row per task, for the arm, each following from its interval (the gap ANFIS
-    minus the rival: above 0 the rival is better, below 0 ANFIS, an interval holding 0 no difference)."""
+    minus the rival: above 0 the rival is better, below 0 ANFIS, an interval holding 0 no difference shown, nor
+    one whose p-value Holm's correction leaves at 0.05 or above)."""
     rows = read_table(tables / "07_verdict.csv")
     assert [r["task"] for r in rows] == VERDICT_TASKS
     for row in rows:
         assert row["arm"] == arm, row["arm"]
         low, gap, high = (number(row[k]) for k in ("gap_low", "gap", "gap_high"))
         assert low <= gap <= high, row["task"]
-        expected = "rival better" if low > 0 else "ANFIS better" if high < 0 else "no difference"
-        assert row["verdict"] == expected, (row["task"], row["verdict"], (low, gap, high))
+        expected = "rival better" if low > 0 else "ANFIS better" if high < 0 else "no difference shown"
+        holm = row.get("holm_p", "")                       # Holm's correction over the arm's comparisons
+        if expected != "no difference shown" and holm and not holm.startswith("<") and float(holm) >= 0.05:
+            expected = "no difference shown (Holm)"
+        assert row["verdict"] == expected, (row["task"], row["verdict"], (low, gap, high), holm)
+        assert holm and int(row["comparisons"]) >= 1, (row["task"], "every row's p-value corrected over the family")
         assert number(row["anfis_low"]) <= number(row["anfis_value"]) <= number(row["anfis_high"]), row["task"]
         assert (row["rank"] == "1") == (row["best"] == row["anfis"]), row["task"]
         assert 1 <= number(row["rank"]) <= number(row["compared"]), row["task"]

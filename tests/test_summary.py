@@ -307,12 +307,12 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
     tie = task_verdict("arm B", "measured arm, generic", "worst NRMSE", "%", {"generic: ANFIS": 30.0, "generic: MLP": 28.0},
                        "generic: ANFIS",
                   (2.0, -1.0, 5.0))
-    assert (idv.rank, idv.verdict, tie.verdict) == (2, "rival better", "no difference")
+    assert (idv.rank, idv.verdict, tie.verdict) == (2, "rival better", "no difference shown")
     with pytest.raises(ValueError, match="must be one of at least two methods compared"):
         task_verdict("arm", "t", "m", "mm", {"ANFIS": 1.0}, "ANFIS", (0, 0, 0))
     verdict_table([ik, idv, tie], floors={"%": 1e-6}).save(tmp_path, "07_verdict")
     rows = read_verdicts(tmp_path / "tables" / "07_verdict.csv")
-    assert [r["verdict"] for r in rows] == ["ANFIS better", "rival better", "no difference"]
+    assert [r["verdict"] for r in rows] == ["ANFIS better", "rival better", "no difference shown"]
     assert rows[1]["best"] == "ridge" and rows[1]["best_value"] == "< 1e-6"       # noise level, shown as such
     warm = [{"start": "home (the dissertation's)", "targets": "2000", "mean iterations": "5.99", "max iterations": "9"},
             {"start": "ANFIS prediction", "targets": "2000", "mean iterations": "2.07", "max iterations": "3"},
@@ -325,8 +325,9 @@ def test_a_verdict_ranks_the_anfis_and_reads_the_paired_interval(tmp_path):
     assert said[0] == ("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
                        "inverse kinematics (arm A, by 4 mm of position p95).")
     assert said[1] == ("Another method is better than ANFIS, beyond the paired interval, on rigid-body inverse dynamics "
-                       f"(arm A: ridge, by 2.5 percentage points of {WORST_ID}); and ANFIS and its best rival are no different within "
-                       "the paired interval on measured arm, generic (arm B: MLP).")    # the tier not repeated
+                       f"(arm A: ridge, by 2.5 percentage points of {WORST_ID}); and no difference between ANFIS and its "
+                       "best rival is shown (the paired interval, or Holm's correction for the arm's comparisons) on "
+                       "measured arm, generic (arm B: MLP, 2 (-1 to 5) percentage points).")    # the tier not repeated
     assert said[2] == ("What the ANFIS gives the exact solver, as measured: started from its prediction, "
                        "Levenberg–Marquardt needs on average 2.07 (at most 3) iterations against 5.99 (at most 9) from "
                        "the home pose and 2.24 (at most 4) from the prediction of RBF interpolation (arm A); from the "

@@ -14,17 +14,17 @@ import os
 import re
 import shutil
 import subprocess
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..infra.notebook_runs import DropMessage, ReportError
-from ..infra.paths import ROOT, atomic_path, shown_path
+from ..infra.paths import FIGURES, ROOT, atomic_path, shown_path
 from ..presentation.numbering import anchor
 from .editions import Edition
 from .manifest import chapter_files
 
-__all__ = ["ANSWERS_KIND", "ReportPages", "machine", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
+__all__ = ["ABSTRACT_FRAMING", "ANSWERS_KIND", "ReportPages", "machine", "write_pages", "references_html", "pandoc_path", "BIBLIOGRAPHY", "abstract_answers", "verdict_rows", "edition_letter", "DISSERTATION_TITLE", "DISSERTATION_TITLE_EN", "export_html", "chapter_title", "install_mathjax", "COURSE_TAGS",
            "MATHJAX", "PAPER_NAME", "PAGE_TEMPLATE"]
 
 
@@ -470,6 +470,19 @@ ABSTRACT_LIMITS = (
     "bootstrap).")
 
 
+#: What this report can and cannot compare with the dissertation: the index and the PDF say it first.
+ABSTRACT_FRAMING = (
+    "This is a re-implementation of the dissertation's study under stated assumptions, not a replication of its "
+    "numbers. The source we have (docs/STUDY.md) is an OCR text of its introduction, its table of contents, the "
+    "first part of its chapter 1, its bibliography and fragments of its program's MATLAB code: it names the methods — "
+    "a DH model of a 5-DOF arm, Levenberg–Marquardt IK, recursive Newton–Euler ID, ANFIS trained by Jang's hybrid "
+    "rule — but holds none of chapters 2–4: no robot parameters, no data settings or training budgets, and no "
+    "tables of results. So what can be compared with a published number is the "
+    "ANFIS engine itself, on Jang's three benchmarks beside his results (chapter 4); every result for the arms — "
+    "the errors, the comparisons with other learners and the verdict below — is this study's own, on assumed arms "
+    "and designs labelled \"(assumed)\" where they are ours, and cannot say whether the dissertation's own figures "
+    "would be met.")
+
 #: What the abstract's intervals and comparisons are (:func:`abstract_answers`), as the index and the PDF say it.
 ANSWERS_KIND = ("on held-out data; a method chapter 6 trained over several seeds pooled over them, with a two-level 95 % "
                 "bootstrap interval over the seeds and the test poses or trajectories; a method trained once, or exact, "
@@ -544,17 +557,46 @@ def _verdict_html(rows: list[dict[str, str]], warm: dict[str, list[dict[str, str
              + "</tbody></table>")
     return ["<h2 id='verdict'>Verdict</h2>",
             "<p>For each task and arm, on held-out data: the best of the methods compared, the ANFIS's best and its "
-            "rank, its difference from the best other method with the paired interval (an interval holding 0 is no "
-            "difference; each value pooled over the seeds of its training and the test units, the interval a two-level "
-            "bootstrap over both) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
+            "rank, its difference from the best other method with the paired interval (no difference is shown where the "
+            "interval holds 0, or where Holm's correction over the arm's comparisons leaves the difference's bootstrap "
+            "p-value at 0.05 or above; each value pooled over the seeds of its training and the test units, the interval "
+            "a two-level bootstrap over both, coarse over five seeds) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
             "<code>docs/STUDY.md</code>).</p>", table,
             "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows, warm)) + "</p>"]
+
+
+def _history_html(arms: Sequence[Edition], figures_dir: Path) -> list[str]:
+    """The verdict's history (:func:`nfarm.publishing.history.verdict_history`): per arm and task,
+    its verdict and gap on every test split the study has read, oldest first."""
+    from .history import verdict_history
+
+    if Path(figures_dir).resolve() != FIGURES.resolve():   # a smoke or custom run's verdict is not a split read
+        return []
+    rows = verdict_history(arms, figures_dir)
+    if not rows:
+        return []
+    splits = list(dict.fromkeys(r.split for r in rows))
+    cells: dict[tuple[str, str], dict[str, str]] = {}
+    for r in rows:
+        cells.setdefault((r.arm, r.task), {})[r.split] = f"{r.verdict}, {r.gap} {r.unit} ({r.commit})"
+    head = ["arm", "task"] + [f"test_seed {split}" if split[:1].isdigit() else split for split in splits]
+    body = [[arm, task] + [by.get(split, "—") for split in splits] for (arm, task), by in cells.items()]
+    table = ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr></thead><tbody>"
+             + "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in body)
+             + "</tbody></table>")
+    return ["<h2 id='history'>Appendix: the verdict on every test split read</h2>",
+            f"<p>The study drew its test split {len(splits)} times and changed choices after each read "
+            "(<code>docs/STUDY.md</code>, \"the final test set\", says what changed after each): each task's verdict "
+            "and gap (ANFIS − best other, with its interval) on every split, as the last commit that published it "
+            "(in parentheses; \"now\": this report's) wrote them, read from the repository's history. A task's "
+            "metric changed where its unit did.</p>", table]
 
 
 def _abstract_html(figures_dir: Path, arms: list[Edition]) -> list[str]:
     """The verdict (:func:`verdict_rows`), then the abstract: the study's question, each arm's
     answers (:func:`abstract_answers`) and the study's limits."""
-    parts = _verdict_html(verdict_rows(figures_dir, arms), warm_start_rows(figures_dir, arms))
+    parts = [f"<p><b>What this is.</b> {html.escape(ABSTRACT_FRAMING)}</p>"]
+    parts += _verdict_html(verdict_rows(figures_dir, arms), warm_start_rows(figures_dir, arms))
     parts += ["<h2 id='abstract'>Abstract</h2>", f"<p><b>Question.</b> {html.escape(ABSTRACT_QUESTION)}</p>"]
     answers = abstract_answers(figures_dir, arms)
     if answers:
@@ -709,6 +751,7 @@ def _write_index(report_dir: Path, figures_dir: Path,
     parts.append("<h2 id='references'>References</h2>")
     parts.append(references_html())
     # The appendix: every chapter's figures and tables, the arms side by side first
+    parts += _history_html(arms, figures_dir)
     parts.append("<h2 id='appendix'>Appendix: every chapter's figures and tables</h2>")
     for prefix, title, page in compared:
         parts.append(f"<h3 id='ch{prefix}'>{html.escape(title)}</h3>"

@@ -31,7 +31,7 @@ from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from ..presentation.numbering import citation_keys
 from .editions import Edition
-from .pages import (ANSWERS_KIND, BIBLIOGRAPHY, ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
+from .pages import (ABSTRACT_FRAMING, ANSWERS_KIND, BIBLIOGRAPHY, ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
                     _git, abstract_answers, chapter_title, edition_letter, numbered_equations, numbered_outputs, pandoc_path, verdict_rows,
                     warm_start_rows)
 
@@ -292,7 +292,8 @@ def _appendix(figures_dir: Path, arms: list[Edition]) -> str:
 
 def _abstract(figures_dir: Path, arms: list[Edition]) -> str:
     answers = abstract_answers(figures_dir, arms)
-    parts = [_verdict(figures_dir, arms), "# Abstract {.unnumbered}", f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
+    parts = [f"**What this is.** {_escape(ABSTRACT_FRAMING)}", _verdict(figures_dir, arms), "# Abstract {.unnumbered}",
+             f"**Question.** {_escape(ABSTRACT_QUESTION)}"]
     if answers:
         parts.append(f"**Answers** ({_escape(ANSWERS_KIND)}):")
         parts.append("\n".join(f"- {_escape(line)}" for line in answers))

@@ -44,7 +44,7 @@ import scipy.stats
 
 __all__ = ["trajectory_sums", "trajectory_maxima", "nrmse_from_sums", "Interval", "bootstrap_nrmse",
            "worst_difference", "Estimate", "bootstrap_rows", "bootstrap_counts", "resampled_quantile",
-           "bootstrap_seeds", "ranges_separate", "separation_level",
+           "bootstrap_seeds", "bootstrap_p", "holm", "distinct_resamples", "ranges_separate", "separation_level",
            "TailRatios", "tail_ratio", "tail_ratios", "resolved_joints"]
 
 
@@ -187,6 +187,9 @@ class Estimate:
     rows: int
     #: The models (seeds) resampled with the rows (:func:`bootstrap_seeds`); 1: the rows alone.
     seeds: int = 1
+    #: The bootstrap's two-sided p-value of 0 for a difference (:func:`bootstrap_p`; its
+    #: resolution ``2 / draws``), of the statistic's shape; NaN where it was not computed.
+    p_zero: np.ndarray | float = float("nan")
 
 
 def bootstrap_rows(rows: np.ndarray, statistic, *, draws: int = 2000, level: float = 0.95, seed: int = 0,
@@ -339,10 +342,61 @@ def bootstrap_seeds(values: np.ndarray, statistic, *, draws: int = 2000, level: 
         pooled = values[models[:, :, None], units[:, None, :]].reshape(b, S * N, k)
         resampled.append(np.asarray(statistic(pooled), float))
     tails = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
-    low, high = np.nanpercentile(np.concatenate(resampled), tails, axis=0)
+    resampled = np.concatenate(resampled)
+    low, high = np.nanpercentile(resampled, tails, axis=0)
     scalar = value.ndim == 0
     as_out = (lambda v: float(v)) if scalar else (lambda v: np.asarray(v, float))   # noqa: E731
-    return Estimate(as_out(value), as_out(low), as_out(high), level, draws, N, S)
+    return Estimate(as_out(value), as_out(low), as_out(high), level, draws, N, S, as_out(bootstrap_p(resampled)))
+
+
+def bootstrap_p(resampled: np.ndarray) -> np.ndarray | float:
+    """The two-sided bootstrap p-value of 0 for a difference, from its resamples ``(draws, ...)``:
+    twice the smaller share of them on either side of 0, at most 1 (Davison & Hinkley 1997,
+    §4.4: the level at which a percentile interval just reaches 0, so that a ``1 − α``
+    interval excludes 0 where ``p < α``). Resamples that are NaN are left out. Its resolution
+    is ``2 / draws``: a 0 means below that.
+
+    Example:
+        >>> float(bootstrap_p(np.array([-3.0, -2.0, -1.0, 1.0]))), float(bootstrap_p(np.array([1.0, 2.0, 3.0])))
+        (0.5, 0.0)
+    """
+    resampled = np.asarray(resampled, float)
+    finite = np.isfinite(resampled)
+    n = finite.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        below = np.where(finite, resampled <= 0, False).sum(axis=0) / n
+        above = np.where(finite, resampled >= 0, False).sum(axis=0) / n
+    return np.minimum(1.0, 2 * np.minimum(below, above))
+
+
+def holm(p_values) -> np.ndarray:
+    """Holm's step-down adjustment of ``m`` p-values (Holm 1979): sorted ascending, the k-th
+    (from 0) is multiplied by ``m − k``, the running maximum taken, capped at 1. Rejecting where
+    the adjusted value is below α holds the family-wise error rate at α for any dependence
+    between the tests.
+
+    Example:
+        >>> holm([0.01, 0.04, 0.03, 0.005]).round(3).tolist()
+        [0.03, 0.06, 0.06, 0.02]
+    """
+    p = np.asarray(p_values, float).ravel()
+    if p.size and (not np.isfinite(p).all() or (p < 0).any() or (p > 1).any()):
+        raise ValueError(f"p-values must be finite numbers in [0, 1], got {p.tolist()}")
+    adjusted, running = np.empty_like(p), 0.0
+    for rank, i in enumerate(np.argsort(p, kind="stable")):
+        running = max(running, min(1.0, (len(p) - rank) * p[i]))
+        adjusted[i] = running
+    return adjusted
+
+
+def distinct_resamples(n: int) -> int:
+    """How many distinct resamples (multisets) ``n`` items drawn with replacement allow:
+    ``C(2n − 1, n)`` — why an outer bootstrap over five seeds is coarse.
+
+    >>> distinct_resamples(5)
+    126
+    """
+    return math.comb(2 * n - 1, n)
 
 
 def ranges_separate(a, b) -> bool:

@@ -25,6 +25,7 @@ differences only.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, replace
 from typing import Callable, Mapping, Sequence
@@ -36,15 +37,15 @@ from ..model.robot import Robot
 from ..presentation.tables import Table, shown
 from ..presentation.wording import times
 from .contest import with_tier_finalists
-from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, nrmse_from_sums,
-                         resampled_quantile, resolved_joints)
+from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_rows, bootstrap_seeds, holm,
+                         nrmse_from_sums, resampled_quantile, resolved_joints)
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
 __all__ = ["IK_METRICS", "Row", "DIGITS", "SUMMARY_FLOORS", "published", "rows_from_table", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
-           "verdict_table", "read_verdicts", "conclusion", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
+           "verdict_table", "read_verdicts", "conclusion", "with_holm", "p_text", "FAMILY_ALPHA", "NO_DIFFERENCE", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_LEARNED_ALONE",
            "ROLE_DESIGN", "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE",
            "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "Paired", "abstract_pairs", "paired_rows", "paired_table",
            "read_paired", "paired_judge", "paired_difference"]
@@ -807,14 +808,14 @@ def _times_of(ours: Mapping[str, str], theirs: Mapping[str, str]) -> str:
     return times(_number(ours["value"]) / _number(theirs["value"]))
 
 
-_VERDICT = {-1: "better than", 1: "worse than", 0: "no different from"}
+_VERDICT = {-1: "better than", 1: "worse than", 0: "not shown to differ from"}
 
 
 def abstract_lines(arm: str, rows: Sequence[Mapping[str, str]],
                    paired: Sequence[Mapping[str, str]]) -> list[str]:
     """Plain-text sentences (one per task) of one arm's answers, every number read from its
     summary rows: the chosen ANFIS, the dissertation's design (assumed), the best baseline and
-    the references; every comparison ("better", "worse", "no different") on the paired
+    the references; every comparison ("better", "worse", "not shown to differ") on the paired
     interval of the two methods' difference over the same test units (``paired``: the rows of
     :func:`paired_table`, as text; :func:`abstract_pairs` lists the ones needed). Rows are
     found by their whole role (:data:`ROLES`)."""
@@ -876,7 +877,7 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
         base = find(task, ROLE_BEST_BASELINE, worst)
         if base:
             verdict = {-1: "better than the ANFIS", 1: "worse than the ANFIS",
-                       0: "no different from the ANFIS (paired interval)"}[_compare(base, free)]
+                       0: "not shown to differ from the ANFIS (paired interval)"}[_compare(base, free)]
             text += f" The best baseline on validation, {reader_label(base['method'])}: {_with_interval(base)}, {verdict}."
         recipe = find(task, ROLE_DESIGN, worst)
         if recipe:
@@ -943,7 +944,12 @@ ID_TARGET_PCT = 5.0
 #: The verdict table's columns (:func:`verdict_table`), as chapter 07 writes them and the index reads them.
 VERDICT_COLUMNS = ("arm", "task", "metric", "unit", "best", "best_value", "anfis", "anfis_value", "anfis_low",
                    "anfis_high", "rank", "compared", "rival", "rival_value", "rival_low", "rival_high", "gap", "gap_low",
-                   "gap_high", "interval", "verdict", "anfis_targets", "rival_targets", "exact")
+                   "gap_high", "interval", "verdict", "anfis_targets", "rival_targets", "exact", "p", "holm_p",
+                   "comparisons")
+#: The family-wise error rate the verdict holds over one arm's comparisons (Holm's correction, :func:`with_holm`).
+FAMILY_ALPHA = 0.05
+#: The verdict's words where no difference is shown: the interval holds 0, or Holm's correction leaves it.
+NO_DIFFERENCE = "no difference shown"
 
 
 @dataclass(frozen=True)
@@ -954,7 +960,10 @@ class Verdict:
     targets each met (``"2 of 3"``; ``""`` where the task has none); ``exact`` names a method that
     solves the task exactly, where one exists (not ranked: the learned methods are compared).
     ``anfis_low``–``anfis_high`` and ``rival_low``–``rival_high`` are the two methods' intervals,
-    and ``interval`` says what they and the gap's resampled."""
+    and ``interval`` says what they and the gap's resampled. ``p`` is the gap's two-sided bootstrap
+    p-value of 0, ``holm_p`` the same after Holm's correction over the arm's ``comparisons``
+    distinct comparisons (:func:`with_holm`), ``draws`` the resamples (``p``'s resolution is
+    ``2 / draws``)."""
 
     arm: str
     task: str
@@ -979,22 +988,63 @@ class Verdict:
     rival_low: float = float("nan")
     rival_high: float = float("nan")
     interval: str = ""
+    p: float = float("nan")
+    holm_p: float = float("nan")
+    comparisons: int = 0
+    draws: int = 0
 
     @property
     def verdict(self) -> str:
-        """``"ANFIS better"``, ``"rival better"`` or ``"no difference"``: the paired interval
-        against 0."""
-        return "ANFIS better" if self.gap_high < 0 else "rival better" if self.gap_low > 0 else "no difference"
+        """``"ANFIS better"``, ``"rival better"`` or ``"no difference shown"``: the paired interval
+        against 0 and, once Holm's correction is known (:func:`with_holm`), the corrected p-value
+        against :data:`FAMILY_ALPHA` as well — ``"no difference shown (Holm)"`` where the interval
+        excludes 0 but the correction for the other comparisons does not let the difference stand."""
+        side = "ANFIS better" if self.gap_high < 0 else "rival better" if self.gap_low > 0 else None
+        if side is None:
+            return NO_DIFFERENCE
+        if math.isfinite(self.holm_p) and self.holm_p >= FAMILY_ALPHA:
+            return f"{NO_DIFFERENCE} (Holm)"
+        return side
+
+
+def with_holm(verdicts: Sequence[Verdict]) -> list[Verdict]:
+    """``verdicts`` (one arm's) with Holm's correction of their p-values over the arm's distinct
+    comparisons: a row comparing the same two methods on the same metric as an earlier one (the
+    measured arm's "every tier", which repeats its best tier's) is the same test and counts once.
+    A row without a p-value (NaN) is left out of the family and keeps its interval's verdict.
+
+    Example:
+        >>> v = [task_verdict("a", f"t{k}", "m", "mm", {"ANFIS": 1.0, f"R{k}": 2.0}, "ANFIS", (-1.0, -1.5, -0.5),
+        ...                   p=p) for k, p in enumerate([0.001, 0.04, 0.02])]
+        >>> [(w.comparisons, round(w.holm_p, 3), w.verdict) for w in with_holm(v)]
+        [(3, 0.003, 'ANFIS better'), (3, 0.04, 'ANFIS better'), (3, 0.04, 'ANFIS better')]
+        >>> [w.verdict for w in with_holm(v[:2] + [replace(v[2], p=0.03)])]
+        ['ANFIS better', 'no difference shown (Holm)', 'no difference shown (Holm)']
+        >>> [w.comparisons for w in with_holm(v + [replace(v[0], task="t0, every tier")])]   # the same test twice
+        [3, 3, 3, 3]
+    """
+    key = lambda v: (v.arm, v.metric, v.anfis, v.rival)      # noqa: E731 — one test per pair of methods and metric
+    first: dict[tuple, Verdict] = {}
+    for v in verdicts:
+        if math.isfinite(v.p):
+            first.setdefault(key(v), v)
+    tests = list(first)
+    adjusted = dict(zip(tests, holm(np.array([first[k].p for k in tests])))) if tests else {}
+    return [replace(v, holm_p=float(adjusted[key(v)]), comparisons=len(tests)) if key(v) in adjusted else v
+            for v in verdicts]
 
 
 def task_verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[str, float], anfis: str,
             gap: tuple[float, float, float], targets: Mapping[str, str] | None = None, exact: str = "", *,
-            intervals: Mapping[str, tuple[float, float]] | None = None, interval: str = "") -> Verdict:
+            intervals: Mapping[str, tuple[float, float]] | None = None, interval: str = "",
+            p: float = float("nan"), draws: int = 0) -> Verdict:
     """The :class:`Verdict` of one task: ``values`` every compared method's value of ``metric``
     (lower is better) on held-out data, ``anfis`` the ANFIS among them, ``gap`` its paired
     difference from the best other method ``(value, low, high)``, ``targets`` each method's
     targets met (``"2 of 3"``), ``exact`` the method that solves the task exactly, if any;
-    ``intervals`` each method's ``(low, high)`` and ``interval`` what they resampled.
+    ``intervals`` each method's ``(low, high)`` and ``interval`` what they resampled; ``p`` the
+    gap's bootstrap p-value of 0 from ``draws`` resamples (:func:`with_holm` corrects it over the
+    arm's comparisons).
 
     Example:
         >>> v = task_verdict("arm", "IK", "position p95", "mm", {"ANFIS": 0.9, "RBF": 4.9, "kNN": 31.0}, "ANFIS",
@@ -1011,7 +1061,7 @@ def task_verdict(arm: str, task: str, metric: str, unit: str, values: Mapping[st
     return Verdict(arm, task, metric, unit, ranked[0], float(values[ranked[0]]), anfis, float(values[anfis]),
                    ranked.index(anfis) + 1, len(ranked), rival, float(values[rival]), *map(float, gap), targets.get(anfis, ""),
                    targets.get(rival, ""), exact, *map(float, intervals.get(anfis, nan)),
-                   *map(float, intervals.get(rival, nan)), interval)
+                   *map(float, intervals.get(rival, nan)), interval, p=float(p), draws=int(draws))
 
 
 def targets_met(rows: Sequence[Row], limits: Sequence[float]) -> str:
@@ -1031,7 +1081,21 @@ def verdict_table(verdicts: Sequence[Verdict], *, floors: Mapping[str, float] | 
                    fmt(v.anfis_low, v.unit), fmt(v.anfis_high, v.unit), v.rank, v.compared, v.rival,
                    fmt(v.rival_value, v.unit), fmt(v.rival_low, v.unit), fmt(v.rival_high, v.unit), fmt(v.gap, v.unit),
                    fmt(v.gap_low, v.unit), fmt(v.gap_high, v.unit), v.interval, v.verdict, v.anfis_targets,
-                   v.rival_targets, v.exact] for v in verdicts], caption=caption)
+                   v.rival_targets, v.exact, p_text(v.p, v.draws), p_text(v.holm_p, v.draws), v.comparisons or ""]
+                  for v in verdicts], caption=caption)
+
+
+def p_text(p: float, draws: int) -> str:
+    """A bootstrap p-value as a table shows it: two digits, or ``< 2/draws`` where no resample
+    reached 0 (its resolution); ``""`` where there is none.
+
+    >>> p_text(0.0, 2000), p_text(0.01234, 2000), p_text(float("nan"), 2000)
+    ('< 0.001', '0.012', '')
+    """
+    if not math.isfinite(p):
+        return ""
+    floor = 2 / draws if draws else 0.0
+    return f"< {floor:.2g}" if p < floor or p == 0 else f"{p:.2g}"
 
 
 #: Configuration words a reader knows, and the learners' names in words (:func:`reader_label`).
@@ -1082,7 +1146,9 @@ def verdict_display(rows: Sequence[Mapping[str, str]]) -> list[list[str]]:
         return f"{reader_label(r[who])}, {value}" + (f" ({low}–{high})" if spread else "") + f" {r['unit']}"
     return [[r["task"], r["arm"], f"{reader_label(r['best'])}, {r['best_value']} {r['unit']}",
              f"{with_interval(r, 'anfis')} ({r['rank']} of {r['compared']})", with_interval(r, "rival"),
-             f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}", r["verdict"],
+             f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {r['unit']}",
+             r["verdict"] + (f" (Holm p {r['holm_p']}, {r['comparisons']} comparisons)"
+                             if r.get("holm_p") and not r["verdict"].endswith("(Holm)") else ""),
              f"{r['anfis_targets'] or '—'} / {r['rival_targets'] or '—'}", r["interval"]] for r in rows]
 
 
@@ -1177,25 +1243,29 @@ def conclusion(verdicts: Sequence[Mapping[str, str]],
                 out.append(f"{task} ({'; '.join(say(r) for r in rows)})")
         return out
 
+    def gap_unit(r: Mapping[str, str]) -> str:       # a gap of two shares: not "% of" one
+        return "percentage points" if r["unit"] == "%" else r["unit"]
+
     def by(r: Mapping[str, str]) -> str:             # the paired gap's size, in the metric's unit
         gap = r.get("gap", "")
         if not gap or gap.startswith("<"):
             return ""
-        unit = "percentage points" if r["unit"] == "%" else r["unit"]     # a gap of two shares: not "% of" one
-        return f", by {gap.lstrip('-')} {unit} of {r['metric']}"
+        return f", by {gap.lstrip('-')} {gap_unit(r)} of {r['metric']}"
 
     sentences = []
     won = grouped("ANFIS better", lambda r: r["arm"] + by(r))
     lost = grouped("rival better", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}{by(r)}")
-    tied = grouped("no difference", lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}")
+    tied = [t for kind in (NO_DIFFERENCE, f"{NO_DIFFERENCE} (Holm)")
+            for t in grouped(kind, lambda r: f"{r['arm']}: {plain(r['task'], r['rival'])}, "
+                                             f"{r['gap']} ({r['gap_low']} to {r['gap_high']}) {gap_unit(r)}")]
     if won:
         sentences.append("ANFIS is better than every other method it was compared with, beyond the paired interval, on "
                          + "; ".join(won) + ".")
     if lost or tied:                                 # one sentence: five at most
         sentences.append("; and ".join(
             ([f"Another method is better than ANFIS, beyond the paired interval, on {'; '.join(lost)}"] if lost else [])
-            + ([f"ANFIS and its best rival are no different within the paired interval on "
-                f"{'; '.join(tied)}"] if tied else [])) + ".")
+            + ([f"no difference between ANFIS and its best rival is shown (the paired interval, or Holm's "
+                f"correction for the arm's comparisons) on {'; '.join(tied)}"] if tied else [])) + ".")
     gives = contribution(warm_starts or {})
     if gives:
         sentences.append(gives)
@@ -1206,7 +1276,12 @@ def conclusion(verdicts: Sequence[Mapping[str, str]],
     use = []
     for task in [t for t in tasks if not t.startswith("measured arm")] + list(dict.fromkeys(r["task"] for r in summed)):
         rows = [r for r in verdicts if r["task"] == task]
-        best = " or ".join(dict.fromkeys(reader_label(r["best"]) for r in rows))
+        # on a tie, no method is recommended over the other: both are named
+        best = " or ".join(dict.fromkeys(name for r in rows for name in (
+            [reader_label(r["best"])] if not r["verdict"].startswith(NO_DIFFERENCE) else
+            [reader_label(r["anfis"]), reader_label(r["rival"])])))
+        if any(r["verdict"].startswith(NO_DIFFERENCE) for r in rows):
+            best += " (no difference shown)"
         exact = " or ".join(dict.fromkeys(r["exact"] for r in rows if r.get("exact")))
         name = task.replace(", every tier", "")
         use.append(f"{name}, {exact} (exact; of the learned methods, {best})" if exact else f"{name}, {best}")
