@@ -177,3 +177,15 @@ def test_an_interrupted_report_resumes_from_the_sweep_cells_it_finished(tmp_path
     assert (figures / "tables" / "01_values.csv").read_text() == "value\n" + "".join(f"{k}\n" for k in range(6))
     assert f"01_sweeps.ipynb: {len(kept)} of 6 sweep cells of tiny already finished (by an earlier " \
            f"chapter, or a run that stopped), reused" in again.stderr, again.stderr
+
+
+def test_a_chapters_sweep_cells_are_bounded_for_hangs_not_for_slowness(monkeypatch):
+    """The chapters' cells get the chapter limit (hours), not the 1 800 s of a sweep run by hand."""
+    from nfarm.study import sweep as sweep_module
+
+    seen = {}
+    monkeypatch.setattr(sweep_module, "run_sweeps", lambda sweeps, outs, **kw: seen.update(kw) or [[] for _ in sweeps])
+    tiny = sweep_module.sweep_from_dict({"name": "tiny", "job": "idle", "grid": {"value": [0]}, "metrics": ["value"]})
+    sweep_module.sweeps_results([tiny], workers=0)
+    assert seen["timeout"] == sweep_module.CHAPTER_CELL_LIMIT_S >= 4 * 3600
+    assert sweep_module.run_sweep.__kwdefaults__["timeout"] == 1800, "a sweep run by hand keeps its limit"

@@ -570,14 +570,24 @@ def sweep_results(sweep: Sweep, sweeps_dir: str | os.PathLike | None = None, *,
     return sweeps_results([sweep], sweeps_dir, workers=workers)[0]
 
 
+#: The time limit of a chapter's sweep cell [s] (:func:`sweeps_results`): a bound on a cell that
+#: hangs, not on a slow one. The chapters' cells come from the committed sweep files, whose epochs
+#: are capped; the longest measured took 830 s on a 2-core machine shared by six processes (180 s
+#: of CPU), and 1 800 s, the limit of a sweep run by hand, left a slower or busier machine too
+#: little room (issue 63).
+CHAPTER_CELL_LIMIT_S = 6 * 3600.0
+
+
 def sweeps_results(sweeps: Sequence[Sweep], sweeps_dir: str | os.PathLike | None = None, *,
-                   workers: int | None = None, scheduler: str | None = None) -> list[list[CellResult]]:
+                   workers: int | None = None, scheduler: str | None = None,
+                   timeout: float | None = CHAPTER_CELL_LIMIT_S) -> list[list[CellResult]]:
     """:func:`sweep_results` of several sweeps, their unfinished cells run on one cluster
     (:func:`run_sweeps`: a local one of ``workers`` processes, or the running Dask scheduler at
-    ``scheduler``): a chapter runs everything it will show first, then reads it back."""
+    ``scheduler``): a chapter runs everything it will show first, then reads it back. ``timeout``:
+    each cell's limit (:data:`CHAPTER_CELL_LIMIT_S`; a sweep file's ``cell_timeout_s`` first)."""
     base = project_path(sweeps_dir) if sweeps_dir is not None else BUILD / "sweeps"
     every = run_sweeps(sweeps, [base / s.name for s in sweeps], workers=workers, scheduler=scheduler,
-                       summary=False)
+                       summary=False, timeout=timeout)
     for sweep, results in zip(sweeps, every):
         for r in results:
             if not r.ok:
