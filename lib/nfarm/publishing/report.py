@@ -468,8 +468,12 @@ def _side_by_side(tasks, grace: float = 10.0, relay: _Relay | None = None) -> No
                 if child.is_alive():
                     os.kill(child.pid, signal.SIGINT)
     if shower is not None:
-        queue.put(None)
-        shower.join()
+        # The end marker from a thread of its own: a child killed while writing would hold the queue's
+        # lock, and the report must not wait on it; what the children sent before is shown first.
+        import threading
+
+        threading.Thread(target=queue.put, args=(None,), daemon=True).start()
+        shower.join(timeout=10.0)
     ends = []
     for (receiver, _), child in zip(pipes, children):
         try:
