@@ -72,5 +72,5 @@ def test_the_project_history_holds_every_split_of_the_study():
     if not any(r.commit != "now" for r in rows):
         pytest.skip("a checkout without the repository's history")
     ik = [r for r in rows if r.arm == "intelbot5" and r.task == "inverse kinematics"]
-    assert [r.split for r in ik][:5] == [DEVELOPMENT, "20261126", "20261127", "20261128", "20261129"]
+    assert [r.split for r in ik][:6] == [DEVELOPMENT, "20261126", "20261127", "20261128", "20261129", "20261130"]
     assert all(r.verdict == "ANFIS better" for r in ik), "the IK gap kept its sign on every split"

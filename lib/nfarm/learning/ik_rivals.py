@@ -22,6 +22,17 @@ Kinds and their options (:data:`KINDS`, the defaults):
 
 Outputs are the joint angles [rad]. Every random draw (the MLP's initialisation and batches, the
 Nyström landmarks) comes from ``random_state``.
+
+**Structures** (:data:`STRUCTURES`): by default (``"whole"``) one model learns all the joints. With
+``"arm"`` a rival gets the structure the contest's ANFIS in the arm's plane has
+(:class:`nfarm.learning.learned.LearnedIK` with ``shared_joints`` the pitch joints, one linear rule
+for the first and last joints, ``pitch_closure``): for an arm of ``n`` joints on the
+``"arm_plane"`` encoding, the first and the last joint are affine maps of the inputs (least
+squares, what a one-rule first-order Sugeno model is), the pitch joints ``q[1:n-1]`` are learned by
+the one model, and the last pitch joint is predicted from the target's pitch
+(:func:`nfarm.learning.learned.fit_pitch_closure`) — the same outputs learned, the same joints
+computed, so that a contest of the two judges the learners (chapter 6). :meth:`RivalIK.without_closure`
+keeps the learned last pitch joint instead (the closure's ablation, chapter 7).
 """
 
 from __future__ import annotations
@@ -39,9 +50,10 @@ from ..model.robot import Robot, robot_hash
 from ..solvers.ik import check_targets
 from .encoding import ENCODINGS, PoseEncoder
 from .estimator import SavedModel, check_robot
-from .learned import ik_pairs
+from .hybrid import least_squares
+from .learned import close_pitch, fit_pitch_closure, ik_pairs, read_closure
 
-__all__ = ["RivalIK", "KINDS", "FILE_NAME", "FORMAT"]
+__all__ = ["RivalIK", "KINDS", "STRUCTURES", "FILE_NAME", "FORMAT"]
 
 FILE_NAME = "rival_ik.json"
 FORMAT = "nfarm-rival-ik-1"
@@ -54,6 +66,8 @@ KINDS: dict[str, dict[str, Any]] = {
             "batch_size": 200, "max_epochs": 300, "patience": 10, "min_improvement": 0.0},
     "kernel_ridge": {"components": 2000, "gamma": 10.0, "alpha": 1e-6},
 }
+#: How the joints are computed: one model for all (``"whole"``) or the ANFIS's structure (``"arm"``, module docstring).
+STRUCTURES = ("whole", "arm")
 _RBF_KERNELS = ("thin_plate_spline", "cubic", "quintic", "linear")
 _ACTIVATIONS = {"relu": lambda a: np.maximum(a, 0, out=a), "tanh": lambda a: np.tanh(a, out=a)}
 
@@ -123,10 +137,23 @@ class RivalIK(SavedModel):
         options: the kind's options over its defaults (:data:`KINDS`).
         max_out_of_plane: the ``"arm_plane"`` encoder's check [rad] (by default none, π).
         random_state: the seed of every random draw.
+        structure: ``"whole"`` (one model learns every joint) or ``"arm"`` (the ANFIS's
+            structure: module docstring; ``"arm_plane"`` only).
+        closure_tolerance: for ``"arm"``, the pitch closure's largest residual [rad] on the
+            training poses (:func:`nfarm.learning.learned.fit_pitch_closure`).
+        affine_ridge: for ``"arm"``, the ridge on the first and last joints' least squares,
+            relative to the normal matrix's mean diagonal — the one-rule ANFIS's least squares
+            (:func:`nfarm.learning.hybrid.least_squares`, one rule), so that with the contest
+            ANFIS's ridge (1e-8) those joints are the ANFIS's to the last bits.
+        pitch_closure: for ``"arm"``, close the last pitch joint from the target's pitch (the
+            structure's; ``False``: keep the model's own prediction of it, as
+            :meth:`without_closure` does).
 
     Learned attributes: ``encoder_``, ``n_joints_``, ``robot_hash_``, ``robot_name_``,
     ``fit_seconds_``, ``epochs_`` (the MLP's epochs run; else 0) and ``best_epoch_`` (the
-    MLP's kept epoch; else 0), and the kind's state (``X_``, ``Y_`` for the neighbour methods;
+    MLP's kept epoch; else 0), ``learned_`` (the joints the model learns, 0-based), ``affine_``
+    (``None``, or ``(d + 1, 2)``: the first and last joints' affine maps of the scaled inputs and
+    1) and ``closure_`` (``None`` or the pitch closure), and the kind's state (``X_``, ``Y_`` for the neighbour methods;
     ``weights_`` and ``biases_`` for the MLP; ``landmarks_ (m, d)``, ``coef_ (m, n)`` (the ridge's
     weights with the Nyström normalisation folded in) and ``intercept_`` for kernel ridge; ``y_mean_`` and ``y_scale_`` for the standardised kinds).
 
@@ -146,12 +173,17 @@ class RivalIK(SavedModel):
     file_name, file_format, what = FILE_NAME, FORMAT, "rival IK"
 
     def __init__(self, kind: str = "rbf", encoding: str = "arm_plane", options: Mapping | None = None,
-                 max_out_of_plane: float = math.pi, random_state: int | None = None):
+                 max_out_of_plane: float = math.pi, random_state: int | None = None, structure: str = "whole",
+                 closure_tolerance: float = 1e-4, affine_ridge: float = 1e-8, pitch_closure: bool = True):
         self.kind = kind
         self.encoding = encoding
         self.options = options
         self.max_out_of_plane = max_out_of_plane
         self.random_state = random_state
+        self.structure = structure
+        self.closure_tolerance = closure_tolerance
+        self.affine_ridge = affine_ridge
+        self.pitch_closure = pitch_closure
 
     # -- fitting ------------------------------------------------------------------------------
 
@@ -165,6 +197,11 @@ class RivalIK(SavedModel):
         o = _checked_options(self.kind, self.options)
         if self.encoding not in ENCODINGS:
             raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {show(self.encoding)}")
+        if self.structure not in STRUCTURES:
+            raise ValueError(f"structure must be one of {', '.join(STRUCTURES)}, got {show(self.structure)}")
+        if self.structure == "arm" and (self.encoding != "arm_plane" or robot.n < 3):
+            raise ValueError(f"structure 'arm' needs the 'arm_plane' encoding and at least 3 joints, got "
+                             f"{show(self.encoding)} and {robot.n}")
         T, q = ik_pairs(train, robot, "train")
         if self.kind == "mlp" and val is None:
             raise ValueError("an mlp rival keeps its best epoch on validation poses: give val")
@@ -176,14 +213,28 @@ class RivalIK(SavedModel):
         X = self.encoder_.fit_transform(robot, T)
         start = time.perf_counter()
         self.epochs_ = self.best_epoch_ = 0
+        self.learned_, self.affine_, self.closure_ = list(range(robot.n)), None, None
+        if self.structure == "arm":
+            if not isinstance(self.pitch_closure, bool):
+                raise ValueError(f"pitch_closure must be true or false, got {show(self.pitch_closure)}")
+            closure = fit_pitch_closure(self.encoder_, X, q, self.closure_tolerance)   # checks the arm either way
+            self.closure_ = closure if self.pitch_closure else None
+            self.learned_ = list(range(1, robot.n - 1))
+            if isinstance(self.affine_ridge, bool) or not isinstance(self.affine_ridge, (int, float)) \
+                    or not 0 <= self.affine_ridge < 1:
+                raise ValueError(f"affine_ridge must be a number in [0, 1), got {show(self.affine_ridge)}")
+            self.affine_ = least_squares(np.ones((len(X), 1)), np.column_stack([X, np.ones(len(X))]),
+                                         q[:, [0, robot.n - 1]], ridge=float(self.affine_ridge))
+        y = q[:, self.learned_]
         if self.kind in ("knn", "rbf"):
-            self.X_, self.Y_ = X, q
+            self.X_, self.Y_ = X, y
         else:
-            self.y_mean_, self.y_scale_ = q.mean(axis=0), np.where(q.std(axis=0) > 0, q.std(axis=0), 1.0)
-            Z = (q - self.y_mean_) / self.y_scale_
+            self.y_mean_, self.y_scale_ = y.mean(axis=0), np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
+            Z = (y - self.y_mean_) / self.y_scale_
             if self.kind == "mlp":
                 T_val, q_val = ik_pairs(val, robot, "val")
-                self._fit_mlp(o, X, Z, self.encoder_.transform(T_val), (q_val - self.y_mean_) / self.y_scale_)
+                self._fit_mlp(o, X, Z, self.encoder_.transform(T_val),
+                              (q_val[:, self.learned_] - self.y_mean_) / self.y_scale_)
             else:
                 self._fit_kernel_ridge(o, X, Z)
         self._build(o)
@@ -250,11 +301,35 @@ class RivalIK(SavedModel):
 
     # -- prediction ---------------------------------------------------------------------------
 
+    def without_closure(self) -> "RivalIK":
+        """A copy of the fitted model that keeps its learned last pitch joint instead of the pitch
+        closure (the closure's ablation, chapter 7); a model without a closure comes back as a copy."""
+        import copy
+
+        self._check_fitted()
+        model = copy.copy(self)
+        model.__dict__.update(copy.deepcopy({k: v for k, v in self.__dict__.items() if not k.endswith("_")}))
+        model.pitch_closure, model.closure_ = False, None
+        return model
+
     def predict(self, T_0e) -> np.ndarray:
         """Joint angles ``(..., n)`` [rad] for tool poses ``T_0e (..., 4, 4)``."""
         self._check_fitted()
         T = check_targets(T_0e, 1e-6)
         X = self.encoder_.transform(T.reshape(-1, 4, 4))
+        y = self._learned(X)
+        if self.affine_ is None:
+            return y.reshape(*T.shape[:-2], self.n_joints_)
+        n = self.n_joints_
+        q = np.empty((len(X), n))
+        q[:, self.learned_] = y
+        q[:, [0, n - 1]] = np.column_stack([X, np.ones(len(X))]) @ self.affine_
+        if self.closure_ is not None:
+            close_pitch(self.closure_, self.encoder_, X, q)
+        return q.reshape(*T.shape[:-2], n)
+
+    def _learned(self, X: np.ndarray) -> np.ndarray:
+        """The learned joints' angles ``(N, len(learned_))`` [rad] of scaled inputs ``X``."""
         if self.kind == "knn":
             q = self.knn_.predict(X)
         elif self.kind == "rbf":
@@ -269,7 +344,7 @@ class RivalIK(SavedModel):
             else:
                 a = self._kernel(X, self.options_["gamma"]) @ self.coef_ + self.intercept_
             q = a * self.y_scale_ + self.y_mean_
-        return q.reshape(*T.shape[:-2], self.n_joints_)
+        return q
 
     # -- persistence --------------------------------------------------------------------------
 
@@ -284,7 +359,11 @@ class RivalIK(SavedModel):
         if self.kind == "mlp":
             state["weights"] = [json_ready(w) for w in self.weights_]
             state["biases"] = [json_ready(b) for b in self.biases_]
-        return {"format": FORMAT, "nfarm_version": __version__, "kind": self.kind,
+        structure = {} if self.structure == "whole" else {
+            "structure": self.structure, "closure_tolerance": self.closure_tolerance, "affine_ridge": self.affine_ridge,
+            "pitch_closure": self.pitch_closure,
+            "affine": json_ready(self.affine_), "closure": json_ready(self.closure_)}
+        return {"format": FORMAT, "nfarm_version": __version__, "kind": self.kind, **structure,
                 "options": json_ready(self.options_), "random_state": self.random_state,
                 "robot": self.robot_name_, "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
                 "fit_seconds": self.fit_seconds_, "epochs": self.epochs_, "best_epoch": self.best_epoch_,
@@ -296,8 +375,11 @@ class RivalIK(SavedModel):
         keys = ("format", "nfarm_version", "kind", "options", "random_state", "robot", "robot_params_sha256",
                 "n_joints", "fit_seconds", "epochs", "best_epoch", "state", "encoding", "max_out_of_plane",
                 "angle_centre", "input_lo", "input_span")
-        v.mapping(data, "", {**dict.fromkeys(keys, True), "chart": False})
+        v.mapping(data, "", {**dict.fromkeys(keys, True), "chart": False,
+                             **dict.fromkeys(("structure", "closure_tolerance", "affine_ridge", "pitch_closure", "affine",
+                                              "closure"), False)})
         kind = v.choice(data["kind"], "kind", tuple(KINDS))
+        structure = v.choice(data.get("structure", "whole"), "structure", STRUCTURES)
         try:
             options = _checked_options(kind, data["options"])
         except ValueError as exc:
@@ -307,8 +389,32 @@ class RivalIK(SavedModel):
         encoder = PoseEncoder.from_dict(data, source)
         d = len(encoder.input_lo_)
         seed = None if data["random_state"] is None else v.integer(data["random_state"], "random_state", lo=0)
-        model = cls(kind, encoder.encoding, options, encoder.max_out_of_plane, seed)
+        model = cls(kind, encoder.encoding, options, encoder.max_out_of_plane, seed, structure)
         model.encoder_, model.n_joints_, model.robot_hash_ = encoder, n, data["robot_params_sha256"]
+        model.learned_, model.affine_, model.closure_ = list(range(n)), None, None
+        if structure == "arm":
+            if encoder.encoding != "arm_plane" or n < 3:
+                v.fail("structure", f"'arm' needs the 'arm_plane' encoding and at least 3 joints, got "
+                                    f"{show(encoder.encoding)} and {n}")
+            for key in ("closure_tolerance", "affine_ridge", "affine", "closure"):
+                if key not in data:
+                    v.fail(key, "is required with structure 'arm'")
+            # the ranges fit accepts: (0, π) and [0, 1)
+            model.closure_tolerance = v.number(data["closure_tolerance"], "closure_tolerance", lo=0, hi=math.pi, lo_open=True)
+            if model.closure_tolerance >= math.pi:
+                v.fail("closure_tolerance", f"must be below pi, got {show(data['closure_tolerance'])}")
+            model.affine_ridge = v.number(data["affine_ridge"], "affine_ridge", lo=0, hi=1)
+            if model.affine_ridge >= 1:
+                v.fail("affine_ridge", f"must be below 1, got {show(data['affine_ridge'])}")
+            model.pitch_closure = v.boolean(data.get("pitch_closure", True), "pitch_closure")
+            model.learned_ = list(range(1, n - 1))
+            model.affine_ = v.array(data["affine"], "affine", (d + 1, 2))
+            model.closure_ = read_closure(v, data["closure"], n) if model.pitch_closure else None
+            if not model.pitch_closure and data["closure"] is not None:
+                v.fail("closure", "must be null when pitch_closure is false")
+        elif any(key in data for key in ("closure_tolerance", "affine_ridge", "pitch_closure", "affine", "closure")):
+            v.fail("structure", "closure_tolerance, affine_ridge, pitch_closure, affine and closure belong to structure 'arm'")
+        n_out = len(model.learned_)
         model.robot_name_ = data["robot"]
         model.fit_seconds_ = v.number(data["fit_seconds"], "fit_seconds", lo=0)
         model.epochs_ = v.integer(data["epochs"], "epochs", lo=0)
@@ -318,12 +424,12 @@ class RivalIK(SavedModel):
         v.mapping(state, "state", dict.fromkeys(wanted, True))
         if kind in ("knn", "rbf"):
             model.X_ = v.array(state["X"], "state.X", (None, d))
-            model.Y_ = v.array(state["Y"], "state.Y", (len(model.X_), n))
+            model.Y_ = v.array(state["Y"], "state.Y", (len(model.X_), n_out))
         else:
-            model.y_mean_ = v.array(state["y_mean"], "state.y_mean", (n,))
-            model.y_scale_ = v.array(state["y_scale"], "state.y_scale", (n,))
+            model.y_mean_ = v.array(state["y_mean"], "state.y_mean", (n_out,))
+            model.y_scale_ = v.array(state["y_scale"], "state.y_scale", (n_out,))
         if kind == "mlp":
-            widths = [d, *options["hidden"], n]
+            widths = [d, *options["hidden"], n_out]
             weights = v.sequence(state["weights"], "state.weights", min_len=len(widths) - 1, max_len=len(widths) - 1)
             biases = v.sequence(state["biases"], "state.biases", min_len=len(widths) - 1, max_len=len(widths) - 1)
             model.weights_ = [v.array(w, f"state.weights[{k}]", (widths[k], widths[k + 1])) for k, w in enumerate(weights)]
@@ -331,7 +437,7 @@ class RivalIK(SavedModel):
         if kind == "kernel_ridge":
             model.landmarks_ = v.array(state["landmarks"], "state.landmarks", (None, d))
             m = len(model.landmarks_)
-            model.coef_ = v.array(state["coef"], "state.coef", (m, n))
-            model.intercept_ = v.array(state["intercept"], "state.intercept", (n,))
+            model.coef_ = v.array(state["coef"], "state.coef", (m, n_out))
+            model.intercept_ = v.array(state["intercept"], "state.intercept", (n_out,))
         model._build(options)
         return model

@@ -17,6 +17,7 @@ is an error, and the file is validated like a parameter file (:mod:`nfarm.infra.
 
 from __future__ import annotations
 
+import copy
 import math
 import os
 import time
@@ -37,7 +38,7 @@ from .estimator import Estimator
 from .per_joint import (PerJointModel, CHUNK, FAR, OutsideTrainingWarning, beyond_range, check_far, check_joint_array,
                         joint_anfis_options, model_lines, read_joint_models, warn_far)
 
-__all__ = ["LearnedIK", "Baseline", "ik_errors", "ik_pairs", "encode", "arm_chart", "out_of_plane", "ENCODINGS",
+__all__ = ["LearnedIK", "Baseline", "ik_errors", "ik_pairs", "fit_pitch_closure", "close_pitch", "read_closure", "encode", "arm_chart", "out_of_plane", "ENCODINGS",
            "ANGULAR", "FILE_NAME", "FORMAT", "BASELINES", "OutsideTrainingWarning", "FAR"]
 
 
@@ -180,41 +181,29 @@ class LearnedIK(PerJointModel):
                              f"{given[0] + 1}'s; joints that share their premises share their options")
         return [int(j) for j in given]
 
-    def _pitch(self, X: np.ndarray) -> np.ndarray:
-        """The approach axis's pitch ``φ`` [rad] of ``"arm_plane"`` inputs ``X`` (scaled)."""
-        lo, span = self.encoder_.input_lo_, self.encoder_.input_span_
-        c, s = (FEATURE_NAMES["arm_plane"].index(name) for name in ("cos_pitch", "sin_pitch"))
-        return np.arctan2(X[:, s] * span[s] + lo[s], X[:, c] * span[c] + lo[c])
-
     def _closure(self, X: np.ndarray, q: np.ndarray) -> dict:
         """The pitch closure's sign, offset and centre, fitted on the training poses (class
-        docstring, ``pitch_closure``)."""
-        n = q.shape[1]
-        if self.encoding != "arm_plane" or n < 3:
-            raise ValueError("pitch_closure needs the 'arm_plane' encoding and at least 3 joints, got "
-                             f"{self.encoding!r} and {n}")
-        if not (isinstance(self.closure_tolerance, (int, float)) and 0 < self.closure_tolerance < math.pi):
-            raise ValueError(f"closure_tolerance must be in (0, pi) rad, got {show(self.closure_tolerance)}")
-        phi, total = self._pitch(X), q[:, 1:n - 1].sum(axis=1)
-        fits = []
-        for sign in (1, -1):
-            offset = float(np.angle(np.exp(1j * (total - sign * phi)).mean()))
-            fits.append((float(np.abs(_wrap(total - sign * phi - offset)).max()), sign, offset))
-        residual, sign, offset = min(fits)
-        if residual > self.closure_tolerance:
-            raise ValueError(f"pitch_closure: joints 2-{n - 1}'s angles do not sum to the tool's pitch "
-                             f"plus a constant on the training poses (largest residual "
-                             f"{math.degrees(residual):.3g} deg, tolerance "
-                             f"{math.degrees(self.closure_tolerance):.3g} deg); use pitch_closure=False")
-        centre = float(np.angle(np.exp(1j * q[:, n - 2]).mean()))
-        return {"joint": n - 2, "sign": sign, "offset": offset, "centre": centre}
+        docstring, ``pitch_closure``; :func:`fit_pitch_closure`)."""
+        if self.encoding != "arm_plane":
+            raise ValueError(f"pitch_closure needs the 'arm_plane' encoding and at least 3 joints, got "
+                             f"{self.encoding!r} and {q.shape[1]}")
+        return fit_pitch_closure(self.encoder_, X, q, self.closure_tolerance)
 
     def _close(self, X: np.ndarray, q: np.ndarray) -> None:
         """Replace ``q``'s closure joint (in place) by the pitch closure of inputs ``X``."""
-        c = self.closure_
-        j = c["joint"]
-        others = q[:, 1:j].sum(axis=1)
-        q[:, j] = c["centre"] + _wrap(c["sign"] * self._pitch(X) + c["offset"] - others - c["centre"])
+        close_pitch(self.closure_, self.encoder_, X, q)
+
+    def without_closure(self) -> "LearnedIK":
+        """A copy of the fitted model that predicts the last pitch joint by its own ANFIS instead
+        of the pitch closure — the closure's ablation (chapter 7): the same trained rules, so a
+        difference is the closure's alone. The copy says so in its parameters (``pitch_closure``
+        false: saved, loaded and refitted as such) and shares no parameter with the original; a
+        model without a closure comes back as such a copy."""
+        self._check_fitted()
+        model = copy.copy(self)
+        model.__dict__.update(copy.deepcopy({k: v for k, v in self.__dict__.items() if not k.endswith("_")}))
+        model.pitch_closure, model.closure_ = False, None
+        return model
 
     # -- prediction ---------------------------------------------------------------------------
 
@@ -327,13 +316,70 @@ class LearnedIK(PerJointModel):
                     max_out_of_plane=encoder.max_out_of_plane, shared_joints=shared,
                     pitch_closure=closing, closure_tolerance=tolerance, **options)
         model.models_, model.fit_seconds_, model.encoder_ = fitted, seconds, encoder
-        model.closure_ = _read_closure(v, data.get("closure"), closing, n) if closing else None
+        model.closure_ = read_closure(v, data.get("closure"), n) if closing else None
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
         return model
 
 
-def _read_closure(v: Validator, data: Any, closing: bool, n: int) -> dict:
+def _pitch(encoder: PoseEncoder, X: np.ndarray) -> np.ndarray:
+    """The approach axis's pitch ``φ`` [rad] of scaled ``"arm_plane"`` inputs ``X (N, 6)``."""
+    lo, span = encoder.input_lo_, encoder.input_span_
+    c, s = (FEATURE_NAMES["arm_plane"].index(name) for name in ("cos_pitch", "sin_pitch"))
+    return np.arctan2(X[:, s] * span[s] + lo[s], X[:, c] * span[c] + lo[c])
+
+
+def fit_pitch_closure(encoder: PoseEncoder, X: np.ndarray, q: np.ndarray, tolerance: float = 1e-4) -> dict:
+    """The pitch closure of an arm whose pitch joints solve a planar sub-problem, fitted on its
+    training poses: the pitch joints' angles ``q[:, 1:n-1]`` sum to ``s·φ + c`` (``φ`` the
+    approach axis's pitch; ``s = ±1`` and the constant ``c`` fitted), so the last pitch joint is
+    ``q[n-2] = s·φ + c − Σ`` of the others (:func:`close_pitch`).
+
+    Args:
+        encoder: the fitted ``"arm_plane"`` :class:`PoseEncoder` of ``X``.
+        X: ``(N, 6)`` its scaled inputs of the training poses; ``q (N, n)`` their joint angles [rad].
+        tolerance: the largest residual [rad] of the identity allowed on the training poses.
+
+    Returns:
+        ``{"joint": n - 2, "sign": s, "offset": c, "centre": ...}`` [rad] (``centre``: the circular
+        mean of ``q[n-2]``, about which a closed angle is wrapped).
+
+    Raises:
+        ValueError: another encoding, fewer than 3 joints, a bad ``tolerance``, or training poses
+            that break the identity by more than ``tolerance``.
+    """
+    n = q.shape[1]
+    if encoder.encoding != "arm_plane" or n < 3:
+        raise ValueError("pitch_closure needs the 'arm_plane' encoding and at least 3 joints, got "
+                         f"{encoder.encoding!r} and {n}")
+    if isinstance(tolerance, bool) or not (isinstance(tolerance, (int, float)) and 0 < tolerance < math.pi):
+        raise ValueError(f"closure_tolerance must be in (0, pi) rad, got {show(tolerance)}")
+    phi, total = _pitch(encoder, X), q[:, 1:n - 1].sum(axis=1)
+    fits = []
+    for sign in (1, -1):
+        offset = float(np.angle(np.exp(1j * (total - sign * phi)).mean()))
+        fits.append((float(np.abs(_wrap(total - sign * phi - offset)).max()), sign, offset))
+    residual, sign, offset = min(fits)
+    if residual > tolerance:
+        raise ValueError(f"pitch_closure: joints 2-{n - 1}'s angles do not sum to the tool's pitch "
+                         f"plus a constant on the training poses (largest residual "
+                         f"{math.degrees(residual):.3g} deg, tolerance "
+                         f"{math.degrees(tolerance):.3g} deg); use pitch_closure=False")
+    centre = float(np.angle(np.exp(1j * q[:, n - 2]).mean()))
+    return {"joint": n - 2, "sign": sign, "offset": offset, "centre": centre}
+
+
+def close_pitch(closure: Mapping, encoder: PoseEncoder, X: np.ndarray, q: np.ndarray) -> None:
+    """Replace the closure joint of predictions ``q (N, n)`` [rad], in place, by the pitch
+    closure (:func:`fit_pitch_closure`) of scaled inputs ``X (N, 6)``, wrapped to within half a
+    turn of the joint's training mean."""
+    j = closure["joint"]
+    others = q[:, 1:j].sum(axis=1)
+    q[:, j] = closure["centre"] + _wrap(closure["sign"] * _pitch(encoder, X) + closure["offset"] - others
+                                        - closure["centre"])
+
+
+def read_closure(v: Validator, data: Any, n: int) -> dict:
     """A saved pitch closure (``closure``), checked."""
     v.mapping(data, "closure", dict.fromkeys(("joint", "sign", "offset", "centre"), True))
     if data["joint"] != n - 2 or data["sign"] not in (1, -1):

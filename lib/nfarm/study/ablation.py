@@ -19,8 +19,9 @@ import numpy as np
 
 from ..learning.encoding import PoseEncoder
 from ..model.robot import Robot
+from .contest import label, learner_of, structure_of
 
-__all__ = ["LinearOnEncoding", "linear_on_encoding"]
+__all__ = ["LinearOnEncoding", "linear_on_encoding", "STRUCTURE_LABELS", "structure_ablation"]
 
 
 @dataclass(frozen=True)
@@ -67,3 +68,47 @@ def linear_on_encoding(robot: Robot, encoding: str, train: Mapping, *,
     A = np.concatenate([x, np.ones((len(x), 1))], axis=1)
     weights = np.linalg.lstsq(A, q, rcond=None)[0]
     return LinearOnEncoding(encoder, weights)
+
+
+# --------------------------------------------------------------------------------------------
+# The structure's ablation (issue 64, chapter 7.1): structure × learner on the test poses
+
+#: The structures of the ablation, in the order shown: one model of all the joints (the rivals'
+#: own), the ANFIS's structure with the last pitch joint learned, and with it closed from the
+#: target's pitch (:mod:`nfarm.learning.ik_rivals`).
+STRUCTURE_LABELS = {"whole": "one model of all the joints",
+                    "arm_open": "the ANFIS's structure, the last pitch joint learned",
+                    "arm": "the ANFIS's structure, the last pitch joint closed"}
+
+
+def structure_ablation(anfis, rivals: Mapping[str, object]) -> dict[tuple[str, str], object]:
+    """Each learner's frozen chosen model in every structure the learned-IK contest trained it
+    in, with and without the pitch closure: ``(learner, structure) → model``, ``learner`` a
+    contestant's words (:func:`nfarm.study.contest.label` of its learner), ``structure`` a key
+    of :data:`STRUCTURE_LABELS`.
+
+    Args:
+        anfis: the chosen :class:`nfarm.learning.learned.LearnedIK` (its closure dropped by
+            :meth:`~nfarm.learning.learned.LearnedIK.without_closure` for ``"arm_open"``); one
+            without a closure (an arm the arm's plane cannot describe) is left out.
+        rivals: the contest's chosen rivals by contestant (:func:`nfarm.study.contest.saved_rivals`:
+            ``"rbf"``, ``"rbf:arm"``, …).
+
+    The models are the contest's, not retrained: ``"arm_open"`` predicts the last pitch joint by
+    the model's own learned output, so a difference from ``"arm"`` is the closure's alone; the
+    difference of ``"whole"`` and ``"arm_open"`` is that of learning the first and last joints
+    and of learning the pitch joints alone or with them.
+    """
+    models: dict[tuple[str, str], object] = {}
+    if anfis is not None and getattr(anfis, "closure_", None) is not None:
+        models["ANFIS", "arm_open"] = anfis.without_closure()
+        models["ANFIS", "arm"] = anfis
+    for name, model in rivals.items():
+        learner = label(learner_of(name))
+        if structure_of(name) == "arm":
+            models[learner, "arm_open"] = model.without_closure()
+            models[learner, "arm"] = model
+        else:
+            models[learner, "whole"] = model
+    order = list(dict.fromkeys(learner for learner, _ in models))
+    return {(learner, s): models[learner, s] for learner in order for s in STRUCTURE_LABELS if (learner, s) in models}

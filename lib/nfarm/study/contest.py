@@ -55,7 +55,7 @@ from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Sweep
 
-__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "choose", "budgets", "spread_params",
+__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -84,6 +84,28 @@ KEEP_WITHIN = 2.0
 LABELS = {"anfis:arm_plane": "ANFIS in the arm's plane", "anfis:quat_xyz": "ANFIS, the dissertation's 7 inputs",
           "anfis:axes_xyz": "ANFIS on position and two tool axes", "rbf": "RBF interpolation",
           "knn": "k nearest neighbours", "mlp": "multilayer perceptron", "kernel_ridge": "kernel ridge (Nyström)"}
+LABELS.update({f"{kind}:arm": f"{LABELS[kind]}, the ANFIS's structure" for kind in ("rbf", "knn", "mlp", "kernel_ridge")})
+#: The structure each contestant computes the joints with: ``"arm"`` (the first and last joints affine
+#: maps, the pitch joints learned, the last pitch joint closed from the target's pitch), ``"whole"``
+#: (one model learns all the joints) or ``"recipe"`` (the dissertation's: one ANFIS per joint on its 7 inputs).
+STRUCTURE_OF = {"anfis:arm_plane": "arm", "anfis:quat_xyz": "recipe", "anfis:axes_xyz": "whole"}
+
+
+def structure_of(name: str) -> str:
+    """The structure of contestant ``name`` (:data:`STRUCTURE_OF`): ``"arm"``, ``"whole"`` or
+    ``"recipe"``.
+
+    Example:
+        >>> structure_of("rbf:arm"), structure_of("mlp"), structure_of("anfis:arm_plane")
+        ('arm', 'whole', 'arm')
+    """
+    return STRUCTURE_OF.get(name, "arm" if name.endswith(":arm") else "whole")
+
+
+def learner_of(name: str) -> str:
+    """The learner of contestant ``name`` whatever its structure: ``"rbf:arm"`` → ``"rbf"``,
+    ``"anfis:arm_plane"`` → ``"anfis"``."""
+    return name.split(":", 1)[0]
 
 
 #: The learned-ID contest's metrics, in order (validation, lower is better).
@@ -141,8 +163,19 @@ def id_contending(chosen: Mapping[str, CellResult], ranked_by: Sequence[str] = I
 
 def family(params: Mapping[str, Any]) -> str:
     """The contestant a cell's parameters belong to: ``"anfis:<encoding>"`` for an ANFIS, else
-    the rival's kind."""
-    return f"anfis:{params['encoding']}" if params["learner"] == "anfis" else params["learner"]
+    the rival's kind, ``"<kind>:arm"`` for a rival in the ANFIS's structure (its option
+    ``structure: arm``, :data:`nfarm.learning.ik_rivals.STRUCTURES`).
+
+    Example:
+        >>> family({"learner": "rbf", "options": {"structure": "arm", "neighbors": 64}})
+        'rbf:arm'
+        >>> family({"learner": "anfis", "encoding": "arm_plane"})
+        'anfis:arm_plane'
+    """
+    if params["learner"] == "anfis":
+        return f"anfis:{params['encoding']}"
+    structure = dict(params.get("options") or {}).get("structure", "whole")
+    return params["learner"] if structure == "whole" else f"{params['learner']}:{structure}"
 
 
 def label(name: str) -> str:
@@ -206,8 +239,8 @@ def promoted_params(results: Iterable[CellResult], *, family_of=family, ranked_b
 def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
             family_of=family) -> dict[str, list[tuple[str, Any, str]]]:
     """Where each contestant's chosen configuration lies at the edge of what its search tried:
-    for every numerical option that all of the contestant's seed-0 configurations set, with at
-    least three distinct values, ``(option, value, "smallest" | "largest")`` when the chosen
+    for every numerical option (a number, or a list of numbers sized by their sum) that all of the
+    contestant's seed-0 configurations set, with at least three distinct values, ``(option, value, "smallest" | "largest")`` when the chosen
     value is the least or the greatest tried — a wider search in that direction might do better.
     ``chosen``: :func:`choose`'s result (contestant → its chosen cell).
 
@@ -218,6 +251,12 @@ def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
         ...                     {}, 1.0, "w") for g in (1.0, 3.0, 10.0)]
         >>> at_edge(cells, {"kernel_ridge": cells[0]})
         {'kernel_ridge': [('gamma', 1.0, 'smallest')]}
+
+    A list of numbers (an MLP's layer widths) is sized by its sum, its hidden units:
+        >>> nets = [CellResult(Cell({"learner": "mlp", "options": {"hidden": h}, "seed": 0}, str(h)), "ok", {}, 1.0, "w")
+        ...         for h in ([64, 64], [128, 128, 128], [512, 512])]
+        >>> at_edge(nets, {"mlp": nets[2]})
+        {'mlp': [('hidden', [512, 512], 'largest')]}
     """
     tried: dict[str, list[Mapping[str, Any]]] = {}
     for r in results:
@@ -228,14 +267,25 @@ def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
         options = tried.get(name, [])
         mine = dict(r.cell.params.get("options") or {})
         for key, value in mine.items():
-            values = [o.get(key) for o in options]
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                    not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+            size = _size(value)
+            sizes = [_size(o.get(key)) for o in options]
+            if size is None or any(v is None for v in sizes):
                 continue
-            distinct = sorted(set(values))
-            if len(distinct) >= 3 and value in (distinct[0], distinct[-1]):
-                edges.setdefault(name, []).append((key, value, "smallest" if value == distinct[0] else "largest"))
+            distinct = sorted(set(sizes))
+            if len(distinct) >= 3 and size in (distinct[0], distinct[-1]):
+                edges.setdefault(name, []).append((key, value, "smallest" if size == distinct[0] else "largest"))
     return edges
+
+
+def _size(value: Any) -> float | None:
+    """A numerical option's size for :func:`at_edge`: the number itself, or a list of numbers'
+    sum (an MLP's ``hidden`` widths: its hidden units); ``None`` for anything else."""
+    if isinstance(value, (list, tuple)) and value and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                          for v in value):
+        return float(sum(value))
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value)
 
 
 def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, tuple[int, float, float]]:
@@ -297,9 +347,12 @@ def paired_gap(a: Replicates, b: Replicates, metric: str = RANKED_BY[0]) -> tupl
 
 def saved_rivals(robot: Robot, models_dir: str | os.PathLike) -> dict[str, RivalIK]:
     """The contest's chosen rivals chapter 6 saved for ``robot`` under
-    ``models_dir/ik_contest/<kind>/``, by kind (those present)."""
+    ``models_dir/ik_contest/<kind>/`` (one model of all joints) and ``<kind>_arm/`` (the ANFIS's
+    structure), by contestant (``"rbf"``, ``"rbf:arm"``, …; those present)."""
     where = Path(models_dir) / "ik_contest"
-    return {kind: RivalIK.load(where / kind, robot) for kind in RIVAL_KINDS if (where / kind).is_dir()}
+    names = [name for kind in RIVAL_KINDS for name in (kind, f"{kind}:arm")]
+    return {name: RivalIK.load(where / name.replace(":", "_"), robot) for name in names
+            if (where / name.replace(":", "_")).is_dir()}
 
 
 def rival_ranking(robot: Robot, rivals: Mapping[str, RivalIK], val: Mapping) -> list[str]:

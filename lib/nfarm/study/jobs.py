@@ -407,7 +407,8 @@ def _fit_contestant(p: dict):
             model = LearnedIK(p["encoding"], **plane, **options, random_state=p["seed"])
             model._options(robot.n)
         elif p["learner"] in RIVAL_KINDS:
-            model = RivalIK(p["learner"], p["encoding"], options, **plane, random_state=p["seed"])
+            structure = options.pop("structure", "whole")     # the rival's structure (nfarm.learning.ik_rivals)
+            model = RivalIK(p["learner"], p["encoding"], options, **plane, random_state=p["seed"], structure=structure)
         else:
             raise ValueError(f"learner must be anfis or one of {', '.join(RIVAL_KINDS)}, got {p['learner']!r}")
     except (ValueError, TypeError) as exc:

@@ -37,7 +37,7 @@ from ..solvers.ik import in_class
 from .id_trajectories import IDSettings, TrueArm
 from .regions import IKRegion
 
-__all__ = ["Study", "StudyFile", "SPLITS", "load_study", "study_from_dict", "smoke_study", "redrawn",
+__all__ = ["Study", "StudyFile", "ShiftedSection", "SPLITS", "load_study", "study_from_dict", "smoke_study", "redrawn",
            "memory_budget", "work_estimates", "PER_JOINT_MAX"]
 
 Split = Literal["train", "val", "test"]
@@ -65,6 +65,8 @@ class Study:
     check_starts: int
     id: IDSettings
     learned_ik: dict = field(default_factory=dict)   # the chosen learned IK's size for this arm
+    #: The shifted test population chapter 7 reads once (:class:`ShiftedSection`), or ``None``.
+    shifted: "ShiftedSection | None" = None
     params: dict = field(repr=False, default_factory=dict)
     #: 0 for the study's own data; k for its training and validation data drawn again
     #: (:func:`redrawn`).
@@ -74,8 +76,9 @@ class Study:
 
     @property
     def data_params(self) -> dict:
-        """The study parameters the data sets depend on (all but ``learned_ik``)."""
-        return {k: v for k, v in self.params.items() if k != "learned_ik"}
+        """The study parameters the data sets depend on (all but ``learned_ik`` and ``shifted``,
+        whose test population is drawn apart, by chapter 7)."""
+        return {k: v for k, v in self.params.items() if k not in ("learned_ik", "shifted")}
 
 
 #: ``[lo, hi]``, either ``null`` for no bound, ``lo < hi`` where both are given.
@@ -128,6 +131,21 @@ class IKSection:
     sizes: Annotated[dict[Split, int], Range(lo=1, hi=50_000_000)]
     check: CheckSection
     full_range: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class ShiftedSection:
+    """``shifted``: a test population that no choice of a model met (issue 66), declared in the
+    study file before it is read and read once, by chapter 7, with the frozen models: IK targets
+    just beyond the region — every joint within ``ik_band`` of its range's width beyond the ends of
+    the region's box (and within its limits), at least one outside it, the task-space filters kept
+    (``nfarm.study.shifted``) — ``ik_samples`` of them, drawn from ``seed``; ``declared`` says when
+    it was declared."""
+
+    seed: Annotated[int, Range(lo=0, hi=2 ** 63 - 1)]
+    declared: Annotated[str, TEXT]
+    ik_band: Annotated[float, Range(lo=0.0, lo_open=True, hi=0.5)]
+    ik_samples: Annotated[int, Range(lo=1, hi=1_000_000)]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -204,6 +222,7 @@ class StudyFile:
     ik: IKSection
     id: IDSection
     learned_ik: Optional[LearnedIKSection] = None
+    shifted: Optional[ShiftedSection] = None
 
 
 def memory_budget() -> float:
@@ -338,7 +357,7 @@ def study_from_dict(data: Any, source: str = "<dict>") -> Study:
     return Study(source=source, name=file.name, robot_file=robot_file, robot=robot, seed=file.seed,
                  test_seed=file.test_seed, ik_region=region, ik_sampler=file.ik.sampler, ik_sizes=file.ik.sizes,
                  ik_full_range=file.ik.full_range, check_targets=file.ik.check.targets,
-                 check_starts=file.ik.check.starts, id=id_settings, learned_ik=learned_ik,
+                 check_starts=file.ik.check.starts, id=id_settings, learned_ik=learned_ik, shifted=file.shifted,
                  params=json.loads(json.dumps(data)), file=file)
 
 

@@ -41,7 +41,7 @@ from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_
                          nrmse_from_sums, resampled_quantile, resolved_joints)
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
-__all__ = ["IK_METRICS", "Row", "DIGITS", "SUMMARY_FLOORS", "published", "rows_from_table", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
+__all__ = ["ORIENTATION_BY_STRUCTURE_DEG", "orientation_by_structure", "IK_METRICS", "Row", "DIGITS", "SUMMARY_FLOORS", "published", "rows_from_table", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
@@ -679,18 +679,47 @@ def _row_text(row) -> Mapping[str, str]:
     return row
 
 
-def paired_judge(paired: Sequence[Mapping[str, str]]):
+def paired_judge(paired: Sequence[Mapping[str, str]], floors: Mapping[str, float] = SUMMARY_FLOORS):
     """The comparison :func:`abstract_lines` makes of two rows of one task and metric: -1 when
     ours is lower on the paired interval of ours less theirs (``paired``, rows of
     :func:`paired_table` as text; :func:`paired_difference`), +1 when higher, 0 when the
-    interval holds 0 or either row is a maximum without an interval. A comparison with no paired
-    row is an error naming it."""
+    interval holds 0, lies within the unit's floor of rounding (``floors``: two models that
+    compute a quantity alike, e.g. the orientation both take from the pitch closure, differ by
+    1e-15 — not a difference), or either row is a maximum without an interval. A comparison with
+    no paired row is an error naming it."""
     def judge(ours: Mapping[str, str], theirs: Mapping[str, str]) -> int:
         if "0" in (ours.get("n"), theirs.get("n")):
             return 0
         _, low, high = paired_difference(paired, ours["task"], ours["method"], theirs["method"], ours["metric"])
+        if max(abs(low), abs(high)) <= floors.get(ours.get("unit", ""), 0.0):
+            return 0
         return -1 if high < 0 else 1 if low > 0 else 0
     return judge
+
+
+#: An IK model whose orientation error's 95th percentile stays below this [deg] does not learn the
+#: orientation: its structure sets it (the pitch closure and the first and last joints' linear rules
+#: of the arm's structure give it to 1e-5°, what a learner of all the joints reaches at best
+#: to 1e-2°), so no orientation comparison is claimed for it (issue 64).
+ORIENTATION_BY_STRUCTURE_DEG = 1e-3
+
+
+def orientation_by_structure(rows: Mapping[str, Mapping[str, str]]) -> bool:
+    """Whether a method's IK rows (metric → text row) say that its structure, not its learner, sets
+    its orientation (:data:`ORIENTATION_BY_STRUCTURE_DEG`, on the upper end of the orientation p95's
+    interval).
+
+    Example:
+        >>> orientation_by_structure({"orientation p95": {"value": "9e-06", "ci_high": "1e-05", "unit": "deg"}})
+        True
+        >>> orientation_by_structure({"orientation p95": {"value": "0.02", "ci_high": "0.03", "unit": "deg"}})
+        False
+    """
+    row = rows.get("orientation p95")
+    if row is None:
+        return False
+    top = row.get("ci_high") or row["value"]
+    return _number(top) < ORIENTATION_BY_STRUCTURE_DEG
 
 
 def paired_difference(paired: Sequence[Mapping[str, str]], task: str, method: str, against: str,
@@ -845,11 +874,21 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
         if "worst joint RMSE" in recipe:
             text += (f" The dissertation's recipe (assumed) on the same data: {_with_interval(recipe['worst joint RMSE'])}"
                      f" on its worst joint")
+            # no orientation claim where a structure, not a learner, sets either's orientation (issue 64)
+            either = orientation_by_structure(get) or orientation_by_structure(recipe)
             better = [f"{m} ({_with_interval(r)} against {_with_interval(get[m])})"
-                      for m, r in recipe.items() if m in get and _compare(r, get[m]) < 0]
+                      for m, r in recipe.items() if m in get and _compare(r, get[m]) < 0
+                      and not (either and m.startswith("orientation"))]
             text += ("; it is better than the chosen model on " + "; ".join(better) + " (paired intervals)."
                      if better else ".")
         base = [r for r in rows if r["task"] == task and r["role"] == ROLE_BEST_BASELINE]
+        # No orientation claim where the structure, not the learner, sets the orientation (issue 64)
+        fixed = orientation_by_structure(get) or orientation_by_structure({r["metric"]: r for r in base})
+        if fixed:
+            for r in base:       # compared all the same (the paired table keeps every pair), but not claimed
+                if r["metric"].startswith("orientation") and r["metric"] in get:
+                    _compare(r, get[r["metric"]])
+            base = [r for r in base if not r["metric"].startswith("orientation")]
         if base:
             wins = [f"{r['metric']} ({_with_interval(r)} against {_with_interval(get[r['metric']])})"
                     for r in base if r["metric"] in get and _compare(r, get[r["metric"]]) < 0]
@@ -860,6 +899,10 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
                      f"intervals).")
             if losses:
                 text += f" The ANFIS is better on {', '.join(losses)}."
+        if fixed:
+            text += (" Their orientation is not compared: where the arm's structure (the pitch closure and linear rules) "
+                     "computes it, it is not learned (the chosen model's 95th percentile "
+                     f"{_with_interval(get['orientation p95'])}).")
         exact = find(task, ROLE_EXACT, "position max")
         if exact:
             text += f" The closed form is exact (largest tool position error {_with_interval(exact)})."

@@ -1,0 +1,104 @@
+"""A shifted test population (issue 66): targets that no choice of a model met, declared in the
+study file before they are drawn (its ``shifted`` section, :class:`nfarm.study.study_files.ShiftedSection`)
+and read once, by chapter 7, with the frozen models, so that the verdict is seen beside one on a
+population the study's choices were not tuned to.
+
+The test split is drawn from the same generator as the training and validation data, only from
+another seed: a redraw does not undo choices made on that population. The shifted IK population
+lies **just beyond the region**: configurations with every joint within ``ik_band`` of its range's
+width beyond the ends of the region's box (and within the joint's limits), at least one joint
+outside the box, the region's task-space filters kept (:func:`beyond_box`) — poses no model was
+trained, tuned or chosen on, each a small step past the data, where every learner extrapolates.
+It is drawn by independent uniform draws from its own seed, in batches, until ``ik_samples`` are
+kept.
+
+It is made in memory when a chapter asks for it (a few thousand forward kinematics), and is not a
+data set of :mod:`nfarm.study.datasets`: the data sets' hash leaves the ``shifted`` section out, so
+declaring it retrains nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..model.kinematics import fk
+from .regions import IKRegion
+from .study_files import Study
+
+__all__ = ["boundary_distance", "beyond_box", "shifted_ik", "describe"]
+
+
+def boundary_distance(region: IKRegion, q: np.ndarray) -> np.ndarray:
+    """``(...)``: how far configurations ``q (..., n)`` [rad] lie inside the region's joint box, as the
+    least over the joints of the signed distance to the nearer end of the joint's range, in shares
+    of that range's width: 0 on the box's boundary, 0.5 at the centre of every joint's range,
+    negative outside the box.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> region = IKRegion(robot, np.array([[-1.0, 1.0]] * 5))
+        >>> boundary_distance(region, np.array([[0.0, 0.0, 0.0, 0.0, 0.9], [0.0] * 5, [1.1] + [0.0] * 4])).round(3).tolist()
+        [0.05, 0.5, -0.05]
+    """
+    lo, hi = region.box[:, 0], region.box[:, 1]
+    share = np.minimum(q - lo, hi - q) / (hi - lo)
+    return share.min(axis=-1)
+
+
+def beyond_box(region: IKRegion, n: int, band: float, seed: int, *, batch: int = 20_000,
+               max_draws: int = 20_000_000) -> np.ndarray:
+    """``n`` configurations ``(n, dof)`` [rad] just beyond the region's joint box: every joint within
+    ``band`` of its range's width beyond the box's ends (clipped to the joint's limits), at least one
+    outside the box (:func:`boundary_distance` below 0), and the region's task-space filters met — by
+    independent uniform draws from ``seed``.
+
+    Raises:
+        ValueError: a ``band`` outside ``(0, 0.5]``; a box at every joint's limits (nothing lies
+            beyond it); too few draws kept within ``max_draws``.
+    """
+    if isinstance(band, bool) or not isinstance(band, (int, float)) or not 0 < band <= 0.5:
+        raise ValueError(f"band must be in (0, 0.5], got {band!r}")
+    lo, hi = region.box[:, 0], region.box[:, 1]
+    limits = region.robot.qlim
+    wide = np.column_stack([np.maximum(lo - band * (hi - lo), limits[:, 0]), np.minimum(hi + band * (hi - lo), limits[:, 1])])
+    if np.array_equal(wide, region.box):
+        raise ValueError("the region's box lies at every joint's limits: no configuration lies beyond it")
+    outer = dataclasses.replace(region, box=wide)
+    rng = np.random.default_rng(seed)
+    kept, drawn = [], 0
+    while sum(len(k) for k in kept) < n:
+        if drawn >= max_draws:
+            raise ValueError(f"beyond the region's box by {band:g} of its ranges, {sum(len(k) for k in kept):,} of "
+                             f"{drawn:,} configurations drawn were kept, fewer than the {n:,} asked: widen ik_band "
+                             f"or lower ik_samples")
+        q = outer.sample(batch, rng, method="uniform")
+        drawn += batch
+        kept.append(q[boundary_distance(region, q) < 0])
+    return np.concatenate(kept)[:n]
+
+
+def shifted_ik(study: Study) -> dict[str, np.ndarray]:
+    """The study's shifted IK targets: ``q (N, n)`` [rad] just beyond the region (:func:`beyond_box`,
+    the study file's ``shifted`` section) and ``T = fk(q) (N, 4, 4)``.
+
+    Raises:
+        ValueError: a study that declares no shifted population.
+    """
+    if study.shifted is None:
+        raise ValueError(f"{study.source}: shifted: the study declares no shifted test population")
+    s = study.shifted
+    q = beyond_box(study.ik_region, s.ik_samples, s.ik_band, s.seed)
+    return {"q": q, "T": fk(study.robot, q)}
+
+
+def describe(study: Study) -> str:
+    """The shifted population in words, for captions and prose."""
+    if study.shifted is None:
+        return "no shifted population"
+    s = study.shifted
+    return (f"{s.ik_samples:,} targets just beyond the region (every joint within {s.ik_band:.0%} of its range's width "
+            f"beyond the region's box, at least one outside it; seed {s.seed}, declared {s.declared})")
