@@ -15,7 +15,8 @@ import pytest
 
 from nfarm.infra.paths import FIGURES, NOTEBOOKS, ROOT
 from nfarm.infra.notebook_runs import chapters, run_notebook
-from nfarm.publishing.pages import COURSE_TAGS, chapter_title, export_html, numbered_outputs
+from nfarm.publishing.citations import numbered_outputs
+from nfarm.publishing.export import COURSE_TAGS, chapter_title, export_html
 
 NOTEBOOK_FILES = chapters(NOTEBOOKS)
 

@@ -333,7 +333,7 @@ def test_the_chapters_equations_are_labelled_and_their_citations_resolve_within_
 
 def test_a_page_citing_what_its_edition_does_not_show_is_refused_in_one_line():
     from nfarm.infra.notebook_runs import ReportError
-    from nfarm.publishing.pages import resolve_citations
+    from nfarm.publishing.citations import resolve_citations
 
     refs = {"06_ik_curves": ("Figure S6.2", "06_anfis_training.html#06_ik_curves")}
     assert resolve_citations("as {numref}<code>06_ik_curves</code> shows", refs, "06.ipynb") == \

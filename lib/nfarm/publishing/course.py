@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..infra.paths import BUILD, NOTEBOOKS, atomic_path
-from .pages import COURSE_TAGS
+from .export import COURSE_TAGS
 
 __all__ = ["check", "check_function", "check_that", "student_notebook", "exercise_notebook",
            "build_course", "check_results", "CHECK_MIME", "TAGS"]
@@ -231,7 +231,7 @@ def build_course(out: str | os.PathLike | None = None, *, smoke: bool = False,
     import nbformat
 
     from ..infra.notebook_runs import chapters, declared_parameters, run_notebook
-    from .pages import chapter_title, export_html, install_mathjax
+    from .export import chapter_title, export_html, install_mathjax
 
     out = Path(out) if out is not None else BUILD / "course"
     say = progress or (lambda text: None)

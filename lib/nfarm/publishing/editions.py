@@ -1,8 +1,9 @@
 """The report's editions: one arm's run of the chapters per study file (:class:`Edition`,
 :func:`editions`), and where the primary edition and the others publish and record.
 
-Apart from :mod:`.report`, which runs them, so that :mod:`.pages` can name them without
-importing the pipeline that calls it.
+Apart from :mod:`.report`, which runs them, so that the pages and the PDF (:mod:`.website`,
+:mod:`.index`, :mod:`.citations`, :mod:`.paper`) can name them without importing the pipeline
+that calls them.
 """
 
 from __future__ import annotations

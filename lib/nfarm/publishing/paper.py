@@ -31,9 +31,14 @@ from ..infra.notebook_runs import ReportError
 from ..infra.paths import ROOT, atomic_path
 from ..presentation.numbering import citation_keys
 from .editions import Edition
-from .pages import (ABSTRACT_FRAMING, ANSWERS_KIND, BIBLIOGRAPHY, ABSTRACT_LIMITS, ABSTRACT_QUESTION, DISSERTATION_TITLE, DISSERTATION_TITLE_EN, PAPER_NAME, ReportPages,
-                    _git, abstract_answers, chapter_title, edition_letter, numbered_equations, numbered_outputs, pandoc_path, verdict_rows,
-                    warm_start_rows)
+from .abstract import (ABSTRACT_FRAMING, ABSTRACT_LIMITS, ABSTRACT_QUESTION, ANSWERS_KIND, DISSERTATION_TITLE,
+                       DISSERTATION_TITLE_EN, abstract_answers, verdict_rows, warm_start_rows)
+from .build_info import current_commit
+from .citations import edition_letter, numbered_equations, numbered_outputs
+from .export import chapter_title
+from .index import PAPER_NAME
+from .references import BIBLIOGRAPHY, pandoc_path
+from .website import ReportPages
 
 __all__ = ["PAPER_NAME", "BIBLIOGRAPHY", "DISSERTATION", "write_paper", "paper_markdown", "PaperChapter"]
 
@@ -254,7 +259,7 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str
 
 
 def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
-    """The verdict table and the conclusion, as on the index (:func:`nfarm.publishing.pages.verdict_rows`)."""
+    """The verdict table and the conclusion, as on the index (:func:`nfarm.publishing.abstract.verdict_rows`)."""
     from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
 
     rows = verdict_rows(figures_dir, arms)
@@ -418,8 +423,7 @@ def write_paper(report: ReportPages, *, commit: str = "", bibliography: Path = B
     for stale in report.report_dir.glob(".paper-*"):    # a killed build's work directory
         shutil.rmtree(stale, ignore_errors=True)
     if not commit:
-        commit = (_git("rev-parse", "--short=12", "HEAD") or "unknown") + \
-            (" (with uncommitted changes)" if _git("status", "--porcelain") else "")
+        commit = current_commit()
     built = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     with tempfile.TemporaryDirectory(prefix=".paper-", dir=report.report_dir) as tmp:
         work = Path(tmp)

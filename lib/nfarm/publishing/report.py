@@ -6,7 +6,7 @@ staging directory under ``build/stage/``, once per arm (:class:`Edition`, one pe
 the primary arm's results go to ``figures/``, another's to ``figures/<study>/``
 (:mod:`.manifest` publishes them atomically). A chapter whose inputs (:func:`_chapter_key`) and
 published files are those of its last run is not run again, so a second ``make report`` with
-nothing changed only rewrites the pages (:mod:`.pages`) and the PDF of the whole study
+nothing changed only rewrites the pages (:mod:`.website`) and the PDF of the whole study
 (:mod:`.paper`, ``build/report/nfarm-study.pdf``).
 
 **Explore freely, publish deliberately.** Only a run with the default parameters publishes
@@ -40,7 +40,7 @@ import shutil
 import signal
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,8 +51,10 @@ from ..infra.provenance import digest_files as _digest_files
 from ..presentation.tables import DOCUMENTS
 from .editions import PRIMARY_STUDY, RECORDINGS, Edition, editions
 from .manifest import chapter_files, publish_chapter, publishing_lock, recover_figures
-from .pages import COURSE_TAGS, ReportPages, _git, install_mathjax, machine, write_pages
+from .build_info import current_commit, machine
+from .export import COURSE_TAGS, install_mathjax
 from .paper import write_paper
+from .website import ReportPages, write_pages
 
 __all__ = ["Edition", "editions", "build_report", "ReportRun", "ReportUsageError", "ReportInterrupted",
            "PRIMARY_STUDY", "RECORDINGS"]
@@ -192,8 +194,14 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
                  force: bool = False, parallel: bool | None = None, scheduler: str | None = None,
                  arm: str | None = None, say: Callable[[str], None] = _quiet,
                  tell: Callable[[dict], None] | None = None) -> ReportRun:
-    """Run the chapters for every arm (:func:`editions`), publish their figures and tables,
-    export HTML and write the index.
+    """Run the chapters for every arm (:func:`editions`), publish their figures and tables, write
+    the PDF of the whole study, export HTML and write the index; return where the index and the
+    figures are (:class:`ReportRun`).
+
+    Its stages, in order: plan the run (:func:`_plan`), recover the figures directory and copy
+    MathJax (:func:`_prepare`), run and publish the editions' chapters (:func:`_run_editions`),
+    then those comparing the editions (:func:`_run_comparing_chapters`), record a clean build's
+    time (:func:`_stamp_clean_build`), write the PDF and the pages (:func:`_write_pdf_and_pages`).
 
     Only a run with the default parameters (not ``smoke``, no ``extra_parameters``)
     publishes into ``figures_dir``; others publish into ``build_dir/<variant>/figures``. A run
@@ -232,6 +240,92 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
         ReportError: a chapter failed (one line naming it and its cell), a notebook or study
             file is not valid, or a directory cannot be written.
     """
+    plan = _plan(smoke=smoke, only=only, notebooks_dir=notebooks_dir, figures_dir=figures_dir, build_dir=build_dir,
+                 extra_parameters=extra_parameters, cell_timeout=cell_timeout, arms=arms, force=force,
+                 parallel=parallel, scheduler=scheduler, arm=arm)
+    relay = _Relay(say, tell)                     # an edition's process sends its lines here
+    try:
+        _prepare(plan)
+        _run_editions(plan, relay)
+        _run_comparing_chapters(plan, relay)
+        _stamp_clean_build(plan)
+        _write_pdf_and_pages(plan, say)
+    except KeyboardInterrupt:
+        raise ReportInterrupted(f"interrupted; {shown_path(plan.figures_dir)} holds the chapters published "
+                                f"before (its manifest matches)") from None
+    except OSError as exc:                        # a read-only or full build directory, …
+        raise ReportError(_cannot_write(exc)) from None
+    return ReportRun(plan.report_dir / "index.html", plan.figures_dir)
+
+
+#: One chapter run: the notebook, the edition it runs for and that edition's own parameters.
+_Job = tuple[Path, Edition, dict]
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What one :func:`build_report` run does, decided before any chapter runs (:func:`_plan`).
+
+    Attributes:
+        everything: every chapter notebook, in order (the pages and the PDF list them all).
+        runs: per notebook file name, its runs for every edition (:func:`_runs`), in order.
+        comparing: the file names of the chapters that compare the editions (they declare
+            ``study_files``).
+        jobs: the chapter runs this run makes, in chapter order (``only`` and ``arm`` applied).
+        sequences: per edition that has any, its jobs but the comparing chapters', in order.
+        keys: every chapter run's key, by notebook file name and edition name
+            (:func:`_chained_keys`).
+        declared: per notebook file name, the parameters it declares.
+        arms: the run's editions, the primary first.
+        extra: the run's parameters other than the defaults.
+        smoke, force, scheduler, cell_timeout: as :func:`build_report` was given them.
+        variant: ``"smoke"``, ``"custom"`` (other parameters) or ``None`` (the published run).
+        build_dir: the build directory; ``base``: this variant's part of it (``build_dir/<variant>``,
+            or ``build_dir`` itself), which holds the executed notebooks and the chapters' stamps.
+        figures_dir: where the chapters publish.
+        report_dir: where the pages and the PDF go.
+        side_by_side: each edition's chapters run in a process of their own.
+        clean: a clean build, whose time is recorded (:data:`CLEAN_BUILD`).
+        started: :func:`time.monotonic` when the run was planned.
+        commit: the checkout's commit then (:func:`nfarm.publishing.build_info.current_commit`).
+    """
+
+    everything: tuple[Path, ...]
+    runs: Mapping[str, tuple[tuple[Edition, dict], ...]]
+    comparing: frozenset[str]
+    jobs: tuple[_Job, ...]
+    sequences: tuple[tuple[_Job, ...], ...]
+    keys: Mapping[tuple[str, str], str]
+    declared: Mapping[str, Sequence[str]]
+    arms: tuple[Edition, ...]
+    extra: Mapping[str, object]
+    smoke: bool
+    force: bool
+    scheduler: str | None
+    cell_timeout: float | None
+    variant: str | None
+    build_dir: Path
+    base: Path
+    figures_dir: Path
+    report_dir: Path
+    side_by_side: bool
+    clean: bool
+    started: float
+    commit: str
+
+
+def _plan(*, smoke: bool, only: Sequence[str] | None, notebooks_dir: Path, figures_dir: Path, build_dir: Path,
+          extra_parameters: dict | None, cell_timeout: float | None, arms: Sequence[Edition] | None,
+          force: bool, parallel: bool | None, scheduler: str | None, arm: str | None) -> _Plan:
+    """The plan of a :func:`build_report` run made from its arguments (the same names): the
+    chapters, the editions each runs for and with what key, where they publish, and whether the
+    editions run side by side.
+
+    Raises:
+        ReportUsageError: ``only`` names no chapter, or one that does not exist; ``arm`` names no
+            edition.
+        ReportError: no chapter notebook, or a study file is not valid.
+    """
     everything, notebooks = _select(notebooks_dir, only)
     if not notebooks:
         raise ReportError(f"no chapter notebooks NN_*.ipynb in {shown_path(notebooks_dir)}")
@@ -240,7 +334,6 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     base = build_dir / variant if variant else build_dir
     if variant:
         figures_dir = base / "figures"
-    report_dir = base / "report"
     try:
         arms = list(arms) if arms is not None else editions()
     except ValueError as exc:                     # a study file (ParamsError)
@@ -255,107 +348,128 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     # (its sweep cells on this machine: a cluster's workers would make the time another machine's)
     clean = variant is None and only is None and arm is None and not force and scheduler is None and \
         not any((build_dir / made).exists() for made in ("datasets", "models", "sweeps", "stamps"))
-    started, commit = time.monotonic(), _commit()
-
-    def runs(nb: Path) -> list[tuple[Edition, dict]]:
-        names = declared[nb.name]
-        if "study_files" in names:                # compares the arms: once, after them
-            if extra and "study_files" not in extra:
-                return []
-            files = {} if extra or len(arms) < 2 else \
-                {"study_files": [a.study_file for a in arms]}
-            return [(arms[0], files)]
-        return [(a, p) for a in arms if (p := a.parameters(names)) is not None]
-
-    comparing = {nb.name for nb in everything if "study_files" in declared[nb.name]}
-    jobs = [(nb, edition, own) for nb in notebooks for edition, own in runs(nb)
-            if arm is None or nb.name in comparing or edition.name == arm]
-    keys = _chained_keys([(nb, edition, own) for nb in everything for edition, own in runs(nb)], comparing, smoke, extra)
-    sequences = [[j for j in jobs if j[1] is edition and j[0].name not in comparing] for edition in arms]
-    sequences = [seq for seq in sequences if seq]
+    started, commit = time.monotonic(), current_commit()
+    runs = {nb.name: tuple(_runs(declared[nb.name], arms, extra)) for nb in everything}
+    comparing = frozenset(nb.name for nb in everything if "study_files" in declared[nb.name])
+    jobs = tuple((nb, edition, own) for nb in notebooks for edition, own in runs[nb.name]
+                 if arm is None or nb.name in comparing or edition.name == arm)
+    keys = _chained_keys([(nb, edition, own) for nb in everything for edition, own in runs[nb.name]],
+                         comparing, smoke, extra)
+    sequences = [tuple(j for j in jobs if j[1] is edition and j[0].name not in comparing) for edition in arms]
+    sequences = tuple(seq for seq in sequences if seq)
     if parallel is None:
         parallel = _cpus() >= 2
-    side_by_side = parallel and len(sequences) > 1
+    return _Plan(everything=tuple(everything), runs=runs, comparing=comparing, jobs=jobs, sequences=sequences,
+                 keys=keys, declared=declared, arms=tuple(arms), extra=extra, smoke=smoke, force=force,
+                 scheduler=scheduler, cell_timeout=cell_timeout, variant=variant, build_dir=build_dir, base=base,
+                 figures_dir=figures_dir, report_dir=base / "report", side_by_side=parallel and len(sequences) > 1,
+                 clean=clean, started=started, commit=commit)
 
-    def chapter(nb: Path, arm: Edition, own: dict) -> None:
-        """Run and publish one chapter of one edition (raises :class:`ReportError`)."""
-        prefix = nb.name[:2]
-        label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
-        stage = build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
-        executed = base / "notebooks" / arm.subdir / nb.name
-        stamp = base / "stamps" / arm.name / f"{nb.stem}.json"
-        parameters = {"smoke": smoke, **own, **extra}
-        key = keys[nb.name, arm.name]
-        if not force and _up_to_date(stamp, key, executed, figures_dir, arm.subdir, prefix):
-            relay.say(f"{label}: up to date (its inputs are unchanged)")
-            return
-        shutil.rmtree(stage, ignore_errors=True)
-        stage.mkdir(parents=True)
-        relay.say(f"{label} …")
-        try:
-            where = {"sweep_scheduler": scheduler} if scheduler and "sweep_scheduler" in declared[nb.name] else {}
-            run_notebook(nb, executed, {**parameters, **where, "out_dir": shown_path(stage)},
-                         progress=sys.stderr.isatty() and not side_by_side and tell is None,
-                         cell_timeout=cell_timeout, remove_tags=COURSE_TAGS,
-                         tell=None if tell is None else lambda state: relay.tell({**state, "label": label}))
-            published = publish_chapter(stage, figures_dir, prefix, arm.subdir)
-        except ReportError:
-            stamp.unlink(missing_ok=True)
-            raise
-        finally:
-            if tell is not None:
-                relay.tell({"label": label, "finished": True})
-        shutil.rmtree(stage, ignore_errors=True)
-        stamp.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(stamp) as tmp:
-            tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
-                figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
-        relay.say(f"{label}: {len(published)} figures and tables published in "
-            f"{shown_path(figures_dir / arm.subdir)}")
 
-    def in_order(sequence) -> None:
-        for job in sequence:
-            chapter(*job)
+def _runs(declared: Sequence[str], arms: Sequence[Edition], extra: dict) -> list[tuple[Edition, dict]]:
+    """The runs of a chapter declaring the parameters ``declared``: (edition, its own parameters)
+    for each edition it runs for (:meth:`Edition.parameters`). A chapter comparing the editions
+    (it declares ``study_files``) runs once, for the first, with every edition's study file (none
+    where a run with ``extra`` parameters does not give ``study_files``)."""
+    if "study_files" in declared:                 # compares the arms: once, after them
+        if extra and "study_files" not in extra:
+            return []
+        files = {} if extra or len(arms) < 2 else \
+            {"study_files": [a.study_file for a in arms]}
+        return [(arms[0], files)]
+    return [(a, p) for a in arms if (p := a.parameters(declared)) is not None]
 
-    relay = _Relay(say, tell)                     # an edition's process sends its lines here
 
+def _prepare(plan: _Plan) -> None:
+    """Before any chapter runs: undo what a killed run left half published beside the figures
+    directory (under the publishing lock), and copy MathJax beside the pages."""
+    with publishing_lock(plan.figures_dir):
+        recover_figures(plan.figures_dir)
+    install_mathjax(plan.report_dir)
+
+
+def _run_editions(plan: _Plan, relay: _Relay) -> None:
+    """Run and publish every edition's chapters but those comparing the editions: side by side, each
+    edition's in a process of its own (:func:`_side_by_side`), or all in chapter order."""
+    if plan.side_by_side:
+        _side_by_side([functools.partial(_run_in_order, plan, relay, seq) for seq in plan.sequences], relay=relay)
+    else:
+        _run_in_order(plan, relay, [j for j in plan.jobs if j[0].name not in plan.comparing])
+
+
+def _run_comparing_chapters(plan: _Plan, relay: _Relay) -> None:
+    """Run and publish the chapters that compare the editions, after the editions' own."""
+    _run_in_order(plan, relay, [j for j in plan.jobs if j[0].name in plan.comparing])
+
+
+def _run_in_order(plan: _Plan, relay: _Relay, jobs: Sequence[_Job]) -> None:
+    """Run and publish each of ``jobs`` (:func:`_run_chapter`), one after the other."""
+    for job in jobs:
+        _run_chapter(plan, relay, *job)
+
+
+def _run_chapter(plan: _Plan, relay: _Relay, nb: Path, arm: Edition, own: dict) -> None:
+    """Run and publish one chapter of one edition, and stamp it with its key and its published
+    files; nothing when it is up to date (:func:`_up_to_date`) and the run is not forced (raises
+    :class:`ReportError`)."""
+    prefix = nb.name[:2]
+    label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
+    stage = plan.build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
+    executed = plan.base / "notebooks" / arm.subdir / nb.name
+    stamp = plan.base / "stamps" / arm.name / f"{nb.stem}.json"
+    parameters = {"smoke": plan.smoke, **own, **plan.extra}
+    key = plan.keys[nb.name, arm.name]
+    if not plan.force and _up_to_date(stamp, key, executed, plan.figures_dir, arm.subdir, prefix):
+        relay.say(f"{label}: up to date (its inputs are unchanged)")
+        return
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir(parents=True)
+    relay.say(f"{label} …")
     try:
-        with publishing_lock(figures_dir):
-            recover_figures(figures_dir)
-        install_mathjax(report_dir)
-        if side_by_side:
-            _side_by_side([functools.partial(in_order, seq) for seq in sequences], relay=relay)
-        else:
-            in_order([j for j in jobs if j[0].name not in comparing])
-        in_order([j for j in jobs if j[0].name in comparing])
-        record = build_dir / "stamps" / CLEAN_BUILD
-        if clean:
-            _record_clean_build(record, time.monotonic() - started, commit)
-        pages = ReportPages(
-            chapters=tuple(everything), runs={nb.name: tuple(arm for arm, _ in runs(nb)) for nb in everything},
-            comparing=frozenset(comparing), arms=tuple(arms), executed_dir=base / "notebooks",
-            report_dir=report_dir, figures_dir=figures_dir, parameters=extra, smoke=smoke,
-            recordings_dir=None if smoke or extra else build_dir / "recordings",
-            clean_build=None if variant else _read_clean_build(record))
-        say("the PDF of the whole study …")
-        write_paper(pages)                        # before the index, which links it
-        write_pages(pages)
-    except KeyboardInterrupt:
-        raise ReportInterrupted(f"interrupted; {shown_path(figures_dir)} holds the chapters published "
-                                f"before (its manifest matches)") from None
-    except OSError as exc:                        # a read-only or full build directory, …
-        raise ReportError(_cannot_write(exc)) from None
-    return ReportRun(report_dir / "index.html", figures_dir)
+        where = {"sweep_scheduler": plan.scheduler} \
+            if plan.scheduler and "sweep_scheduler" in plan.declared[nb.name] else {}
+        run_notebook(nb, executed, {**parameters, **where, "out_dir": shown_path(stage)},
+                     progress=sys.stderr.isatty() and not plan.side_by_side and not relay.telling,
+                     cell_timeout=plan.cell_timeout, remove_tags=COURSE_TAGS,
+                     tell=(lambda state: relay.tell({**state, "label": label})) if relay.telling else None)
+        published = publish_chapter(stage, plan.figures_dir, prefix, arm.subdir)
+    except ReportError:
+        stamp.unlink(missing_ok=True)
+        raise
+    finally:
+        if relay.telling:
+            relay.tell({"label": label, "finished": True})
+    shutil.rmtree(stage, ignore_errors=True)
+    stamp.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(stamp) as tmp:
+        tmp.write_text(json.dumps({"key": key, "outputs": _published_digests(
+            plan.figures_dir, arm.subdir, prefix)}, indent=1), encoding="utf-8")
+    relay.say(f"{label}: {len(published)} figures and tables published in "
+              f"{shown_path(plan.figures_dir / arm.subdir)}")
+
+
+def _stamp_clean_build(plan: _Plan) -> None:
+    """Record a clean build's time (:data:`CLEAN_BUILD`), once its chapters have run."""
+    if plan.clean:
+        _record_clean_build(plan.build_dir / "stamps" / CLEAN_BUILD, time.monotonic() - plan.started, plan.commit)
+
+
+def _write_pdf_and_pages(plan: _Plan, say: Callable[[str], None]) -> None:
+    """The PDF of the whole study (:func:`nfarm.publishing.paper.write_paper`), then every executed
+    chapter's HTML page and the index, which links the PDF (:func:`nfarm.publishing.website.write_pages`)."""
+    pages = ReportPages(
+        chapters=plan.everything, runs={name: tuple(arm for arm, _ in runs) for name, runs in plan.runs.items()},
+        comparing=plan.comparing, arms=plan.arms, executed_dir=plan.base / "notebooks",
+        report_dir=plan.report_dir, figures_dir=plan.figures_dir, parameters=plan.extra, smoke=plan.smoke,
+        recordings_dir=None if plan.smoke or plan.extra else plan.build_dir / "recordings",
+        clean_build=None if plan.variant else _read_clean_build(plan.build_dir / "stamps" / CLEAN_BUILD))
+    say("the PDF of the whole study …")
+    write_paper(pages)                            # before the index, which links it
+    write_pages(pages)
 
 
 #: Where a clean build records its time (under ``build/stamps/``): the index's "reproduce" box reads it.
 CLEAN_BUILD = "clean_build.json"
-
-
-def _commit() -> str:
-    """The checkout's commit, and whether it had uncommitted changes (when a build starts)."""
-    return (_git("rev-parse", "--short=12", "HEAD") or "unknown") + \
-        (" (with uncommitted changes)" if _git("status", "--porcelain") else "")
 
 
 def _record_clean_build(path: Path, seconds: float, commit: str) -> None:
@@ -402,6 +516,11 @@ class _Relay:
 
     def __init__(self, say: Callable[[str], None], tell: Callable[[dict], None] | None):
         self._say, self._tell, self.queue = say, tell, None
+
+    @property
+    def telling(self) -> bool:
+        """Whether the report was given a ``tell``, to which a running chapter's state goes."""
+        return self._tell is not None
 
     def say(self, text: str) -> None:
         if self.queue is not None:

@@ -1,0 +1,193 @@
+"""The learned-ID contest on the measured arm as chapter 6.8 reports it: learners compete within
+their tier of prior knowledge on the measured torques, each tier's ANFIS against its best rival.
+
+The contest's rules are :mod:`nfarm.study.contest`'s (:func:`~nfarm.study.contest.id_contest`);
+this module writes its results down. The ranking metric is the study's target metric: the worst
+resolved joint's validation NRMSE against the **measured** torques' spread, in %; torques and
+their RMSE are in N·m. Each tier's two finalists are also trained on fewer and more training
+states (seed 0), so that a reader sees whether the tier's verdict depends on the data's size.
+
+Example (a share in %, at rounding level shown as such):
+    >>> pct(0.01234), pct(1e-12)
+    ('1.23', '< 1e-6')
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..learning.bases import tier_of
+from ..model.dynamics import rnea
+from ..model.robot import Robot
+from ..presentation.plotting import plot_error_by_size, plot_joint_curves
+from ..presentation.tables import Table, shown
+from ..presentation.wording import listed, ordinal
+from . import contest
+from .id_comparison_report import ID_FLOOR
+from .statistics import resolved_joints
+from .sweep import CellResult, Replicates
+
+__all__ = ["pct", "worst_ends", "measured_validation", "newton_euler_rmse", "contest_table", "budget_table",
+           "joints_table", "size_curves", "sizes_figure", "contest_prose", "nominal_anfis", "residual_figure"]
+
+STATES = ("q", "qd", "qdd")
+
+
+def pct(value: float, *, floor: float = ID_FLOOR) -> str:
+    """An NRMSE (a share) in %, to three digits (``"< 1e-6"`` below ``floor``)."""
+    return shown(100 * value, ".3g", floor=100 * floor)
+
+
+def worst_ends(g: Replicates) -> str:
+    """A finalist's least–largest worst-joint NRMSE over its seeds, in %."""
+    return f"{pct(g.low('worst_nrmse'))}–{pct(g.high('worst_nrmse'))}"
+
+
+def measured_validation(id_val: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The validation data as the measured arm's learners see it: the states its sensors give
+    (``q_measured``, … where the data hold them) and the measured torques ``tau`` [N·m]."""
+    return {**{k: id_val.get(f"{k}_measured", id_val[k]) for k in STATES}, "tau": id_val["tau_measured"]}
+
+
+def newton_euler_rmse(robot: Robot, id_val: Mapping[str, np.ndarray]) -> np.ndarray:
+    """``(n,)`` [N·m] each joint's RMSE of Newton–Euler with the nominal model on the measured
+    validation torques (:func:`measured_validation`): what learning has to beat."""
+    m = measured_validation(id_val)
+    return np.sqrt(np.mean((rnea(robot, m["q"], m["qd"], m["qdd"]) - m["tau"]) ** 2, axis=0))
+
+
+def contest_table(idc: contest.IDContest) -> Table:
+    """The contest by tier: each learner's chosen configuration, its budget, its training states,
+    its worst resolved joint's NRMSE (mean over the seeds of a finalist; ◀ the tier's best), the
+    range over the seeds, the worst joint's RMSE [N·m] and the seeds it ran."""
+    spent, rows = idc.budgets, []
+    for tier in idc.tiers:
+        winner = idc.winner(tier)
+        for name, r in idc.chosen.items():
+            if name.rsplit(":", 1)[0] != tier:
+                continue
+            g = idc.group(name)
+            rows.append([tier, contest.id_label(name).split(": ", 1)[1] + (" ◀" if g is winner else ""),
+                         contest.id_configuration(r.cell.params), spent[name][0], f"{r.metrics['train_samples']:,}",
+                         pct(g.metrics["worst_nrmse"]), worst_ends(g) if g.n > 1 else "pruned after seed 0",
+                         f"{g.metrics['worst_rmse']:.3g}", g.n])
+    return Table(["tier", "learner", "chosen configuration", "configurations tried", "training states",
+                  "worst resolved joint NRMSE [%]", "range over seeds [%]", "worst joint RMSE [N·m]", "seeds"], rows,
+                 caption="The learned-ID contest on the measured arm (validation): each learner's configuration chosen on "
+                         "seed 0 by the worst resolved joint's NRMSE against the measured torques' spread; each tier's best "
+                         "ANFIS and best rival also over four more draws of the data (mean and range over the seeds); "
+                         "◀ the tier's best by the mean")
+
+
+def budget_table(idc: contest.IDContest) -> Table:
+    """The tuning budget each learner spent on seed 0: configurations, its models' training
+    seconds and its cells' seconds. Wall-clock times depend on the machine: shown, not saved."""
+    return Table(["learner", "configurations", "training [s]", "cells [s]"],
+                 [[contest.id_label(name), *idc.budgets[name]] for name in idc.chosen], floatfmt=["", "", ".3g", ".3g"],
+                 caption="The tuning budget each learner spent on seed 0: configurations, the seconds its models' "
+                         "training took and the seconds its cells took (not saved: they depend on the machine)")
+
+
+def joints_table(idc: contest.IDContest, id_val: Mapping[str, np.ndarray], ne_rmse: np.ndarray, noise) -> Table:
+    """Every joint's validation RMSE [N·m] on the measured torques: Newton–Euler alone
+    (``ne_rmse``, :func:`newton_euler_rmse`), each tier's two finalists (mean over the seeds),
+    the sensor noise σ (``noise (n,)`` [N·m]) and the measured torque's spread; a joint whose
+    spread is below σ is marked "(below noise)": shown, not judged."""
+    spread = measured_validation(id_val)["tau"].std(axis=0)
+    resolved = resolved_joints(spread, noise)
+    finalists = {contest.id_label(name): idc.group(name) for name in idc.finalists}
+    rows = [["Newton–Euler alone", "nominal model", *(f"{x:.3g}" for x in ne_rmse), "study's own data"]]
+    rows += [[name, name.split(":")[0], *(f"{x:.3g}" for x in g.metrics["rmse"]), g.n] for name, g in finalists.items()]
+    rows += [["sensor noise σ", "", *(f"{x:.3g}" for x in noise), ""],
+             ["measured torque's spread (standard deviation)", "", *(f"{x:.3g}" for x in spread), ""]]
+    return Table(["model", "tier", *(f"τ{j + 1} [N·m]" + ("" if resolved[j] else " (below noise)") for j in range(len(spread))),
+                  "seeds"], rows,
+                 caption="Every joint's validation RMSE on the measured torques for each tier's two finalists (mean over the "
+                         "seeds), beside the sensor noise σ and the measured torque's spread; a joint whose spread is below "
+                         "σ is shown but not judged")
+
+
+def size_curves(idc: contest.IDContest, size_runs: Sequence[CellResult]) -> dict[str, list[tuple[int, float]]]:
+    """Each finalist's ``(training states, worst resolved joint NRMSE [%])`` on seed 0, at the
+    contest's size and at every other size it ran (``size_runs``), by the finalist's words."""
+    curves: dict[str, list[tuple[int, float]]] = {}
+    for r in [*size_runs, *(idc.chosen[name] for name in idc.finalists)]:
+        curves.setdefault(contest.id_label(contest.id_family(r.cell.params)), []).append(
+            (r.metrics["train_samples"], 100 * r.metrics["worst_nrmse"]))
+    return curves
+
+
+def sizes_figure(curves: Mapping[str, Sequence[tuple[int, float]]], robot_name: str, strides: Sequence[int],
+                 id_stride: int) -> tuple[Figure, str]:
+    """The validation error of each tier's two finalists against their training states
+    (``curves``: :func:`size_curves`; every ``strides``-th and, the contest's, every
+    ``id_stride``-th training state); the figure and its caption."""
+    fig = plot_error_by_size({name: tuple(zip(*sorted(points))) for name, points in curves.items()},
+                             quantity="worst resolved joint NRMSE, validation")
+    fig.suptitle(f"{robot_name}: the measured arm's contest, each tier's finalists (seed 0)", fontsize=10)
+    return fig, ("Validation error of each tier's two finalists against the number of training states "
+                 f"(seed 0; every {listed(ordinal(s) for s in sorted({*strides, id_stride}, reverse=True))} state of "
+                 f"the training trajectories, the contest's every {ordinal(id_stride)})")
+
+
+def contest_prose(idc: contest.IDContest, curves: Mapping[str, Sequence[tuple[int, float]]], ne_rmse: np.ndarray,
+                  noise) -> str:
+    """The contest's verdicts in words: in each tier the ANFIS against its best rival, paired
+    seed by seed, and whether their order holds on the most training states (``curves``:
+    :func:`size_curves`); then Newton–Euler alone (``ne_rmse``), the best of all, and the sensor
+    noise (``noise (n,)`` [N·m]) no model can predict."""
+    sentences = []
+    for tier in idc.tiers:
+        a, b = idc.pair(tier)
+        winner = idc.winner(tier)
+        if a is None or b is None:
+            sentences.append(f"In the {tier} tier only {contest.id_label(contest.id_family(winner.cell.params))} competes, "
+                             f"at {pct(winner.metrics['worst_nrmse'])} %.")
+            continue
+        rival = contest.id_label(contest.id_family(b.cell.params)).split(": ", 1)[1]
+        mean, low, high = contest.paired_gap(a, b, "worst_nrmse")
+        verdict = ("not shown to differ from" if low <= 0 <= high else "better than" if high < 0 else "worse than")
+        sentences.append(
+            f"In the **{tier}** tier the ANFIS reaches {pct(a.metrics['worst_nrmse'])} % ({worst_ends(a)} over "
+            f"{a.n} seeds) against the tier's best rival, {rival}, at {pct(b.metrics['worst_nrmse'])} % "
+            f"({worst_ends(b)}): paired seed by seed, the ANFIS is **{verdict}** it (difference {pct(low)} to "
+            f"{pct(high)} percentage points).")
+        curve_a, curve_b = (dict(curves[contest.id_label(contest.id_family(g.cell.params))]) for g in (a, b))
+        if len(curve_a) > 1 and len(curve_a) == len(curve_b):
+            most, contest_size = max(curve_a), int(a.runs[0].metrics["train_samples"])
+
+            def ahead(n: int) -> bool:
+                """The ANFIS ahead on seed 0 at ``n`` training states."""
+                return curve_a[n] < curve_b[n]
+
+            sentences[-1] += (f" On {most:,} training states (seed 0) the ANFIS reaches "
+                              f"{shown(curve_a[most], '.3g', floor=100 * ID_FLOOR)} % and {rival} "
+                              f"{shown(curve_b[most], '.3g', floor=100 * ID_FLOOR)} %: "
+                              + ("the same order as on the contest's " if ahead(most) == ahead(contest_size)
+                                 else "the other order than on the contest's ") + f"{contest_size:,}.")
+    best = min((idc.winner(t) for t in idc.tiers), key=lambda g: g.metrics["worst_nrmse"])
+    return " ".join(sentences) + (
+        f" Newton–Euler alone misses the validation torques by up to {ne_rmse.max():.3g} N·m; best of all is "
+        f"{contest.id_label(contest.id_family(best.cell.params))} at {pct(best.metrics['worst_nrmse'])} % "
+        f"({best.metrics['worst_rmse']:.3g} N·m on the worst joint). The sensor noise, which no model can "
+        f"predict, is {np.max(noise):.3g} N·m. Chapter 7 tests each tier's two finalists, frozen, on the "
+        f"held-out trajectories.")
+
+
+def nominal_anfis(idc: contest.IDContest) -> Replicates | None:
+    """The residual ANFIS finalist of the *nominal model + learned* tier (Newton–Euler with the
+    nominal masses plus a learned residual), or ``None`` where the tier has none."""
+    return idc.pair(tier_of({"residual": True}))[0]
+
+
+def residual_figure(model, group: Replicates, robot: Robot, noise, seed: int = 0) -> tuple[Figure, str]:
+    """The training and validation RMSE [N·m] per epoch of the residual ANFIS (``model``, its
+    configuration ``group``: the measured torques minus Newton–Euler), with each joint's sensor
+    noise (``noise (n,)`` [N·m]); the figure and its caption."""
+    fig = plot_joint_curves(model.models_, robot.joint_names, scale=1.0, unit="N·m", symbol="τ", noise=noise)
+    fig.suptitle(f"{robot.name}: residual ANFIS, {contest.id_configuration(group.cell.params)}, seed {seed}", fontsize=10)
+    return fig, ("Training and validation RMSE per epoch of the residual ANFIS (measured torques minus Newton–Euler), "
+                 "with each joint's sensor noise")

@@ -1,0 +1,181 @@
+"""The study's verdict (chapter 7.7): per task, the ANFIS's best against the best other method,
+both chosen on validation, judged on held-out data over every seed chapter 6 trained each on.
+
+A **seed** is a draw of the training data and of the learner's initialisation; chapter 6 trains a
+contest's finalists on seed 0 and on :data:`nfarm.study.contest.SPREAD_SEEDS`, and keeps the
+models of a published configuration beside it (``seeds.json``, :mod:`nfarm.study.replicates`).
+Here each method's errors on the test units (poses for IK, trajectories for ID) are stacked over
+its seeds — ``(S, N, k)``, the chapter's seed first — and judged by
+:func:`nfarm.study.summary.seed_comparison`: a two-level bootstrap (the seeds resampled, then the
+test units), the gap paired by seed and unit. :func:`judge_task` turns that into a
+:class:`nfarm.study.summary.Verdict` with the study's targets met on the same intervals;
+:func:`measured_verdicts` judges the measured arm tier by tier.
+
+Example (two methods on two seeds of 30 test poses; the rival's position errors three times the
+ANFIS's):
+
+    >>> rng = np.random.default_rng(0)
+    >>> def errors(scale):
+    ...     return {"joint": rng.normal(0, 1e-3, (30, 5)), "position": scale * rng.random(30) * 1e-3,
+    ...             "orientation": rng.random(30) * 1e-3}
+    >>> values = {m: ik_seed_values([errors(s), errors(s)]) for m, s in (("ANFIS", 1.0), ("RBF", 3.0))}
+    >>> v = judge_task("arm", "inverse kinematics", "position p95", "mm", values, "ANFIS", "RBF", ik=True, draws=200)
+    >>> v.rival, v.verdict, v.anfis_value < v.rival_value
+    ('RBF', 'ANFIS better', True)
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..learning.learned import ik_errors
+from .statistics import distinct_resamples, trajectory_sums
+from . import contest, replicates
+from .summary import ID_TARGET_PCT, WORST_ID, Row, Verdict, ik_seed_values, seed_comparison, targets_met, task_verdict
+from .sweep import sweep_results
+
+__all__ = ["seed_models", "seed_sums", "summary_row", "judge_task", "ik_values_over_seeds", "id_values_over_seeds",
+           "measured_verdicts"]
+
+
+def seed_models(where: str | os.PathLike, published: Any, probe: Sequence[np.ndarray], *, seed: int = 0) -> list:
+    """The models of a published model's configuration on each of its seeds (the ``seeds.json``
+    chapter 6 wrote beside it in ``where``), the chapter's ``seed`` first and checked to give the
+    published model's predictions on ``probe`` (the arguments of its ``predict``), then the
+    others in seed order; ``[published]`` where no seeds are listed (a method trained once).
+
+    Raises:
+        RuntimeError: the seed-``seed`` model is missing or is not the published one (chapter 6
+            must be run again).
+    """
+    where = Path(where)
+    if not (where / replicates.SEEDS_FILE).is_file():
+        return [published]
+    models = replicates.seed_models(where)
+    if seed not in models or not np.array_equal(models[seed].predict(*probe), published.predict(*probe)):
+        raise RuntimeError(f"{where}: its seed-{seed} model is not the published one: rerun chapter 6")
+    return [models[seed]] + [models[s] for s in sorted(models) if s != seed]
+
+
+def seed_sums(runs: Sequence, n_joints: int, *, seed: int = 0) -> np.ndarray:
+    """``(S, T, 1 + 3n)``: the test cells' trajectory sums (their metric ``trajectory_sums``,
+    :func:`nfarm.study.statistics.trajectory_sums`) of one configuration over its seeds, the
+    chapter's ``seed`` first, then the others in order."""
+    runs = sorted(runs, key=lambda r: (r.cell.params["seed"] != seed, r.cell.params["seed"]))
+    return np.stack([np.array(r.metrics["trajectory_sums"]).reshape(-1, 1 + 3 * n_joints) for r in runs])
+
+
+def summary_row(task: str, method: str, metric: str, unit: str, estimate, scale: float = 1.0) -> Row:
+    """A two-level estimate (of :func:`nfarm.study.summary.seed_comparison`) as a summary
+    :class:`~nfarm.study.summary.Row`, its value and interval times ``scale`` (what the targets
+    are judged on)."""
+    return Row(task, method, "", metric, unit, scale * estimate.value, scale * estimate.low, scale * estimate.high,
+               estimate.draws, estimate.level, "")
+
+
+def judge_task(arm: str, task: str, metric: str, unit: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *,
+               targets: Sequence[tuple[str, float, str]] = (), exact: str = "", units: str = "test poses",
+               scale: float = 1.0, draws: int = 2000, level: float = 0.95, seed: int = 0, **given) -> Verdict:
+    """One task's :class:`~nfarm.study.summary.Verdict` on two-level intervals: the ``anfis``
+    against ``rival`` on ``metric`` (in ``unit`` after multiplying by ``scale``), from each
+    method's values over its seeds (``values``: method → ``(S, N, k)``, as
+    :func:`~nfarm.study.summary.seed_comparison` takes them, with its options ``given``:
+    ``ik=True``, ``resolved=…``); ``targets`` the study's targets ``(metric, limit, unit)`` judged
+    for each compared method on the same intervals; ``units`` names the test units in the
+    interval's description."""
+    boot = {"draws": draws, "level": level, "seed": seed}
+    est, gap = seed_comparison(values, anfis, rival, metric, **given, **boot)
+    met: dict[str, list[tuple[Row, float]]] = {}
+    for target_metric, limit, target_unit in targets:
+        on = est if target_metric == metric else seed_comparison(values, anfis, rival, target_metric, **given, **boot)[0]
+        for name in values:
+            met.setdefault(name, []).append((summary_row(task, name, target_metric, target_unit, on[name], scale), limit))
+    kind = (f"{level:.0%} two-level bootstrap, seeds × {est[anfis].rows:,} {units}; seeds: ANFIS {est[anfis].seeds}, "
+            f"best other {est[rival].seeds}, paired {gap.seeds}"
+            + (f" (coarse: {gap.seeds} seeds allow {distinct_resamples(gap.seeds)} distinct resamples)" if gap.seeds > 1 else ""))
+    return task_verdict(arm, task, metric, unit, {n: scale * e.value for n, e in est.items()}, anfis,
+                        (scale * gap.value, scale * gap.low, scale * gap.high),
+                        {n: targets_met([r for r, _ in rows], [lim for _, lim in rows]) for n, rows in met.items()},
+                        exact, intervals={n: (scale * e.low, scale * e.high) for n, e in est.items()}, interval=kind,
+                        p=gap.p_zero, draws=gap.draws)
+
+
+def ik_values_over_seeds(robot, published: Mapping[str, tuple[Any, str | os.PathLike]], T: np.ndarray, q: np.ndarray, *,
+                         probe: np.ndarray, first: Mapping[str, Mapping[str, np.ndarray]] | None = None,
+                         seed: int = 0) -> dict[str, np.ndarray]:
+    """Each published IK method's errors on the targets ``T (N, 4, 4)`` (true joints ``q (N, n)``)
+    over its seeds, as :func:`~nfarm.study.summary.ik_seed_values` stacks them: ``published``
+    maps a method to its published model and the directory it was published in
+    (:func:`seed_models`, checked on the targets ``probe``); ``first`` the chapter seed's errors
+    where already computed (:func:`nfarm.learning.learned.ik_errors`), reused."""
+    values = {}
+    for name, (model, where) in published.items():
+        models = seed_models(where, model, (probe,), seed=seed)
+        errors = [first[name]] if first is not None else [ik_errors(robot, models[0].predict(T), q, T)]
+        values[name] = ik_seed_values(errors + [ik_errors(robot, m.predict(T), q, T) for m in models[1:]])
+    return values
+
+
+def id_values_over_seeds(published: Mapping[str, tuple[Any, str | os.PathLike]], X: Sequence[np.ndarray],
+                         tau: np.ndarray, trajectory: np.ndarray, *, first: Mapping[str, np.ndarray],
+                         probe: Sequence[np.ndarray], seed: int = 0) -> dict[str, np.ndarray]:
+    """Each published ID model's trajectory sums on the held-out states ``X = (q, qd, qdd)``
+    (each ``(M, n)``; true torques ``tau (M, n)`` [N·m], ``trajectory (M,)`` the samples'
+    trajectories) over its seeds, ``(S, T, 1 + 3n)``: the chapter seed's from ``first``, the
+    others predicted here (:func:`seed_models`, checked on the states ``probe``)."""
+    with warnings.catch_warnings(record=True) as caught:       # a model's warnings are the caller's to show
+        warnings.simplefilter("always")
+        values = {name: np.stack([first[name]] + [trajectory_sums(m.predict(*X), tau, trajectory)
+                                                  for m in seed_models(where, model, probe, seed=seed)[1:]])
+                  for name, (model, where) in published.items()}
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
+    return values
+
+
+def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Mapping[str, Sequence[str]], *,
+                      resolved: np.ndarray, n_joints: int, reference: str, sweeps_dir=None, workers: int | None = None,
+                      draws: int = 2000, level: float = 0.95, seed: int = 0,
+                      run: Callable = sweep_results) -> tuple[list[Verdict], dict[str, np.ndarray]]:
+    """The measured arm's verdicts: for each tier of ``pairs`` (tier → its ANFIS and its best
+    rival, by label), and over every tier (the best ANFIS and the best other method by
+    validation), the two judged on the test trajectories over their seeds by the worst resolved
+    joint's NRMSE [%] against the measured torques' spread — with the study's ≤ 5 % target met on
+    the ``resolved`` joints and on every joint. ``idc`` is chapter 6.8's contest
+    (:func:`nfarm.study.contest.id_contest`) and ``idc_sweep`` its sweep; ``names`` every tested
+    method's label, ``reference`` (Newton–Euler alone) among them but never a contestant. Each
+    contestant's test cells are run or reused through ``run`` (:func:`nfarm.study.sweep.sweep_results`).
+    Returns the verdicts (unranked for Holm's correction) and every contestant's trajectory sums
+    over its seeds."""
+    boot = {"draws": draws, "level": level, "seed": seed}
+    family_of = {contest.id_label(f): f for f in idc.chosen}
+    tested = [n for n in names if n != reference]
+    runs = run(idc_sweep.with_cells([{**r.cell.params, "split": "test"} for name in tested
+                                     for r in idc.group(family_of[name]).runs]), sweeps_dir, workers=workers)
+    values = {name: seed_sums([r for r in runs if contest.id_label(contest.id_family(r.cell.params)) == name], n_joints,
+                              seed=seed) for name in tested}
+    on_val = {contest.id_label(contest.id_family(g.cell.params)): g.metrics["worst_nrmse"] for g in idc.standings}
+    best_anfis = min((n for n in names if n.endswith(": ANFIS") and n in on_val), key=on_val.get)
+    best_other = min((n for n in names if n != reference and not n.endswith(": ANFIS") and n in on_val), key=on_val.get)
+    verdicts = []
+    for tier, (a, b) in [*pairs.items(), ("every tier", (best_anfis, best_other))]:
+        # Ranked by what chapter 6.8's contest ranked by and the ≤ 5 % target judges: the worst resolved joint's NRMSE
+        # [%] against the measured torques' spread (the summary's "worst NRMSE"); the target also over every joint
+        pair = {n: values[n] for n in (a, b)}
+        verdict = judge_task(arm, f"measured arm, {tier}", "worst NRMSE", "%", pair, a, b, units="test trajectories",
+                             scale=100.0, resolved=resolved, **boot)
+        rows: dict[str, list[Row]] = {n: [] for n in (a, b)}
+        for mask in (resolved, np.ones(n_joints, bool)):
+            est, _ = seed_comparison(pair, a, b, WORST_ID, resolved=mask, **boot)
+            for n in (a, b):
+                rows[n].append(summary_row("measured", n, WORST_ID, "%", est[n], 100.0))
+        met = {n: targets_met(r, [ID_TARGET_PCT, ID_TARGET_PCT]) for n, r in rows.items()}
+        verdicts.append(replace(verdict, anfis_targets=met[a], rival_targets=met[b]))
+    return verdicts, values

@@ -1,0 +1,54 @@
+"""nfarm.publishing.findings: the study's findings in words, read back from the published tables."""
+
+from __future__ import annotations
+
+import pytest
+
+from nfarm.publishing.findings import PublishedResults
+from nfarm.study.summary import Paired, Row, long_table, paired_table
+
+IK = "inverse kinematics"
+
+
+def _row(method, metric, unit, value, width=0.1):
+    return Row(IK, method, "", metric, unit, value, value - width, value + width, 200, 0.95, "poses")
+
+
+def _results(tmp_path, rows, pairs):
+    long_table(rows).save(tmp_path, "07_summary")
+    paired_table(pairs).save(tmp_path, "07_paired")
+    return PublishedResults(tmp_path / "tables")
+
+
+def _pair(method, against, metric, unit, difference, low, high):
+    return Paired(IK, method, against, metric, unit, difference, low, high, 200, 0.95, "poses")
+
+
+@pytest.mark.parametrize("low, high, words", [(-0.8, -0.6, "better than the rival by 0.7 mm (paired interval 0.6 to 0.8)"),
+                                              (0.6, 0.8, "worse than the rival by 0.7 mm (paired interval 0.6 to 0.8)"),
+                                              (-0.2, 1.6, "not shown to differ from the rival (paired interval of the "
+                                                          "difference -0.2 to 1.6 mm)")])
+def test_gap_said_follows_the_side_of_zero_the_paired_interval_lies_on(tmp_path, low, high, words):
+    d = -0.7 if high < 0 else 0.7
+    results = _results(tmp_path, [_row("A", "position p95", "mm", 1.0), _row("B", "position p95", "mm", 1.7)],
+                       [_pair("A", "B", "position p95", "mm", d, low, high)])
+    assert results.gap_said("A", "B", "position p95", IK, "the rival") == words
+    assert results.order("A", "B", "position p95") == (-1 if high < 0 else 1 if low > 0 else 0)
+
+
+def test_sides_claim_no_orientation_where_a_structure_sets_it(tmp_path):
+    rows = [_row("A", "position p95", "mm", 0.6), _row("B", "position p95", "mm", 1.3),
+            _row("A", "orientation p95", "deg", 9e-6, 1e-6), _row("B", "orientation p95", "deg", 0.02, 0.005)]
+    pairs = [_pair("A", "B", "position p95", "mm", -0.7, -0.8, -0.6),
+             _pair("A", "B", "orientation p95", "deg", -0.02, -0.025, -0.015)]
+    text = _results(tmp_path, rows, pairs).sides("A", "B", "the ANFIS", "the rival")
+    assert text.startswith("the ANFIS is better on position p95 (0.6 (0.5–0.7) mm against 1.3 (1.2–1.4) mm)")
+    assert "orientation p95 (" not in text and text.endswith("orientation not compared: a structure, not a learner, sets it")
+
+
+def test_sides_name_a_metric_where_the_other_is_better(tmp_path):
+    rows = [_row("A", "position p95", "mm", 1.6), _row("B", "position p95", "mm", 1.0),
+            _row("A", "orientation p95", "deg", 0.05, 0.01), _row("B", "orientation p95", "deg", 0.05, 0.01)]
+    pairs = [_pair("A", "B", "position p95", "mm", 0.6, 0.5, 0.7), _pair("A", "B", "orientation p95", "deg", 0, -0.01, 0.01)]
+    text = _results(tmp_path, rows, pairs).sides("A", "B", "the ANFIS", "the rival")
+    assert "**the rival is better** on position p95" in text and "no difference shown on orientation p95" in text

@@ -1,0 +1,107 @@
+"""The measured arm's learned-ID contest as chapter 6.8 writes it down (nfarm.study.id_contest_report):
+its tables, the finalists' error against the training states, and the tiers' verdicts, on a
+contest made up here."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from nfarm.model.dynamics import rnea  # noqa: E402
+from nfarm.model.robot import load_robot  # noqa: E402
+from nfarm.study import contest  # noqa: E402
+from nfarm.study import id_contest_report as report  # noqa: E402
+from nfarm.study.sweep import Cell, CellResult  # noqa: E402
+
+ROBOT = load_robot("params/robots/intelbot5.yaml")
+NOISE = np.full(ROBOT.n, 0.005)
+
+
+def result(learner, seed, nrmse, stride=2, samples=1500, **options):
+    params = {"learner": learner, "options": options, "seed": seed, "split": "val", "stride": stride}
+    return CellResult(Cell(params, f"{learner}{seed}{stride}{sorted(options.items())}"), "ok",
+                      {"worst_nrmse": nrmse, "worst_rmse": 10 * nrmse, "rmse": [nrmse] * ROBOT.n, "fit_seconds": 1.0,
+                       "train_samples": samples}, 2.0, "w")
+
+
+@pytest.fixture
+def idc():
+    seed0 = [result("anfis", 0, 0.30, inputs="affine_generic"), result("ridge", 0, 0.20, basis="generic"),
+             result("mlp", 0, 0.25, hidden=[8]), result("friction", 0, 0.10, residual=True)]
+    spread = [result("anfis", 1, 0.40, inputs="affine_generic"), result("ridge", 1, 0.22, basis="generic")]
+    return contest.id_contest(seed0, spread)
+
+
+def test_the_contest_table_marks_each_tiers_best_and_the_pruned(idc):
+    rows = {row[1]: row for row in report.contest_table(idc).rows}
+    assert rows["ridge regression ◀"][5:] == ["21", "20–22", "2.1", 2]
+    assert rows["ANFIS"][5:7] == ["35", "30–40"]
+    assert rows["multilayer perceptron"][6] == "pruned after seed 0"
+    assert rows["friction identification (least squares) ◀"][0] == "nominal model + learned"
+    assert report.budget_table(idc).rows[0] == ["generic: ANFIS", 1, 1.0, 2.0]
+
+
+def test_newton_euler_alone_is_judged_on_the_measured_torques():
+    rng = np.random.default_rng(0)
+    q, qd, qdd = rng.normal(size=(3, 50, ROBOT.n))
+    offset = np.linspace(0.1, 0.5, ROBOT.n)
+    val = {"q": q, "qd": qd, "qdd": qdd, "tau": rnea(ROBOT, q, qd, qdd), "tau_measured": rnea(ROBOT, q, qd, qdd) + offset}
+    np.testing.assert_allclose(report.newton_euler_rmse(ROBOT, val), offset, rtol=1e-12)
+    # The measured arm's states, where the data hold them, are what its learners (and Newton–Euler) see
+    seen = report.measured_validation({**val, "q_measured": q + 1.0})
+    assert np.array_equal(seen["q"], q + 1.0) and np.array_equal(seen["qd"], qd) and seen["tau"] is val["tau_measured"]
+
+
+def test_the_joints_table_sets_the_finalists_beside_the_noise_and_the_spread(idc):
+    tau = np.zeros((4, ROBOT.n))
+    tau[:, 0], tau[:, -1] = [-1, 1, -1, 1], [-1e-4, 1e-4, -1e-4, 1e-4]    # the last joint below the noise
+    table = report.joints_table(idc, {"tau_measured": tau, "q": tau, "qd": tau, "qdd": tau}, np.full(ROBOT.n, 0.1), NOISE)
+    assert table.columns[-2] == f"τ{ROBOT.n} [N·m] (below noise)" and table.columns[2] == "τ1 [N·m]"
+    assert [row[0] for row in table.rows] == ["Newton–Euler alone", "generic: ANFIS", "generic: ridge regression",
+                                              "nominal model + learned: friction identification (least squares)",
+                                              "sensor noise σ", "measured torque's spread (standard deviation)"]
+    assert table.rows[2][2] == "0.21" and table.rows[-1][2] == "1"
+
+
+def test_the_finalists_error_against_the_training_states(idc):
+    sizes = [result("anfis", 0, 0.5, stride=8, samples=375, inputs="affine_generic"),
+             result("ridge", 0, 0.1, stride=8, samples=375, basis="generic")]
+    curves = report.size_curves(idc, sizes)
+    assert curves["generic: ANFIS"] == [(375, 50.0), (1500, 30.0)]
+    fig, caption = report.sizes_figure(curves, "arm", [8], 2)
+    assert caption.endswith("(seed 0; every 8th and 2nd state of the training trajectories, the contest's every 2nd)")
+    plt.close(fig)
+    text = report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE)
+    assert text.startswith("In the **generic** tier the ANFIS reaches 35 % (30–40 over 2 seeds) against the tier's best "
+                           "rival, ridge regression, at 21 % (20–22): paired seed by seed, the ANFIS is **worse than** it "
+                           "(difference 10 to 18 percentage points).")
+    assert "On 1,500 training states (seed 0) the ANFIS reaches 30 % and ridge regression 20 %: the same order" in text
+    assert "In the nominal model + learned tier only nominal model + learned: friction identification (least squares) " \
+           "competes, at 10 %." in text
+    assert "Newton–Euler alone misses the validation torques by up to 0.3 N·m; best of all is nominal model + learned: " \
+           "friction identification (least squares) at 10 % (1 N·m on the worst joint)" in text
+    assert report.nominal_anfis(idc) is None
+
+
+def test_the_residual_anfis_is_the_nominal_tiers_anfis_finalist():
+    seed0 = [result("anfis", 0, 0.1, inputs="own", residual=True), result("boosting", 0, 0.2, residual=True)]
+    idc = contest.id_contest(seed0)
+    assert report.nominal_anfis(idc).cell.params["learner"] == "anfis"
+
+    class Joint:
+        loss_curve_ = val_loss_curve_ = [0.02, 0.01]
+        best_epoch_ = 1
+
+    class Residual:
+        models_ = [Joint()] * ROBOT.n
+
+    assert report.pct(0.0123) == "1.23" and report.worst_ends(idc.pair("nominal model + learned")[1]) == "20–20"
+    fig, caption = report.residual_figure(Residual(), report.nominal_anfis(idc), ROBOT, NOISE, seed=3)
+    assert fig._suptitle.get_text() == f"{ROBOT.name}: residual ANFIS, inputs=own, seed 3"   # residual: the tier says it
+    assert len([line for line in fig.axes[0].get_lines() if line.get_linestyle() == ":"]) == ROBOT.n + 1   # each σ, its key
+    assert "sensor noise" in caption
+    plt.close(fig)

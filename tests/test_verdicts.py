@@ -1,0 +1,103 @@
+"""nfarm.study.verdicts: the verdict of chapter 7.7 from each method's values over its seeds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nfarm.study import replicates, verdicts
+from nfarm.study.summary import ik_seed_values
+from nfarm.study.sweep import CellResult
+from nfarm.study.sweep_files import Cell
+
+BOOT = {"draws": 300, "level": 0.95, "seed": 0}
+
+
+def _ik_errors(rng, scale, n=40):
+    return {"joint": rng.normal(0, 1e-3, (n, 5)), "position": scale * (0.5 + rng.random(n)) * 1e-3,
+            "orientation": rng.random(n) * 1e-4}
+
+
+def _sums(rng, scale, trajectories=12, n=3):
+    """Trajectory sums ``(T, 1 + 3n)``: counts, squared errors, torques, squared torques."""
+    counts = np.full((trajectories, 1), 100.0)
+    tau = rng.normal(0, 1, (trajectories, n)) * 10
+    tau2 = 100 * (1 + rng.random((trajectories, n))) * 100
+    err2 = scale * 100 * (1 + 0.1 * rng.random((trajectories, n)))
+    return np.hstack([counts, err2, tau, tau2])
+
+
+@pytest.mark.parametrize("anfis_scale, rival_scale, expected", [(1.0, 3.0, "ANFIS better"), (3.0, 1.0, "rival better"),
+                                                                (1.0, 1.0, "no difference shown")])
+def test_judge_task_reads_the_paired_interval(anfis_scale, rival_scale, expected):
+    rng = np.random.default_rng(1)
+    same = [_ik_errors(rng, 1.0) for _ in range(2)]
+    values = {"ANFIS": ik_seed_values(same if anfis_scale == rival_scale else
+                                      [_ik_errors(rng, anfis_scale) for _ in range(2)]),
+              "RBF": ik_seed_values(same if anfis_scale == rival_scale else
+                                    [_ik_errors(rng, rival_scale) for _ in range(2)])}
+    v = verdicts.judge_task("arm", "inverse kinematics", "position p95", "mm", values, "ANFIS", "RBF", ik=True, **BOOT)
+    assert v.verdict == expected
+    assert v.rival == "RBF" and v.compared == 2
+    assert v.gap_low <= v.gap <= v.gap_high
+    assert "seeds: ANFIS 2, best other 2, paired 2" in v.interval and "distinct resamples" in v.interval
+
+
+def test_judge_task_counts_the_targets_each_method_meets_on_its_interval():
+    rng = np.random.default_rng(2)
+    values = {"ANFIS": ik_seed_values([_ik_errors(rng, 1.0)]), "RBF": ik_seed_values([_ik_errors(rng, 20.0)])}
+    # position p95 of the ANFIS is about 1.5 mm, of the RBF about 30 mm: a 10 mm limit the first meets, a 0.1 mm neither
+    v = verdicts.judge_task("arm", "inverse kinematics", "position p95", "mm", values, "ANFIS", "RBF", ik=True,
+                            targets=[("position p95", 10.0, "mm"), ("position median", 0.1, "mm")], **BOOT)
+    assert (v.anfis_targets, v.rival_targets) == ("1 of 2", "0 of 2")
+    assert "coarse" not in v.interval          # one seed each: no outer resampling to call coarse
+
+
+def test_seed_sums_put_the_chapters_seed_first_then_the_others_in_order():
+    def run(seed):
+        return CellResult(Cell({"seed": seed}, f"k{seed}"), "ok", {"trajectory_sums": [float(seed)] * 7}, 0.0, "")
+    stacked = verdicts.seed_sums([run(3), run(0), run(2), run(1)], 2, seed=2)
+    assert stacked.shape == (4, 1, 7)
+    assert stacked[:, 0, 0].tolist() == [2.0, 0.0, 1.0, 3.0]
+
+
+class _Constant:
+    def __init__(self, value):
+        self.value = value
+
+    def predict(self, X):
+        return np.full(len(X), self.value)
+
+
+def test_seed_models_without_a_seeds_file_is_the_published_model_alone(tmp_path):
+    model = _Constant(1.0)
+    assert verdicts.seed_models(tmp_path, model, (np.zeros(3),)) == [model]
+
+
+def test_seed_models_refuses_a_seed_model_that_is_not_the_published_one(tmp_path, monkeypatch):
+    (tmp_path / replicates.SEEDS_FILE).write_text("{}")
+    monkeypatch.setattr(replicates, "seed_models", lambda where: {0: _Constant(2.0), 1: _Constant(3.0)})
+    with pytest.raises(RuntimeError, match="is not the published one"):
+        verdicts.seed_models(tmp_path, _Constant(1.0), (np.zeros(3),))
+    got = verdicts.seed_models(tmp_path, _Constant(2.0), (np.zeros(3),))
+    assert [m.value for m in got] == [2.0, 3.0]
+
+
+def test_id_values_over_seeds_reuse_the_chapters_seed_and_predict_the_others(tmp_path, monkeypatch):
+    class Torques:
+        def __init__(self, offset):
+            self.offset = offset
+
+        def predict(self, q, qd, qdd):
+            return q + self.offset
+
+    (tmp_path / replicates.SEEDS_FILE).write_text("{}")
+    monkeypatch.setattr(replicates, "seed_models", lambda where: {0: Torques(0.0), 1: Torques(1.0)})
+    q = np.zeros((6, 2))
+    X, tau, trajectory = (q, q, q), np.zeros((6, 2)), np.repeat([0, 1, 2], 2)
+    first = np.full((3, 7), -1.0)
+    got = verdicts.id_values_over_seeds({"ANFIS": (Torques(0.0), tmp_path)}, X, tau, trajectory, first={"ANFIS": first},
+                                        probe=(q[:2], q[:2], q[:2]))
+    assert got["ANFIS"].shape == (2, 3, 7)
+    assert np.array_equal(got["ANFIS"][0], first)                  # reused, not recomputed
+    assert got["ANFIS"][1, :, 1:3].tolist() == [[2.0, 2.0]] * 3     # seed 1: an error of 1 N·m on 2 samples a trajectory
