@@ -52,3 +52,22 @@ def test_sides_name_a_metric_where_the_other_is_better(tmp_path):
     pairs = [_pair("A", "B", "position p95", "mm", 0.6, 0.5, 0.7), _pair("A", "B", "orientation p95", "deg", 0, -0.01, 0.01)]
     text = _results(tmp_path, rows, pairs).sides("A", "B", "the ANFIS", "the rival")
     assert "**the rival is better** on position p95" in text and "no difference shown on orientation p95" in text
+
+
+def _verdict_row(gap, low, high, verdict, value=(1.0, 0.9, 1.1), rival=(2.0, 1.8, 2.2)):
+    return {"gap": gap, "gap_low": low, "gap_high": high, "verdict": verdict,
+            **{f"anfis_{k}": str(v) for k, v in zip(("value", "low", "high"), value)},
+            **{f"rival_{k}": str(v) for k, v in zip(("value", "low", "high"), rival)}}
+
+
+@pytest.mark.parametrize("shifted, same", [(("-1.1", "-1.4", "-0.8", "ANFIS better"), True),
+                                           (("-0.2", "-0.9", "0.5", "no difference shown"), False)])
+def test_shifted_in_words_reads_both_rows_and_says_where_the_intervals_lie(shifted, same):
+    from nfarm.publishing.findings import shifted_in_words
+    main = _verdict_row("-1", "-1.2", "-0.8", "ANFIS better (Holm)")
+    text = shifted_in_words(_verdict_row(*shifted), main, rival="kernel ridge", described="targets beyond the box")
+    assert "targets beyond the box" in text and "1.0 mm (0.9–1.1)" in text and "kernel ridge, 2.0 mm (1.8–2.2)" in text
+    assert f"**{shifted[3]}**, against -1 mm (-1.2 to -0.8), ANFIS better (Holm)" in text
+    assert ("the paired interval lies on the same side of 0 on both." in text) == same
+    assert ("on the shifted population the paired interval holds 0, on the test split it excludes 0" in text) == (not same)
+    assert text.endswith("the shifted one is a single comparison.)")

@@ -9,18 +9,21 @@ for the torques by hand). Angles in radians unless a name says otherwise.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..learning.anfis import ANFIS
 from ..learning.jang import rmse, sinc_data
-from ..learning.learned import LearnedIK
+from ..learning.learned import LearnedIK, arm_chart, out_of_plane
 from ..learning.learned_id import LearnedID
 from ..model.dynamics import gravity_torques, rnea
 from ..model.kinematics import fk, jacobian, min_singular_value
 from ..model.robot import Robot, robot_from_dict, robot_hash, robot_to_dict, sample_configurations
 from ..solvers.ik import solve
 from ..solvers.workspace import reach, workspace_points
+from ..study import datasets, study_files
 from ..study.regions import check_single_valued, IKRegion
 from ..study.study_files import Study
 from ..solvers.workspace import workspace_volume
@@ -29,7 +32,7 @@ __all__ = ["scan", "tool_shift", "dh_transform", "dh_cases", "singular_elbows_de
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
            "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
            "sinc_fit", "best_sinc_mf", "second_share_full_elbow", "other_branch_verdict",
-           "mean_solutions_full", "learned_ik_worst", "learned_id_worst", "beats",
+           "mean_solutions_full", "IKExercises", "ik_exercises", "learned_ik_worst", "learned_id_worst", "beats",
            "median_tool_error_mm", "warm_start_iterations", "nearest_by_position", "reaches",
            "volume_error_ratio", "annulus_area", "area_verdict"]
 
@@ -234,6 +237,55 @@ def mean_solutions_full(robot: Robot, targets: int, seed: int) -> float:
 
 
 # -- chapters 6 and 7 --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class IKExercises:
+    """Chapter 7's exercises' set-up (:func:`ik_exercises`): the study's ``robot``, its splits
+    ``data`` (``"ik_train"``, ``"ik_val"``, ``"ik_test"``, ``"id_train"``, ``"id_val"``), the small
+    model's LearnedIK ``options`` and the ``model`` trained with them on the first ``samples``
+    training poses, the first ``test`` test poses ``T (test, 4, 4)``, and ``notice``: a sentence
+    for the student when the arm's plane cannot describe the arm ("" otherwise)."""
+
+    robot: Robot
+    data: Mapping[str, Mapping]
+    options: dict
+    model: LearnedIK
+    T: np.ndarray
+    samples: int
+    test: int
+    notice: str
+
+
+def ik_exercises(study_file, *, smoke: bool = False, data_dir=None, seed: int = 0, samples: int | None = None,
+                 epochs: int | None = None, test: int | None = None, max_out_of_plane_deg: float = 0.5) -> IKExercises:
+    """The study's data (built or reused, as chapter 5 builds it) and one small learned IK for
+    chapter 7's three exercises: chapter 6's options with fewer functions and epochs, in the arm's
+    plane — or on the dissertation's seven inputs for an arm whose tool leaves that plane by more
+    than ``max_out_of_plane_deg`` [deg] (the plane cannot describe its poses). ``samples``,
+    ``epochs`` and ``test`` default to 2 000, 5 and 500 (smoke: 300, 2 and 100)."""
+    study = study_files.load_study(study_file)
+    study = study_files.smoke_study(study) if smoke else study
+    robot = study.robot
+    samples = (300 if smoke else 2000) if samples is None else samples
+    epochs = (2 if smoke else 5) if epochs is None else epochs
+    test = (100 if smoke else 500) if test is None else test
+    datasets.build_datasets(study, data_dir)
+    directory = datasets.dataset_dir(study, data_dir)
+    data = {name: datasets.load(directory / f"{name}.npz", robot, study)
+            for name in ("ik_train", "ik_val", "ik_test", "id_train", "id_val")}
+    plane = np.radians(max_out_of_plane_deg)
+    notice = ""
+    if out_of_plane(data["ik_train"]["T"], arm_chart(robot)).max() <= plane:
+        options = dict(encoding="arm_plane", partition="grid", n_mfs=[1, 2, 2, 2, 2, 1], epochs=epochs,
+                       max_out_of_plane=plane)
+    else:
+        options = dict(encoding="quat_xyz", partition="grid", n_mfs=[2, 2, 2, 1, 1, 1, 1], epochs=epochs)
+        notice = (f"{robot.name}'s tool leaves the arm's vertical plane: the exercises' model takes the dissertation's "
+                  f"seven inputs")
+    model = LearnedIK(**options, random_state=seed).fit(
+        robot, {k: data["ik_train"][k][:samples] for k in ("T", "q")}, data["ik_val"])
+    return IKExercises(robot, data, options, model, data["ik_test"]["T"][:test], samples, test, notice)
 
 
 def _fit_ik(robot: Robot, train, val, options: dict, samples: int, seed: int) -> LearnedIK:

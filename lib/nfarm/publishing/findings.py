@@ -35,7 +35,8 @@ from ..study.summary import (ID_TARGET_PCT, IK_TARGETS, ROLE_RESIDUAL_BASELINE, 
                              interval_text, orientation_by_structure, paired_difference, paired_judge, read_long_table,
                              read_paired, rows_from_table, target_verdict)
 
-__all__ = ["PublishedResults", "study_in_words", "residual_baseline", "measured_in_words", "TIER_WORDS"]
+__all__ = ["PublishedResults", "study_in_words", "residual_baseline", "measured_in_words", "TIER_WORDS",
+           "shifted_in_words"]
 
 IK = "inverse kinematics"
 ID = "inverse dynamics"
@@ -226,3 +227,32 @@ def measured_in_words(t: MeasuredTest, rmse: Mapping, targets: Mapping[str, Row]
                  f"model's worst-joint error becomes {times_range(min(grown), max(grown))} what it was without it: a load "
                  f"none of them is told is a load none of them predicts.")
     return text + f" The sensor noise, which no model can predict, is {noise.max():.3g} N·m."
+
+
+def _side(row: Mapping[str, str]) -> int:
+    """The side of 0 a verdict row's paired interval lies on (-1: the ANFIS lower, 0: holds 0),
+    whatever a family-wise correction says."""
+    return -1 if float(row["gap_high"].lstrip("<")) < 0 else 1 if float(row["gap_low"].lstrip("<")) > 0 else 0
+
+
+def shifted_in_words(shifted: Mapping[str, str], main: Mapping[str, str], *, rival: str, described: str) -> str:
+    """The shifted population's verdict against the main one, in words (chapter 7.7), read back from
+    the two published verdict rows (``07_verdict_shifted.csv``'s and ``07_verdict.csv``'s
+    inverse-kinematics row, :func:`nfarm.study.summary.read_verdicts`); ``rival`` the best other
+    method's reader's label, ``described`` the population (:func:`nfarm.study.shifted.describe`)."""
+    def span(r, k):
+        return f"{r[k + '_value']} mm ({r[k + '_low']}–{r[k + '_high']})"
+
+    def gap(r):
+        return f"{r['gap']} mm ({r['gap_low']} to {r['gap_high']})"
+
+    return (f"**A shifted population.** Declared in the study file before it was drawn, {described}: poses "
+            f"just past those every model was trained, tuned and chosen on, where each extrapolates. There the ANFIS's "
+            f"95th-percentile tool position error is {span(shifted, 'anfis')} and that of the best other method, "
+            f"{rival}, {span(shifted, 'rival')}; the ANFIS less the rival {gap(shifted)}: "
+            f"**{shifted['verdict']}**, against {gap(main)}, {main['verdict']}, on the test split — "
+            + ("the paired interval lies on the same side of 0 on both." if _side(shifted) == _side(main) else
+               f"**on the shifted population the paired interval {'holds 0' if _side(shifted) == 0 else 'excludes 0'}, "
+               f"on the test split it {'holds 0' if _side(main) == 0 else 'excludes 0'}**.")
+            + (" (The main verdict's words carry Holm's correction over the arm's comparisons; the shifted one is a single "
+               "comparison.)" if "Holm" in main["verdict"] else ""))

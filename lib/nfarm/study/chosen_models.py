@@ -14,6 +14,7 @@ chapter's ``models_dir``)::
     id_seed_like/<name>/      the chosen ANFIS and the design trained on the dissertation's cubics
     id_measured/<tier>/<slot> each tier's two finalists on the measured arm, with the built arm
                               (built_arm.yaml) and its torque readings' offsets beside them
+    results/                  chapter 7's verdict and summary tables (chapter 8 reads them)
 
 Each published model is a copy of a sweep cell's (:func:`publish`) and keeps beside it the cells
 of its configuration over the seeds (:mod:`nfarm.study.replicates`), for chapter 7's intervals.
@@ -113,6 +114,11 @@ class ChosenModels:
         """A tier's finalist on the measured arm, ``slot`` ``"anfis"`` or ``"rival"``
         (:func:`nfarm.study.contest.id_model_dir`)."""
         return contest.id_model_dir(self.root, tier, slot)
+
+    @property
+    def results(self) -> Path:
+        """Chapter 7's verdict and summary tables beside the models they judge (chapter 8 reads them)."""
+        return self.root / "results"
 
     @property
     def built_arm(self) -> Path:

@@ -38,11 +38,14 @@ import numpy as np
 from ..learning.learned import ik_errors
 from .statistics import distinct_resamples, trajectory_sums
 from . import contest, replicates
-from .summary import ID_TARGET_PCT, WORST_ID, Row, Verdict, ik_seed_values, seed_comparison, targets_met, task_verdict
+from .shifted import describe as describe_shifted, shifted_ik
+from .summary import (ID_TARGET_PCT, IK_TARGETS, WORST_ID, Row, Verdict, ik_seed_values, seed_comparison, targets_met,
+                      task_verdict, with_holm)
 from .sweep import sweep_results
 
 __all__ = ["seed_models", "seed_sums", "summary_row", "judge_task", "ik_values_over_seeds", "id_values_over_seeds",
-           "measured_verdicts"]
+           "measured_verdicts", "shifted_verdict", "shifted_caption",
+           "verdict_caption", "summary_caption", "paired_caption", "wide_caption"]
 
 
 def seed_models(where: str | os.PathLike, published: Any, probe: Sequence[np.ndarray], *, seed: int = 0) -> list:
@@ -179,3 +182,66 @@ def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Map
         met = {n: targets_met(r, [ID_TARGET_PCT, ID_TARGET_PCT]) for n, r in rows.items()}
         verdicts.append(replace(verdict, anfis_targets=met[a], rival_targets=met[b]))
     return verdicts, values
+
+
+def shifted_verdict(study, published: Mapping[str, tuple[Any, str | os.PathLike]], anfis: str, rival: str, *,
+                    probe: np.ndarray, draws: int = 2000, level: float = 0.95, seed: int = 0) -> Verdict | None:
+    """The learned-IK verdict on the shifted population ``study`` declares (``study.shifted``,
+    :func:`nfarm.study.shifted.shifted_ik`; ``None`` where it declares none), read once by the
+    frozen models of the main verdict: ``anfis`` against ``rival``, each over its seeds
+    (``published`` as :func:`ik_values_over_seeds` takes it, checked on the poses ``probe``), by
+    the 95th-percentile tool position error with the study's IK targets, one comparison (Holm's
+    correction over one: none)."""
+    if study.shifted is None:
+        return None
+    targets = shifted_ik(study)
+    values = ik_values_over_seeds(study.robot, {name: published[name] for name in (anfis, rival)}, targets["T"],
+                                  targets["q"], probe=probe, seed=seed)
+    return with_holm([judge_task(
+        study.robot.name, "inverse kinematics, shifted population", "position p95", "mm", values, anfis, rival, ik=True,
+        targets=[(metric, limit, unit) for _, metric, limit, unit in IK_TARGETS], units="shifted targets",
+        draws=draws, level=level, seed=seed)])[0]
+
+
+def shifted_caption(study, level: float = 0.95) -> str:
+    """The shifted verdict table's caption: what the population is and how it was judged."""
+    return (f"The learned-IK verdict on a shifted population read once: {describe_shifted(study)} — the chosen ANFIS "
+            f"and the best other method of the main verdict, frozen, over the same seeds, with the same two-level "
+            f"{level:.0%} bootstrap (one comparison: no family-wise correction)")
+
+
+# --------------------------------------------------------------------------------------------
+# The captions of chapter 7.7's published tables
+
+
+def verdict_caption(level: float, comparisons: int, alpha: float) -> str:
+    """The verdict table's caption: ``comparisons`` distinct comparisons under Holm's correction at
+    family-wise error ``alpha``."""
+    return (f"The verdict on held-out data: per task, the methods compared (each chosen on validation), each pooled "
+            f"over its seeds and the test units with a two-level {level:.0%} bootstrap interval (kind in the 'interval' "
+            f"column), the ANFIS's rank, its difference from the best other method paired by seed and unit, and the "
+            f"study's targets met on those intervals (docs/STUDY.md). A difference is shown where its interval excludes "
+            f"0 and its bootstrap p-value (p), corrected by Holm's method over the arm's {comparisons} distinct "
+            f"comparisons (holm_p), is below {alpha:g}: the family-wise error of the whole verdict at most {alpha:.0%}")
+
+
+def summary_caption(level: float, draws: int) -> str:
+    """The long summary table's caption (``07_summary``)."""
+    return (f"The study's result: every method's errors on held-out data, a method chapter 6 trained over several seeds "
+            f"pooled over them (a two-level {level:.0%} bootstrap interval over the seeds and the test units), one "
+            f"trained once or exact over the test units ({draws:,} resamples; the kind of each interval in the 'spread' "
+            f"column)")
+
+
+def paired_caption(level: float) -> str:
+    """The paired comparisons' caption (``07_paired``)."""
+    return (f"The comparisons the abstract states: each method less the one it is compared with, seed by seed on the "
+            f"same test poses or trajectories, with the paired two-level {level:.0%} interval where either was trained "
+            f"over several seeds (one with a single model beside each seed's model), else over the test units ('spread' "
+            f"names the kind; an interval that holds 0: no difference)")
+
+
+def wide_caption(task: str, level: float) -> str:
+    """A task's wide table's caption (``07_summary_ik`` and the like)."""
+    return (f"{task[0].upper() + task[1:]} on held-out data: value ({level:.0%} interval over the seeds and the test "
+            f"units for a method trained over several seeds, over the test units for the others)")
