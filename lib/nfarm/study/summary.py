@@ -41,7 +41,7 @@ from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_
                          nrmse_from_sums, resampled_quantile, resolved_joints)
 from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
 
-__all__ = ["ORIENTATION_BY_STRUCTURE_DEG", "orientation_by_structure", "IK_METRICS", "Row", "DIGITS", "SUMMARY_FLOORS", "published", "rows_from_table", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison",
+__all__ = ["ORIENTATION_BY_STRUCTURE_DEG", "orientation_by_structure", "IK_METRICS", "Row", "DIGITS", "SUMMARY_FLOORS", "published", "rows_from_table", "pooled_rows", "pooled_pairs", "ik_rows", "id_rows", "ik_difference", "largest_difference", "ik_seed_values", "seed_comparison", "seed_estimates",
            "long_table", "wide_table", "interval_text", "best_id_baseline",
            "resolved_sums", "bootstrap_resolved", "resolved_on_validation", "with_resolved_worst", "WORST_ID",
            "target_verdict", "IK_TARGETS", "ID_TARGET_PCT", "VERDICT_COLUMNS", "VERDICT_HEAD", "verdict_display", "reader_label", "Verdict", "task_verdict", "targets_met",
@@ -229,8 +229,7 @@ def seed_comparison(values: Mapping[str, np.ndarray], anfis: str, rival: str, me
         (True, 3, 3)
     """
     boot = {"draws": draws, "level": level, "seed": seed}
-    columns, statistic = _pooled_ik(metric) if ik else (slice(None), _pooled_worst(resolved, normalised))
-    values = {name: np.asarray(v, float)[..., columns] for name, v in values.items()}     # what the metric reads
+    values, statistic = _seed_metric(values, metric, ik, resolved, normalised)
     estimates = {name: bootstrap_seeds(v, statistic, **boot) for name, v in values.items()}
     a, b = np.asarray(values[anfis], float), np.asarray(values[rival], float)
     common = min(len(a), len(b))
@@ -240,6 +239,21 @@ def seed_comparison(values: Mapping[str, np.ndarray], anfis: str, rival: str, me
     gap = bootstrap_seeds(np.concatenate([a[:common], b[:common]], axis=-1),
                           lambda X: statistic(X[..., :width]) - statistic(X[..., width:]), **boot)
     return estimates, gap
+
+
+def _seed_metric(values: Mapping[str, np.ndarray], metric: str, ik: bool, resolved, normalised: bool):
+    """The columns of each method's seed values that ``metric`` reads, and its statistic of pooled rows."""
+    columns, statistic = _pooled_ik(metric) if ik else (slice(None), _pooled_worst(resolved, normalised))
+    return {name: np.asarray(v, float)[..., columns] for name, v in values.items()}, statistic
+
+
+def seed_estimates(values: Mapping[str, np.ndarray], metric: str, *, ik: bool = False, resolved=None,
+                   normalised: bool = True, draws: int = 2000, level: float = 0.95, seed: int = 0) -> dict[str, Estimate]:
+    """Every method's ``metric`` over its seeds' models and the test units, with the two-level
+    interval: :func:`seed_comparison`'s estimates without the paired difference (the same
+    resamples, so the same numbers)."""
+    values, statistic = _seed_metric(values, metric, ik, resolved, normalised)
+    return {name: bootstrap_seeds(v, statistic, draws=draws, level=level, seed=seed) for name, v in values.items()}
 
 
 _PER_JOINT = re.compile(r"τ(?P<joint>\d+) (?P<kind>N?RMSE)( \(below noise\))?")

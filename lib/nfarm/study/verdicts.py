@@ -39,7 +39,7 @@ from ..learning.learned import ik_errors
 from .statistics import distinct_resamples, trajectory_sums
 from . import contest, replicates
 from .shifted import describe as describe_shifted, shifted_ik
-from .summary import (ID_TARGET_PCT, IK_TARGETS, WORST_ID, Row, Verdict, ik_seed_values, seed_comparison, targets_met,
+from .summary import (ID_TARGET_PCT, IK_TARGETS, WORST_ID, Row, Verdict, ik_seed_values, seed_comparison, seed_estimates, targets_met,
                       task_verdict, with_holm)
 from .sweep import sweep_results
 
@@ -97,7 +97,7 @@ def judge_task(arm: str, task: str, metric: str, unit: str, values: Mapping[str,
     est, gap = seed_comparison(values, anfis, rival, metric, **given, **boot)
     met: dict[str, list[tuple[Row, float]]] = {}
     for target_metric, limit, target_unit in targets:
-        on = est if target_metric == metric else seed_comparison(values, anfis, rival, target_metric, **given, **boot)[0]
+        on = est if target_metric == metric else seed_estimates(values, target_metric, **given, **boot)
         for name in values:
             met.setdefault(name, []).append((summary_row(task, name, target_metric, target_unit, on[name], scale), limit))
     kind = (f"{level:.0%} two-level bootstrap, seeds × {est[anfis].rows:,} {units}; seeds: ANFIS {est[anfis].seeds}, "
