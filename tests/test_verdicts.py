@@ -101,3 +101,25 @@ def test_id_values_over_seeds_reuse_the_chapters_seed_and_predict_the_others(tmp
     assert got["ANFIS"].shape == (2, 3, 7)
     assert np.array_equal(got["ANFIS"][0], first)                  # reused, not recomputed
     assert got["ANFIS"][1, :, 1:3].tolist() == [[2.0, 2.0]] * 3     # seed 1: an error of 1 N·m on 2 samples a trajectory
+
+
+def test_the_task_verdicts_judge_each_task_on_its_metric_and_targets():
+    rng = np.random.default_rng(3)
+    ik = {m: ik_seed_values([_ik_errors(rng, s) for _ in range(2)]) for m, s in (("ANFIS", 1.0), ("RBF", 3.0))}
+    v = verdicts.ik_verdict("arm", ik, "ANFIS", "RBF", exact="closed form", **BOOT)
+    assert (v.task, v.metric, v.unit, v.verdict, v.exact) == ("inverse kinematics", "position p95", "mm", "ANFIS better",
+                                                               "closed form")
+    ids = {m: np.stack([_sums(rng, s) for _ in range(2)]) for m, s in (("ANFIS", 4.0), ("ridge", 1.0))}
+    w = verdicts.rigid_id_verdict("arm", ids, "ANFIS", "ridge", resolved=np.ones(3, bool), **BOOT)
+    assert (w.task, w.unit, w.verdict) == ("rigid-body inverse dynamics", "%", "rival better")
+    assert w.rival_value < w.anfis_value
+
+
+def test_seed_values_by_task_keys_every_method_by_its_task():
+    values, resolved_by = verdicts.seed_values_by_task({"A": np.zeros((2, 5, 7))}, {"B": np.ones((2, 4, 10))}, "r",
+                                                       measured={"C": np.ones((3, 4, 10))},
+                                                       reference=("NE", np.ones((4, 10))), measured_resolved="m")
+    assert sorted(values) == [("ID, measured arm", "C"), ("ID, measured arm", "NE"), ("inverse dynamics", "B"),
+                              ("inverse kinematics", "A")]
+    assert values["ID, measured arm", "NE"].shape == (1, 4, 10)
+    assert resolved_by == {"inverse dynamics": "r", "ID, measured arm": "m"}

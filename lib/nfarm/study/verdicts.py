@@ -44,7 +44,7 @@ from .summary import (ID_TARGET_PCT, IK_TARGETS, WORST_ID, Row, Verdict, ik_seed
 from .sweep import sweep_results
 
 __all__ = ["seed_models", "seed_sums", "summary_row", "judge_task", "ik_values_over_seeds", "id_values_over_seeds",
-           "measured_verdicts", "shifted_verdict", "shifted_caption",
+           "measured_verdicts", "ik_verdict", "rigid_id_verdict", "seed_values_by_task", "shifted_verdict", "shifted_caption",
            "verdict_caption", "summary_caption", "paired_caption", "wide_caption"]
 
 
@@ -182,6 +182,44 @@ def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Map
         met = {n: targets_met(r, [ID_TARGET_PCT, ID_TARGET_PCT]) for n, r in rows.items()}
         verdicts.append(replace(verdict, anfis_targets=met[a], rival_targets=met[b]))
     return verdicts, values
+
+
+def ik_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, exact: str, draws: int = 2000,
+               level: float = 0.95, seed: int = 0) -> Verdict:
+    """The learned-IK task's verdict: ``anfis`` against ``rival`` by the 95th-percentile tool position
+    error [mm] over their seeds (``values`` as :func:`ik_values_over_seeds` gives them), with the
+    study's IK targets (:data:`nfarm.study.summary.IK_TARGETS`); ``exact`` names the exact method."""
+    return judge_task(arm, "inverse kinematics", "position p95", "mm", values, anfis, rival, ik=True,
+                      targets=[(metric, limit, unit) for _, metric, limit, unit in IK_TARGETS], exact=exact,
+                      draws=draws, level=level, seed=seed)
+
+
+def rigid_id_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, resolved,
+                     draws: int = 2000, level: float = 0.95, seed: int = 0) -> Verdict:
+    """The rigid-body ID task's verdict: ``anfis`` against ``rival`` by the worst ``resolved`` joint's
+    NRMSE [%] over their seeds and the test trajectories (``values`` as :func:`id_values_over_seeds`
+    gives them), with the study's ≤ 5 % target; Newton–Euler, which made the torques, is exact."""
+    return judge_task(arm, "rigid-body inverse dynamics", WORST_ID, "%", values, anfis, rival,
+                      targets=[(WORST_ID, ID_TARGET_PCT, "%")], exact="Newton–Euler (the rigid-body model that made the torques)",
+                      units="test trajectories", scale=100.0, resolved=resolved, draws=draws, level=level, seed=seed)
+
+
+def seed_values_by_task(ik_values: Mapping[str, np.ndarray], id_values: Mapping[str, np.ndarray], resolved, *,
+                        measured: Mapping[str, np.ndarray] | None = None, reference: tuple[str, np.ndarray] | None = None,
+                        measured_resolved=None) -> tuple[dict[tuple[str, str], np.ndarray], dict[str, Any]]:
+    """Every method's values over its seeds by ``(task, method)`` as
+    :func:`nfarm.study.summary.pooled_rows` takes them, and the resolved joints by task: the IK's,
+    the rigid-body ID's and, for a measured arm, each contestant's (``measured``) with the reference
+    ``(name, sums (T, 1 + 3n))`` (Newton–Euler alone, one model) beside them."""
+    values = {("inverse kinematics", n): v for n, v in ik_values.items()} | \
+             {("inverse dynamics", n): v for n, v in id_values.items()}
+    resolved_by = {"inverse dynamics": resolved}
+    if measured is not None:
+        values |= {("ID, measured arm", n): v for n, v in measured.items()}
+        if reference is not None:
+            values["ID, measured arm", reference[0]] = np.asarray(reference[1])[None]
+        resolved_by["ID, measured arm"] = measured_resolved
+    return values, resolved_by
 
 
 def shifted_verdict(study, published: Mapping[str, tuple[Any, str | os.PathLike]], anfis: str, rival: str, *,
