@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from nfarm.publishing.findings import PublishedResults
-from nfarm.study.summary import Paired, Row, long_table, paired_table
+from nfarm.study.paired import Paired, paired_table
+from nfarm.study.rows import Row, long_table
 
 IK = "inverse kinematics"
 

@@ -1,7 +1,7 @@
 """Issue 64: the learned-IK contest judges the learner, not the structure given to one side.
 Every rival can be trained inside the ANFIS's structure (nfarm.learning.ik_rivals, structure
 "arm"), every structured model can drop its closure (the ablation), and no comparison is claimed
-where two models compute a quantity alike (nfarm.study.summary.paired_judge) or the structure
+where two models compute a quantity alike (nfarm.study.paired.paired_judge) or the structure
 sets the orientation (orientation_by_structure)."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from nfarm.study import contest
 from nfarm.study.ablation import STRUCTURE_LABELS, structure_ablation
 from nfarm.study.regions import ik_samples
 from nfarm.study.study_files import load_study
-from nfarm.study.summary import orientation_by_structure, paired_judge
+from nfarm.study.paired import orientation_by_structure, paired_judge
 
 STUDY = load_study(PARAMS / "studies" / "intelbot5.yaml")
 ROBOT = STUDY.robot

@@ -11,7 +11,7 @@ from nfarm.study import ik_test_report as report
 from nfarm.study.ablation import STRUCTURE_LABELS
 from nfarm.study.regions import ik_samples
 from nfarm.study.study_files import load_study
-from nfarm.study.summary import interval_text
+from nfarm.study.rows import interval_text
 
 STUDY = load_study(PARAMS / "studies" / "intelbot5.yaml")
 ROBOT, REGION = STUDY.robot, STUDY.ik_region

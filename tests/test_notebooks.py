@@ -30,7 +30,7 @@ def run_chapter(notebook, output, parameters):
 REQUIRED_PARAMETERS = {"seed", "smoke", "out_dir"}
 
 
-#: Tables of every row saved for machines (nfarm.study.summary.long_table); their pages show reading copies.
+#: Tables of every row saved for machines (nfarm.study.rows.long_table); their pages show reading copies.
 LONG_TABLES = {"07_summary", "08_learned"}
 
 #: What a page's prose (its markdown, code and tables left out) must not hold, each a kind and a pattern.

@@ -60,7 +60,7 @@ def results_disagreeing(summaries: dict[str, Path], learned: Path | None = None,
     best other method's values, written to three digits, against the summary's read to three); a
     verdict or chapter 8 row that no summary holds is reported too (a number without its table)."""
     from nfarm.presentation.tables import shown
-    from nfarm.study.summary import read_long_table, read_verdicts
+    from nfarm.study.result_tables import read_long_table, read_verdicts
 
     found: dict[tuple, dict[str, str]] = {}
     summary = {}
@@ -100,7 +100,7 @@ def test_the_check_finds_a_result_that_two_chapters_state_differently(tmp_path):
     row = "inverse kinematics,ANFIS,learned (chosen),position p95,mm,{v},0.9,0.97,2000,0.95,pooled\n"
     (tmp_path / "07_summary.csv").write_text(head + row.format(v="0.9355"), encoding="utf-8")
     (tmp_path / "08_learned.csv").write_text("arm," + head + "a," + row.format(v="0.9001"), encoding="utf-8")
-    from nfarm.study.summary import VERDICT_COLUMNS
+    from nfarm.study.result_tables import VERDICT_COLUMNS
     values = {c: "" for c in VERDICT_COLUMNS} | {"arm": "a", "task": "inverse kinematics", "metric": "position p95",
                                                  "anfis": "ANFIS", "anfis_value": "0.936", "rival": "RBF", "rival_value": "3.97"}
     (tmp_path / "07_verdict.csv").write_text(",".join(VERDICT_COLUMNS) + "\n" + ",".join(values[c] for c in VERDICT_COLUMNS)

@@ -11,8 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from nfarm.study.statistics import bootstrap_p, bootstrap_seeds, distinct_resamples, holm
-from nfarm.study.summary import (FAMILY_ALPHA, NO_DIFFERENCE, conclusion, p_text, read_verdicts, task_verdict,
-                                 verdict_table, with_holm)
+from nfarm.publishing.conclusion import conclusion
+from nfarm.study.result_tables import read_verdicts
+from nfarm.study.verdict_rows import FAMILY_ALPHA, NO_DIFFERENCE, p_text, task_verdict, verdict_table, with_holm
 
 
 def holm_procedure(p: np.ndarray, alpha: float) -> set[int]:

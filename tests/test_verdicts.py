@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from nfarm.study import replicates, verdicts
-from nfarm.study.summary import ik_seed_values
+from nfarm.study.rows import ik_seed_values
 from nfarm.study.sweep import CellResult
 from nfarm.study.sweep_files import Cell
 

@@ -10,7 +10,8 @@ Example (two IK methods of a summary and their paired difference):
 
     >>> import tempfile
     >>> from pathlib import Path
-    >>> from nfarm.study.summary import Paired, Row, long_table, paired_table
+    >>> from nfarm.study.paired import Paired, paired_table
+    >>> from nfarm.study.rows import Row, long_table
     >>> rows = [Row("inverse kinematics", m, "", "position p95", "mm", v, v - 0.1, v + 0.1, 200, 0.95, "")
     ...         for m, v in (("ANFIS", 0.6), ("RBF", 1.3))]
     >>> pair = Paired("inverse kinematics", "ANFIS", "RBF", "position p95", "mm", -0.7, -0.8, -0.6, 200, 0.95, "")
@@ -31,9 +32,10 @@ import numpy as np
 
 from ..presentation.wording import listed, times, times_range
 from ..study.measured_test import NE, MeasuredTest, against
-from ..study.summary import (ID_TARGET_PCT, IK_TARGETS, ROLE_RESIDUAL_BASELINE, SUMMARY_FLOORS, WORST_ID, Row,
-                             interval_text, orientation_by_structure, paired_difference, paired_judge, read_long_table,
-                             read_paired, rows_from_table, target_verdict)
+from ..study.paired import orientation_by_structure, paired_difference, paired_judge
+from ..study.result_tables import SUMMARY_FLOORS, read_long_table, read_paired
+from ..study.rows import ROLE_RESIDUAL_BASELINE, WORST_ID, Row, interval_text, rows_from_table
+from ..study.verdict_rows import ID_TARGET_PCT, IK_TARGETS, target_verdict
 
 __all__ = ["PublishedResults", "study_in_words", "residual_baseline", "measured_in_words", "TIER_WORDS",
            "shifted_in_words"]
@@ -50,7 +52,7 @@ TIER_WORDS = {"generic": "only what holds for every rigid arm (torque affine in 
 class PublishedResults:
     """One arm's published summary and paired comparisons (``tables``: the directory holding
     ``07_summary.csv`` and ``07_paired.csv``), read once; ``floors`` the values shown as below
-    their unit's rounding (:data:`nfarm.study.summary.SUMMARY_FLOORS`)."""
+    their unit's rounding (:data:`nfarm.study.result_tables.SUMMARY_FLOORS`)."""
 
     def __init__(self, tables: str | os.PathLike, *, floors: Mapping[str, float] = SUMMARY_FLOORS):
         tables = Path(tables)
@@ -94,7 +96,7 @@ class PublishedResults:
     def sides(self, a: str, b: str, ours: str, theirs: str) -> str:
         """Where ``a`` is better, worse or not shown to differ from ``b`` on every IK metric with an
         interval — with no orientation claim where a structure, not a learner, sets either's
-        orientation (:func:`nfarm.study.summary.orientation_by_structure`)."""
+        orientation (:func:`nfarm.study.paired.orientation_by_structure`)."""
         metrics = self.ik_metrics(a)
         side: dict[int, list[str]] = {-1: [], 1: [], 0: []}
         fixed = any(orientation_by_structure({m: self._text_of[IK, x, m] for m in metrics}) for x in (a, b))
@@ -238,7 +240,7 @@ def _side(row: Mapping[str, str]) -> int:
 def shifted_in_words(shifted: Mapping[str, str], main: Mapping[str, str], *, rival: str, described: str) -> str:
     """The shifted population's verdict against the main one, in words (chapter 7.7), read back from
     the two published verdict rows (``07_verdict_shifted.csv``'s and ``07_verdict.csv``'s
-    inverse-kinematics row, :func:`nfarm.study.summary.read_verdicts`); ``rival`` the best other
+    inverse-kinematics row, :func:`nfarm.study.result_tables.read_verdicts`); ``rival`` the best other
     method's reader's label, ``described`` the population (:func:`nfarm.study.shifted.describe`)."""
     def span(r, k):
         return f"{r[k + '_value']} mm ({r[k + '_low']}–{r[k + '_high']})"

@@ -17,6 +17,7 @@ from ..infra.paths import FIGURES, ROOT, atomic_path, shown_path
 from .abstract import (ABSTRACT_FRAMING, ABSTRACT_LIMITS, ABSTRACT_QUESTION, ANSWERS_KIND, DISSERTATION_TITLE,
                        DISSERTATION_TITLE_EN, abstract_answers, verdict_rows, warm_start_rows)
 from .build_info import current_commit, machine
+from .conclusion import VERDICT_HEAD, conclusion, verdict_display
 from .editions import Edition
 from .manifest import chapter_files
 from .references import references_html
@@ -83,9 +84,7 @@ def _figures_html(figures_dir: Path, subdir: str, prefix: str, shown: Path) -> l
 
 
 def _verdict_html(rows: list[dict[str, str]], warm: dict[str, list[dict[str, str]]] | None = None) -> list[str]:
-    """The verdict table and the conclusion (:func:`nfarm.study.summary.conclusion`) as HTML."""
-    from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
-
+    """The verdict table and the conclusion (:func:`nfarm.publishing.conclusion.conclusion`) as HTML."""
     if not rows:
         return ["<p><b>Verdict.</b> Not yet computed: chapter 7 has not published its verdict table.</p>"]
     head, body = VERDICT_HEAD, verdict_display(rows)

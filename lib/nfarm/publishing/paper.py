@@ -35,6 +35,7 @@ from .abstract import (ABSTRACT_FRAMING, ABSTRACT_LIMITS, ABSTRACT_QUESTION, ANS
                        DISSERTATION_TITLE_EN, abstract_answers, verdict_rows, warm_start_rows)
 from .build_info import current_commit
 from .citations import edition_letter, numbered_equations, numbered_outputs
+from .conclusion import VERDICT_HEAD, conclusion, verdict_display
 from .export import chapter_title
 from .index import PAPER_NAME
 from .references import BIBLIOGRAPHY, pandoc_path
@@ -260,8 +261,6 @@ def _chapter_markdown(chapter: PaperChapter, assets: Path, labels: dict[str, str
 
 def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
     """The verdict table and the conclusion, as on the index (:func:`nfarm.publishing.abstract.verdict_rows`)."""
-    from ..study.summary import VERDICT_HEAD, conclusion, verdict_display
-
     rows = verdict_rows(figures_dir, arms)
     if not rows:
         return "# Verdict {.unnumbered}\n\nNot yet computed: chapter 7 has not published its verdict table."
@@ -273,7 +272,7 @@ def _verdict(figures_dir: Path, arms: list[Edition]) -> str:
             + " ".join(_escape(sentence) for sentence in conclusion(rows, warm_start_rows(figures_dir, arms))))
 
 
-#: The long tables, every row of a chapter's results for machines (:func:`nfarm.study.summary.long_table`),
+#: The long tables, every row of a chapter's results for machines (:func:`nfarm.study.rows.long_table`),
 #: whose reading copies the chapters show: the PDF sets them whole in its appendix.
 LONG_TABLES = ("07_summary", "08_learned")
 

@@ -33,7 +33,8 @@ from ..presentation.tables import Table, shown
 from ..presentation.wording import listed, torque_columns, worst_of
 from .configurations import RULE_BASE, configuration_label, counts, no_difference, span, value_range
 from .statistics import resolved_joints, separation_level
-from .summary import ID_TARGET_PCT, with_resolved_worst
+from .rows import with_resolved_worst
+from .verdict_rows import ID_TARGET_PCT
 from .sweep import CellResult, Replicates, by_configuration
 
 __all__ = ["ID_FLOOR", "MODEL_FREE", "TorqueReading", "torque_reading", "same", "comparison_table", "wall_time_table",
@@ -85,7 +86,7 @@ class TorqueReading:
 
     def configurations(self, runs: Iterable[CellResult], source: str) -> list[Replicates]:
         """A sweep's configurations over their seeds, the worst joint taken over the resolved joints
-        of the per-joint metric ``source`` (:func:`nfarm.study.summary.with_resolved_worst`)."""
+        of the per-joint metric ``source`` (:func:`nfarm.study.rows.with_resolved_worst`)."""
         return with_resolved_worst(by_configuration(runs), self.resolved, source)
 
 
@@ -147,7 +148,7 @@ def best_model_free(results: Sequence[Replicates]) -> Replicates:
 def comparison_prose(reading: TorqueReading, results: Sequence[Replicates], best: Replicates) -> str:
     """Section 6.4's findings in words: which joints the worst is taken over, the best
     configuration without the arm's parameters (``best``) and the study's target
-    (:data:`nfarm.study.summary.ID_TARGET_PCT`), the generic tier's best, the configurations
+    (:data:`nfarm.study.verdict_rows.ID_TARGET_PCT`), the generic tier's best, the configurations
     not shown to differ from it, the dissertation's own-state design, a single rule, and the
     identification on the regressor (a reference)."""
     r_, names, n = reading, reading.joint_names, len(reading.joint_names)

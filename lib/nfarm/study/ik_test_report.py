@@ -40,8 +40,10 @@ from ..solvers import ik
 from ..solvers.geometric_ik import in_class
 from . import contest
 from .ablation import STRUCTURE_LABELS, linear_on_encoding, structure_ablation
-from .summary import (IK_METRICS, IK_TARGETS, ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_EXACT, ROLE_NUMERICAL,
-                      ROLE_RECIPE, Row, ik_difference, ik_rows, interval_text, target_verdict)
+from .paired import ik_difference
+from .rows import (IK_METRICS, ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_EXACT, ROLE_NUMERICAL, ROLE_RECIPE, Row, ik_rows,
+                   interval_text)
+from .verdict_rows import IK_TARGETS, target_verdict
 
 __all__ = ["FLOOR", "DISS", "FULL", "LM_NAME", "CLOSED_NAME", "LINEAR", "ANFIS", "EXACT_JOINT_DEG", "IKTest",
            "evaluate_ik", "joint_errors_table", "tool_errors_table", "timing_table", "ik_summaries", "accuracy_prose", "closed_form_prose", "Credit",
@@ -190,7 +192,7 @@ def ik_summaries(tested: IKTest, *, draws: int = 2000, level: float = 0.95,
                  seed: int = 0) -> tuple[list[tuple[str, str]], dict[str, dict[str, Row]]]:
     """The methods section 7.7 tabulates with their roles (``(name, role)``: the chosen ANFIS,
     the recipe on the region's and on its full-range data, the best rival, the closed form, LM)
-    and each one's rows (:func:`nfarm.study.summary.ik_rows`: metric → row, with its bootstrap
+    and each one's rows (:func:`nfarm.study.rows.ik_rows`: metric → row, with its bootstrap
     interval over the test poses; LM without the joint RMSE, whose "errors" are other branches)."""
     errors = tested.errors
     ik_methods = [(tested.chosen, ROLE_CHOSEN), (DISS, ROLE_RECIPE)] + \
@@ -262,7 +264,7 @@ def closed_form_prose(tested: IKTest, *, floor: float = FLOOR) -> str | None:
 class Credit:
     """The credit ablation (:func:`encoding_credit`): ``errors``: ``(encoding, learner)`` → the
     test poses' :func:`~nfarm.learning.learned.ik_errors`; ``rows``: the same keys → metric →
-    :class:`~nfarm.study.summary.Row` (bootstrap intervals over the poses); ``recipe_encoding``:
+    :class:`~nfarm.study.rows.Row` (bootstrap intervals over the poses); ``recipe_encoding``:
     the recipe's encoding; ``rival``: the best rival's name (``"best rival: <rbf>"`` is its learner
     on its own encoding); ``moved``: the learner of its configuration trained on the other one."""
 

@@ -27,8 +27,9 @@ from ..presentation.wording import worst_of
 from . import contest
 from .statistics import (Interval, bootstrap_nrmse, resolved_joints, trajectory_maxima, trajectory_sums,
                          worst_difference)
-from .summary import (ID_TARGET_PCT, ROLE_CHOSEN, ROLE_FRICTION_ID, ROLE_LEARNED_ALONE, ROLE_NUMERICAL, ROLE_PHYSICS,
-                      ROLE_RESIDUAL_BASELINE, ROLE_TIER_ANFIS, ROLE_TIER_RIVAL, Row, bootstrap_resolved, target_verdict)
+from .rows import (ROLE_CHOSEN, ROLE_FRICTION_ID, ROLE_LEARNED_ALONE, ROLE_NUMERICAL, ROLE_PHYSICS,
+                   ROLE_RESIDUAL_BASELINE, ROLE_TIER_ANFIS, ROLE_TIER_RIVAL, Row, bootstrap_resolved)
+from .verdict_rows import ID_TARGET_PCT, target_verdict
 from .sweep import sweep_results
 from .sweep_files import Sweep
 

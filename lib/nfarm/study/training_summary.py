@@ -1,6 +1,6 @@
 """Chapter 6's summary: what it chose, in a few lines of Markdown — the learned IK the contest
 chose, the best ANFIS for the inverse dynamics without the arm's parameters against the study's
-target (:data:`nfarm.study.summary.ID_TARGET_PCT`) and the best scikit-learn baseline, and each
+target (:data:`nfarm.study.verdict_rows.ID_TARGET_PCT`) and the best scikit-learn baseline, and each
 tier's best on the measured arm. Every number is a validation number: chapter 7 reads the test
 set once, with the chosen models frozen.
 """
@@ -17,7 +17,7 @@ from .chosen_models import ChosenIK
 from .id_comparison_report import TorqueReading, baseline_winner, same
 from .id_contest_report import pct
 from .ik_contest_report import mm_text, seeds_text
-from .summary import ID_TARGET_PCT
+from .verdict_rows import ID_TARGET_PCT
 from .sweep import Replicates
 
 __all__ = ["summary_prose"]

@@ -6,9 +6,9 @@ contest's finalists on seed 0 and on :data:`nfarm.study.contest.SPREAD_SEEDS`, a
 models of a published configuration beside it (``seeds.json``, :mod:`nfarm.study.replicates`).
 Here each method's errors on the test units (poses for IK, trajectories for ID) are stacked over
 its seeds — ``(S, N, k)``, the chapter's seed first — and judged by
-:func:`nfarm.study.summary.seed_comparison`: a two-level bootstrap (the seeds resampled, then the
+:func:`nfarm.study.paired.seed_comparison`: a two-level bootstrap (the seeds resampled, then the
 test units), the gap paired by seed and unit. :func:`judge_task` turns that into a
-:class:`nfarm.study.summary.Verdict` with the study's targets met on the same intervals;
+:class:`nfarm.study.verdict_rows.Verdict` with the study's targets met on the same intervals;
 :func:`measured_verdicts` judges the measured arm tier by tier.
 
 Example (two methods on two seeds of 30 test poses; the rival's position errors three times the
@@ -39,8 +39,9 @@ from ..learning.learned import ik_errors
 from .statistics import distinct_resamples, trajectory_sums
 from . import contest, replicates
 from .shifted import describe as describe_shifted, shifted_ik
-from .summary import (ID_TARGET_PCT, IK_TARGETS, WORST_ID, Row, Verdict, ik_seed_values, seed_comparison, seed_estimates, targets_met,
-                      task_verdict, with_holm)
+from .paired import seed_comparison
+from .rows import WORST_ID, Row, ik_seed_values, seed_estimates
+from .verdict_rows import ID_TARGET_PCT, IK_TARGETS, Verdict, targets_met, task_verdict, with_holm
 from .sweep import sweep_results
 
 __all__ = ["seed_models", "seed_sums", "summary_row", "judge_task", "ik_values_over_seeds", "id_values_over_seeds",
@@ -76,8 +77,8 @@ def seed_sums(runs: Sequence, n_joints: int, *, seed: int = 0) -> np.ndarray:
 
 
 def summary_row(task: str, method: str, metric: str, unit: str, estimate, scale: float = 1.0) -> Row:
-    """A two-level estimate (of :func:`nfarm.study.summary.seed_comparison`) as a summary
-    :class:`~nfarm.study.summary.Row`, its value and interval times ``scale`` (what the targets
+    """A two-level estimate (of :func:`nfarm.study.paired.seed_comparison`) as a summary
+    :class:`~nfarm.study.rows.Row`, its value and interval times ``scale`` (what the targets
     are judged on)."""
     return Row(task, method, "", metric, unit, scale * estimate.value, scale * estimate.low, scale * estimate.high,
                estimate.draws, estimate.level, "")
@@ -86,10 +87,10 @@ def summary_row(task: str, method: str, metric: str, unit: str, estimate, scale:
 def judge_task(arm: str, task: str, metric: str, unit: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *,
                targets: Sequence[tuple[str, float, str]] = (), exact: str = "", units: str = "test poses",
                scale: float = 1.0, draws: int = 2000, level: float = 0.95, seed: int = 0, **given) -> Verdict:
-    """One task's :class:`~nfarm.study.summary.Verdict` on two-level intervals: the ``anfis``
+    """One task's :class:`~nfarm.study.verdict_rows.Verdict` on two-level intervals: the ``anfis``
     against ``rival`` on ``metric`` (in ``unit`` after multiplying by ``scale``), from each
     method's values over its seeds (``values``: method → ``(S, N, k)``, as
-    :func:`~nfarm.study.summary.seed_comparison` takes them, with its options ``given``:
+    :func:`~nfarm.study.paired.seed_comparison` takes them, with its options ``given``:
     ``ik=True``, ``resolved=…``); ``targets`` the study's targets ``(metric, limit, unit)`` judged
     for each compared method on the same intervals; ``units`` names the test units in the
     interval's description."""
@@ -114,7 +115,7 @@ def ik_values_over_seeds(robot, published: Mapping[str, tuple[Any, str | os.Path
                          probe: np.ndarray, first: Mapping[str, Mapping[str, np.ndarray]] | None = None,
                          seed: int = 0) -> dict[str, np.ndarray]:
     """Each published IK method's errors on the targets ``T (N, 4, 4)`` (true joints ``q (N, n)``)
-    over its seeds, as :func:`~nfarm.study.summary.ik_seed_values` stacks them: ``published``
+    over its seeds, as :func:`~nfarm.study.rows.ik_seed_values` stacks them: ``published``
     maps a method to its published model and the directory it was published in
     (:func:`seed_models`, checked on the targets ``probe``); ``first`` the chapter seed's errors
     where already computed (:func:`nfarm.learning.learned.ik_errors`), reused."""
@@ -188,7 +189,7 @@ def ik_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: st
                level: float = 0.95, seed: int = 0) -> Verdict:
     """The learned-IK task's verdict: ``anfis`` against ``rival`` by the 95th-percentile tool position
     error [mm] over their seeds (``values`` as :func:`ik_values_over_seeds` gives them), with the
-    study's IK targets (:data:`nfarm.study.summary.IK_TARGETS`); ``exact`` names the exact method."""
+    study's IK targets (:data:`nfarm.study.verdict_rows.IK_TARGETS`); ``exact`` names the exact method."""
     return judge_task(arm, "inverse kinematics", "position p95", "mm", values, anfis, rival, ik=True,
                       targets=[(metric, limit, unit) for _, metric, limit, unit in IK_TARGETS], exact=exact,
                       draws=draws, level=level, seed=seed)
@@ -208,7 +209,7 @@ def seed_values_by_task(ik_values: Mapping[str, np.ndarray], id_values: Mapping[
                         measured: Mapping[str, np.ndarray] | None = None, reference: tuple[str, np.ndarray] | None = None,
                         measured_resolved=None) -> tuple[dict[tuple[str, str], np.ndarray], dict[str, Any]]:
     """Every method's values over its seeds by ``(task, method)`` as
-    :func:`nfarm.study.summary.pooled_rows` takes them, and the resolved joints by task: the IK's,
+    :func:`nfarm.study.rows.pooled_rows` takes them, and the resolved joints by task: the IK's,
     the rigid-body ID's and, for a measured arm, each contestant's (``measured``) with the reference
     ``(name, sums (T, 1 + 3n))`` (Newton–Euler alone, one model) beside them."""
     values = {("inverse kinematics", n): v for n, v in ik_values.items()} | \
