@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from types import SimpleNamespace
+
+import matplotlib
 import numpy as np
 import pytest
 
-from nfarm.study.measured_test import NE, MeasuredTest, against, payload_table, rmse_table
+from nfarm.study.measured_test import (NE, MeasuredTest, against, deploy_prose, deploy_table, deploy_times,
+                                       measured_figure, measured_tables, payload_table, rmse_table)
+
+matplotlib.use("Agg")
 from nfarm.study.statistics import bootstrap_nrmse, trajectory_sums
 
 BOOT = {"draws": 300, "level": 0.95, "seed": 0}
@@ -49,3 +56,59 @@ def test_the_payload_table_sets_each_method_beside_its_error_without_the_payload
     assert [r[-1] for r in table.rows] == [ci[NE].worst, ci["generic: ANFIS"].worst]
     assert payload[NE].worst == pytest.approx(np.sqrt(1.5) * ci[NE].worst)     # squared errors 1.5 times larger
     assert "0.5 kg" in table.caption
+
+
+# -- the tables as one record, the figure, and what each tier costs to deploy ---------------------------------
+
+
+class _Contest:
+    """A contest of two tiers whose winners are the ANFIS of the generic tier and ridge regression of the nominal one."""
+    tiers = ["generic", "nominal model + learned"]
+
+    def winner(self, tier):
+        params = {"generic": {"learner": "anfis", "options": {"inputs": "own"}},
+                  "nominal model + learned": {"learner": "ridge", "options": {"residual": True}}}[tier]
+        return SimpleNamespace(cell=SimpleNamespace(params=params))
+
+    def pair(self, tier):
+        return None, None
+
+
+def test_the_tables_come_as_one_record_the_payload_case_only_where_the_split_holds_it():
+    t = replace(_test({NE: 0.5, "generic: ANFIS": 0.2}), contest=_Contest())
+    noise = np.array([0.01, 0.02, 0.03])
+    tables = measured_tables(t, noise, None, **BOOT)
+    assert tables.payload_table is None and tables.payload is None and tables.payload_kg == 0.0
+    assert tables.rmse[NE].worst == pytest.approx(rmse_table(t, noise, **BOOT)[1][NE].worst)
+    assert tables.resolved.tolist() == [True] * 3 and set(tables.target) == {NE, "generic: ANFIS"}
+    with_payload = replace(t, payload=t.measured)
+    with pytest.raises(ValueError, match="no true_arm says its payload"):
+        measured_tables(with_payload, noise, None, **BOOT)
+    tables = measured_tables(with_payload, noise, SimpleNamespace(payload=0.25), **BOOT)
+    assert tables.payload_kg == 0.25 and "0.25 kg" in tables.payload_table.caption
+    assert tables.payload[NE].worst == pytest.approx(np.sqrt(1.5) * tables.rmse[NE].worst)
+
+
+def test_the_deploy_table_goes_tier_by_tier_and_the_words_name_each_tiers_choice(intelbot5):
+    names = [NE, "generic: ANFIS", "generic: ridge regression", "nominal model + learned: ridge regression"]
+    t = _test(dict(zip(names, [0.5, 0.3, 0.2, 0.1])), n=intelbot5.n)
+    t = replace(t, contest=_Contest(), predict_us={names[1]: 4.0, names[2]: 1.0, names[3]: 2.0})
+    _, ci = rmse_table(t, np.full(intelbot5.n, 0.01), **BOOT)
+    deploy_us = deploy_times(intelbot5, t, repeats=1)
+    assert list(deploy_us)[0] == NE and deploy_us[NE] > 0 and deploy_us[names[1]] == 4.0
+    deploy_us = {**deploy_us, NE: 2.0}                   # this run's time for Newton–Euler, fixed for the words
+    table = deploy_table(t, ci, deploy_us, level=0.9)
+    assert [row[1] for row in table.rows] == [names[2], names[1], NE, names[3]]     # by tier, then by error
+    assert [row[-1] for row in table.rows] == [0.5, 2.0, 1.0, 1.0] and "90% interval [N·m]" in table.columns
+    words = deploy_prose(t, ci, deploy_us, "/tmp/models")
+    assert "against Newton–Euler's 2 µs (saved under `/tmp/models/id_measured`" in words
+    assert f"generic: ANFIS, {ci[names[1]].worst:.3g} N·m, 2.0 times rnea's time" in words
+    assert "nominal model + learned: ridge regression, " in words and "about the same as rnea's time" in words
+
+
+def test_the_measured_figure_counts_its_predictions():
+    t = _test({NE: 0.5})
+    mask = np.arange(len(t.measured)) < 50
+    shown = {NE: t.measured[mask] + 0.1, "nominal model + learned: ANFIS": t.measured[mask]}
+    fig, caption = measured_figure(t, shown, np.arange(len(t.measured)) * 0.01, mask, 0, ["a", "b", "c"])
+    assert caption == "Held-out trajectory 0: measured torques and 2 predictions" and len(fig.axes) >= 3

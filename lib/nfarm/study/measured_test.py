@@ -6,8 +6,11 @@ motor currents of the built arm (``tau_measured``), the states its encoders read
 …) and, where the study declares one, the same trajectories carrying a payload no model was
 trained with (``tau_payload``). :func:`measured_test` runs (or reuses) each finalist's test cell,
 the two least-squares references beside them, and Newton–Euler alone on the nominal model; the
-tables of :func:`rmse_table`, :func:`nrmse_table` and :func:`payload_table` are chapter 7.6's, and
-:func:`against` says one method against another on the paired interval of their worst joints.
+tables of :func:`rmse_table`, :func:`nrmse_table` and :func:`payload_table` are chapter 7.6's
+(:func:`measured_tables` makes the three), and :func:`against` says one method against another on
+the paired interval of their worst joints. :func:`measured_figure` shows a held-out trajectory's
+measured torques and predictions (:func:`shown_predictions`), and :func:`deploy_table` what each
+tier's choice would cost to deploy.
 
 Every error is kept as **trajectory sums** ``(T, 1 + 3n)`` (:func:`nfarm.study.statistics.trajectory_sums`):
 the intervals resample the held-out trajectories, as everywhere in the study.
@@ -15,16 +18,23 @@ the intervals resample the held-out trajectories, as everywhere in the study.
 
 from __future__ import annotations
 
+import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib.figure import Figure
 
+from ..infra.paths import shown_path
+from ..learning.baselines import load_id_model
 from ..learning.bases import tier_of
 from ..model.dynamics import rnea
+from ..presentation.plotting import plot_per_joint
 from ..presentation.tables import Table
-from ..presentation.wording import worst_of
+from ..presentation.wording import times, worst_of
 from . import contest
+from .id_test_report import per_sample
 from .statistics import (Interval, bootstrap_nrmse, resolved_joints, trajectory_maxima, trajectory_sums,
                          worst_difference)
 from .rows import (ROLE_CHOSEN, ROLE_FRICTION_ID, ROLE_LEARNED_ALONE, ROLE_NUMERICAL, ROLE_PHYSICS,
@@ -33,7 +43,9 @@ from .verdict_rows import ID_TARGET_PCT, target_verdict
 from .sweep import sweep_results
 from .sweep_files import Sweep
 
-__all__ = ["NE", "MeasuredTest", "measured_test", "rmse_table", "nrmse_table", "payload_table", "against"]
+__all__ = ["NE", "MeasuredTest", "measured_test", "rmse_table", "nrmse_table", "payload_table", "against",
+           "MeasuredTables", "measured_tables", "shown_predictions", "measured_figure", "deploy_times", "deploy_table",
+           "deploy_prose"]
 
 #: The nominal model alone, the reference every learned model is compared with.
 NE = "Newton–Euler alone"
@@ -223,3 +235,100 @@ def against(t: MeasuredTest, name: str, reference: str, *, draws: int = 2000, le
     if low > 0:
         return "worse", f"{diff:.2g} N·m worse (paired interval {low:.2g} to {high:.2g})"
     return "same", f"no difference shown (paired interval of the difference {low:.2g} to {high:.2g} N·m)"
+
+
+@dataclass(frozen=True)
+class MeasuredTables:
+    """Chapter 7.6's tables (:func:`measured_tables`): ``rmse_table`` and the intervals ``rmse``
+    of :func:`rmse_table`; ``nrmse_table``, the resolved joints ``resolved (n,)`` and the summary
+    rows ``target`` and ``target_all`` of :func:`nrmse_table`; and, where the test split holds the
+    payload case, ``payload_table`` and ``payload`` of :func:`payload_table` with ``payload_kg``
+    at the tool (else ``None``, ``None`` and 0)."""
+
+    rmse_table: Table
+    rmse: Mapping[str, Interval]
+    nrmse_table: Table
+    resolved: np.ndarray
+    target: Mapping[str, Row]
+    target_all: Mapping[str, Row]
+    payload_table: Table | None
+    payload: Mapping[str, Interval] | None
+    payload_kg: float
+
+
+def measured_tables(t: MeasuredTest, noise: np.ndarray, true_arm=None, *, draws: int = 2000, level: float = 0.95,
+                    seed: int = 0) -> MeasuredTables:
+    """The tables of :func:`rmse_table` and :func:`nrmse_table` (sensor noise ``noise (n,)``
+    [N·m]) and, where ``t`` holds the payload case, of :func:`payload_table` with the payload of
+    ``true_arm`` (the study's ``id.true_arm``: its ``payload`` [kg])."""
+    boot = {"draws": draws, "level": level, "seed": seed}
+    rmse_t, rmse = rmse_table(t, noise, **boot)
+    nrmse_t, resolved, target, target_all = nrmse_table(t, noise, **boot)
+    if t.payload is None:
+        return MeasuredTables(rmse_t, rmse, nrmse_t, resolved, target, target_all, None, None, 0.0)
+    if true_arm is None:
+        raise ValueError("the test split holds a payload case, and no true_arm says its payload")
+    payload_t, payload = payload_table(t, rmse, true_arm.payload, **boot)
+    return MeasuredTables(rmse_t, rmse, nrmse_t, resolved, target, target_all, payload_t, payload, true_arm.payload)
+
+
+def shown_predictions(t: MeasuredTest, robot, models_dir: str | os.PathLike, mask: np.ndarray) -> dict[str, np.ndarray]:
+    """The torques [N·m] predicted on the test samples ``mask (M,)`` marks (one trajectory's
+    encoder states, ``(K, n)`` each): Newton–Euler alone, then the best ANFIS without the
+    rigid-body model and the residual ANFIS, as chapter 6.8 saved them under ``models_dir``
+    (where the contest has them). The models' warnings are the caller's to show."""
+    names = [name for name in (t.learned_alone, t.residual) if name is not None]
+    models = {name: load_id_model(contest.id_model_dir(models_dir, name.split(":")[0], "anfis"), robot) for name in names}
+    states = tuple(x[mask] for x in t.states)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        shown = {NE: rnea(robot, *states), **{name: m.predict(*states) for name, m in models.items()}}
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
+    return shown
+
+
+def measured_figure(t: MeasuredTest, shown: Mapping[str, np.ndarray], time_s: np.ndarray, mask: np.ndarray,
+                   trajectory: int, joint_names: Sequence[str]) -> tuple[Figure, str]:
+    """The measured torques [N·m] of held-out trajectory ``trajectory`` (its samples ``mask (M,)``
+    marks, at ``time_s (M,)`` [s]) and the predictions ``shown`` on it (:func:`shown_predictions`);
+    the figure and its caption."""
+    fig = plot_per_joint(time_s[mask], {"measured": t.measured[mask], **shown}, joint_names, ylabel="τ [N·m]", focus=3.0)
+    return fig, f"Held-out trajectory {trajectory}: measured torques and {len(shown)} predictions"
+
+
+def deploy_times(robot, t: MeasuredTest, *, repeats: int = 3) -> dict[str, float]:
+    """[µs per state] what each tested method costs to predict, batched on one core: this run's
+    time for Newton–Euler alone (:data:`NE`) on the encoders' states, the test cell's for the
+    others (measured where the cell ran). Depends on the machine: shown, not saved."""
+    return {NE: 1e6 * per_sample(lambda q, qd, qdd: rnea(robot, q, qd, qdd), *t.states, repeats=repeats)} | dict(t.predict_us)
+
+
+def deploy_table(t: MeasuredTest, rmse: Mapping[str, Interval], deploy_us: Mapping[str, float], *,
+                 level: float = 0.95) -> Table:
+    """Tier by tier, each tested method's worst joint RMSE [N·m] on the held-out trajectories
+    with its interval (``rmse``: :func:`rmse_table`'s, at coverage ``level``) and its prediction
+    time (``deploy_us``: :func:`deploy_times`) absolute and relative to Newton–Euler's."""
+    by_tier = sorted(t.order, key=lambda name: (t.tier[name], rmse[name].worst))
+    return Table(["tier", "model", "worst joint RMSE [N·m]", f"{level:.0%} interval [N·m]", "prediction [µs/state]",
+                  "relative to rnea"],
+                 [[t.tier[name], name, rmse[name].worst, f"{rmse[name].worst_low:.3g}–{rmse[name].worst_high:.3g}",
+                   deploy_us[name], deploy_us[name] / deploy_us[NE]] for name in by_tier],
+                 floatfmt=["", "", ".3g", "", ".3g", ".2g"],
+                 caption="What each tier would deploy on the measured arm: the error on the held-out trajectories and the "
+                         "prediction time per state, batched, on one core (not saved: it depends on the machine)")
+
+
+def deploy_prose(t: MeasuredTest, rmse: Mapping[str, Interval], deploy_us: Mapping[str, float],
+                 models_dir: str | os.PathLike) -> str:
+    """Tier by tier, what chapter 6.8 chose on validation, its worst joint RMSE on the held-out
+    trajectories and its time per state against Newton–Euler's (Markdown); the models are saved
+    under ``models_dir/id_measured``."""
+    chosen = [contest.id_label(contest.id_family(t.contest.winner(tier).cell.params)) for tier in t.contest.tiers]
+    return ("Tier by tier, what chapter 6.8 chose on validation, its error on the held-out trajectories and what it costs "
+            f"per state against Newton–Euler's {deploy_us[NE]:.2g} µs (saved under "
+            f"`{shown_path(os.path.join(models_dir, 'id_measured'))}`, loadable with "
+            "`nfarm.learning.baselines.load_id_model`): "
+            + "; ".join(f"{tier}: {name.split(': ', 1)[1]}, {rmse[name].worst:.3g} N·m, "
+                        f"{times(deploy_us[name] / deploy_us[NE])} rnea's time"
+                        for tier, name in zip(t.contest.tiers, chosen) if name in rmse) + ".")

@@ -33,20 +33,17 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from ..learning.baselines import label as baseline_label
 from ..presentation.tables import Table, shown
-from .contest import with_tier_finalists
 from .result_tables import DIGITS
 from .statistics import (Estimate, bootstrap_counts, bootstrap_nrmse, bootstrap_seeds, nrmse_from_sums,
                          resampled_quantile, resolved_joints)
-from .sweep import Replicates, Sweep, best_by, by_configuration, sweep_results
+from .sweep import Replicates
 
 __all__ = ["WORST_ID", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_DESIGN",
            "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE", "ROLE_LEARNED_ALONE",
            "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "IK_METRICS", "Row", "ik_rows", "ik_seed_values", "seed_estimates",
            "pooled_rows", "resolved_sums", "bootstrap_resolved", "id_rows", "with_resolved_worst",
-           "resolved_on_validation", "published", "rows_from_table", "long_table", "interval_text", "wide_table",
-           "best_id_baseline"]
+           "resolved_on_validation", "published", "rows_from_table", "long_table", "interval_text", "wide_table"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).
 WORST_ID = "worst resolved joint NRMSE"
@@ -458,30 +455,3 @@ def wide_table(rows: Sequence[Row], task: str, *, floors: Mapping[str, float] | 
                   for a, m, role in methods], caption=caption)
 
 
-def best_id_baseline(sweep: Sweep, sweeps_dir=None, *, seed: int = 0, workers: int | None = None,
-                     resolved=None, seeds: Sequence[int] | None = None):
-    """The best scikit-learn baseline of a baselines sweep (``params/sweeps/id_baselines.yaml``,
-    restricted to one arm), as chapter 6.5 chooses it: each learner's best configuration by its
-    worst-joint NRMSE on validation with seed 0, where every configuration ran (over the
-    ``resolved`` joints, :func:`with_resolved_worst`; ``None``: every joint), the best of those
-    (least squares on ``q, q̇, q̈``, the floor, left out), over its seeds (each tier's best ran on
-    more, :func:`nfarm.study.contest.with_tier_finalists`: ``seeds``, by default its), and that configuration's run on the
-    test split with ``seed`` (run now if it is not in ``sweeps_dir``). Returns ``(name,
-    validation Replicates, test CellResult)``, or ``None`` if the sweep holds no learner but the
-    floor."""
-    unseeded = lambda p: {k: v for k, v in p.items() if k != "seed"}          # noqa: E731
-    seed0 = sweep_results(sweep, sweeps_dir, workers=workers)
-    if not seed0:
-        return None
-    joints = np.ones(len(seed0[0].metrics["nrmse"]), bool) if resolved is None else np.asarray(resolved, bool)
-    more = {} if seeds is None else {"seeds": tuple(seeds)}
-    val = with_resolved_worst(by_configuration(with_tier_finalists(sweep, joints, "nrmse", sweeps_dir, workers=workers,
-                                                                   seed0=seed0, **more)), joints, "nrmse")
-    learners = [g for learner, g in best_by(val, "learner", "worst_nrmse", seed=0).items() if learner != "linear"]
-    if not learners:
-        return None
-    best = min(learners, key=lambda g: g.values("worst_nrmse")[0])
-    config = unseeded(best.cell.params)
-    test = sweep_results(sweep.select(lambda p: unseeded(p) == config).restrict(split="test", seed=seed),
-                         sweeps_dir, workers=workers)
-    return baseline_label(best.cell.params), best, test[0]
