@@ -735,8 +735,11 @@ def test_ctrl_c_stops_editions_running_side_by_side(tmp_path):
     import subprocess
     import sys
 
+    # Ctrl-C's own handler, whatever this test run inherited: a run started in the background (`make test &`, nohup)
+    # ignores SIGINT, as the shell asks, and the report would rightly ignore it too
     code = f"""
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 sys.path.insert(0, {os.path.dirname(__file__)!r})
 from pathlib import Path
 from nfarm.infra import notebook_runs

@@ -1,4 +1,4 @@
-"""nfarm.study.test_setup: chapter 7's inputs loaded once, refused in one line when chapter 6 has not run."""
+"""nfarm.study.tested_models: chapter 7's inputs loaded once, refused in one line when chapter 6 has not run."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import pytest
 
 from nfarm.infra.paths import PARAMS
 from nfarm.study import datasets, study_files
-from nfarm.study.test_setup import load_tested
+from nfarm.study.tested_models import load_tested
 
 STUDY = PARAMS / "studies" / "intelbot5.yaml"
 

@@ -3,7 +3,7 @@
 Chapter 7 reads the models chapter 6 chose on validation from the chosen-model store
 (:class:`nfarm.study.chosen_models.ChosenModels`) and the data sets chapter 5 built, and tests
 each once on the held-out split. :func:`load_tested` gathers them in one record,
-:class:`Tested`, so that the chapter's first cell is one call; a store that chapter 6 has not
+:class:`TestedModels`, so that the chapter's first cell is one call; a store that chapter 6 has not
 filled for this arm is a one-line ``RuntimeError`` that says which chapter to run first.
 
 Example (the smoke models of ``make test``'s chapter 6 runs)::
@@ -28,14 +28,14 @@ from ..presentation.notices import noted, notes_text
 from . import contest, datasets, study_files
 from .chosen_models import ChosenModels
 
-__all__ = ["Tested", "load_tested", "SMOKE_LM_TARGETS", "SMOKE_DRAWS"]
+__all__ = ["TestedModels", "load_tested", "SMOKE_LM_TARGETS", "SMOKE_DRAWS"]
 
 #: A smoke run's LM targets and bootstrap resamples (a few hundred poses: enough to run the code).
 SMOKE_LM_TARGETS, SMOKE_DRAWS = 100, 200
 
 
 @dataclass(frozen=True)
-class Tested:
+class TestedModels:
     """Chapter 7's inputs (:func:`load_tested`).
 
     Attributes:
@@ -55,6 +55,8 @@ class Tested:
         other_seeds: the draws chapter 6 trained its finalists on besides seed 0.
         lm_targets, bootstrap_draws: the chapter's, or a smoke run's smaller ones.
     """
+
+    __test__ = False                  # a record, not a test class (pytest collects names that start with "Test")
 
     study: Any
     notes: str
@@ -99,9 +101,9 @@ class Tested:
 
 def load_tested(study_file: str | os.PathLike, *, smoke: bool = False, data_dir=None, models_dir=None,
                 lm_targets: int = 2000, bootstrap_draws: int = 2000,
-                spread_seeds: Sequence[int] | None = None) -> Tested:
+                spread_seeds: Sequence[int] | None = None) -> TestedModels:
     """The study of ``study_file``, its held-out data (``data_dir``, as chapter 5 built it) and the
-    models chapter 6 chose (``models_dir``, else ``build/models/<robot>/``), as a :class:`Tested`.
+    models chapter 6 chose (``models_dir``, else ``build/models/<robot>/``), as a :class:`TestedModels`.
     ``smoke``: the smoke study, :data:`SMOKE_LM_TARGETS` and :data:`SMOKE_DRAWS`, and chapter 6's
     smoke spread seeds unless ``spread_seeds`` names them.
 
@@ -139,5 +141,5 @@ def load_tested(study_file: str | os.PathLike, *, smoke: bool = False, data_dir=
     if not rivals:
         raise RuntimeError(f"chapter 07 compares chapter 06's contest rivals, and {store.root} holds none for "
                            f"{robot.name}: run chapter 06 for it first")
-    return Tested(study, notes, directory, data, store, learned, recipe, rivals, *id_models, id_seed_like,
+    return TestedModels(study, notes, directory, data, store, learned, recipe, rivals, *id_models, id_seed_like,
                   tuple(other_seeds), lm_targets, bootstrap_draws, spread_seeds)
