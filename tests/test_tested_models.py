@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from nfarm.infra.paths import PARAMS
@@ -40,3 +41,14 @@ def test_the_exercises_set_up_one_small_model_in_the_arm_s_plane(smoke_data):
     import numpy as np
     mine = 1000 * np.median(np.linalg.norm(fk(ex.robot, ex.model.predict(ex.T))[:, :3, 3] - ex.T[:, :3, 3], axis=-1))
     assert mine == pytest.approx(again, rel=1e-12)
+
+
+def test_chapter_6_s_exercises_get_the_smoke_budgets_and_the_arm_s_plane(smoke_data):
+    from nfarm.publishing import answers
+    ex = answers.training_exercises(STUDY, smoke=True, data_dir=smoke_data)
+    assert (ex.samples, ex.epochs, ex.stride, ex.planar, ex.notice) == (300, 2, 4, True, "")
+    assert ex.plane == pytest.approx(np.radians(0.5))
+    assert set(ex.data) == {"ik_train", "ik_val", "ik_test", "id_train", "id_val"}
+    # a plane that admits nothing: the arm's poses leave it, and the student is told which exercises apply
+    tight = answers.training_exercises(STUDY, smoke=True, data_dir=smoke_data, max_out_of_plane_deg=-1.0)
+    assert not tight.planar and tight.notice.startswith("intelbot5's tool leaves the arm's vertical plane")

@@ -32,7 +32,7 @@ __all__ = ["scan", "tool_shift", "dh_transform", "dh_cases", "singular_elbows_de
            "one_more_joint_answers", "tolerance_iterations", "jt_step", "jt_cases", "jt_success",
            "two_link_torques", "payload_torque_change", "peak_gravity_shoulder_deg",
            "sinc_fit", "best_sinc_mf", "second_share_full_elbow", "other_branch_verdict",
-           "mean_solutions_full", "IKExercises", "ik_exercises", "learned_ik_worst", "learned_id_worst", "beats",
+           "mean_solutions_full", "TrainingExercises", "training_exercises", "IKExercises", "ik_exercises", "learned_ik_worst", "learned_id_worst", "beats",
            "median_tool_error_mm", "warm_start_iterations", "nearest_by_position", "reaches",
            "volume_error_ratio", "annulus_area", "area_verdict"]
 
@@ -239,6 +239,53 @@ def mean_solutions_full(robot: Robot, targets: int, seed: int) -> float:
 # -- chapters 6 and 7 --------------------------------------------------------------------------
 
 
+def _exercise_data(study_file, smoke: bool, data_dir) -> tuple[Robot, dict[str, Mapping]]:
+    """The study's robot and the splits the exercises read, the data sets built (or reused) as
+    chapter 5 builds them (the smoke study's in smoke mode)."""
+    study = study_files.load_study(study_file)
+    study = study_files.smoke_study(study) if smoke else study
+    datasets.build_datasets(study, data_dir)
+    directory = datasets.dataset_dir(study, data_dir)
+    return study.robot, {name: datasets.load(directory / f"{name}.npz", study.robot, study)
+                         for name in ("ik_train", "ik_val", "ik_test", "id_train", "id_val")}
+
+
+def _in_plane(robot: Robot, data: Mapping[str, Mapping], plane: float) -> bool:
+    """Whether the arm's plane describes the training poses (to within ``plane`` [rad])."""
+    return bool(out_of_plane(data["ik_train"]["T"], arm_chart(robot)).max() <= plane)
+
+
+@dataclass(frozen=True)
+class TrainingExercises:
+    """Chapter 6's exercises' set-up (:func:`training_exercises`): the study's ``robot`` and its
+    splits ``data`` (as :class:`IKExercises`'), the budgets — ``samples`` training poses,
+    ``epochs``, every ``stride``-th ID training state —, ``plane`` [rad], the out-of-plane angle
+    the arm's plane accepts, ``planar``: whether it describes this arm (exercises 6.1 and 6.2 train
+    in it), and ``notice``: a sentence for the student where it does not ("" otherwise)."""
+
+    robot: Robot
+    data: Mapping[str, Mapping]
+    samples: int
+    epochs: int
+    stride: int
+    plane: float
+    planar: bool
+    notice: str
+
+
+def training_exercises(study_file, *, smoke: bool = False, data_dir=None,
+                       max_out_of_plane_deg: float = 0.5) -> TrainingExercises:
+    """The study's data and small budgets for chapter 6's exercises: 2 000 training poses, 5 epochs
+    and every 32nd ID training state (smoke: 300, 2 and every 4th)."""
+    robot, data = _exercise_data(study_file, smoke, data_dir)
+    plane = np.radians(max_out_of_plane_deg)
+    planar = _in_plane(robot, data, plane)
+    notice = "" if planar else (f"{robot.name}'s tool leaves the arm's vertical plane: exercises 6.1 and 6.2, which "
+                                f"train in that plane, do not apply to this arm (their cells say so); exercise 6.3 does.")
+    return TrainingExercises(robot, data, 300 if smoke else 2000, 2 if smoke else 5, 4 if smoke else 32, plane, planar,
+                             notice)
+
+
 @dataclass(frozen=True)
 class IKExercises:
     """Chapter 7's exercises' set-up (:func:`ik_exercises`): the study's ``robot``, its splits
@@ -264,19 +311,13 @@ def ik_exercises(study_file, *, smoke: bool = False, data_dir=None, seed: int = 
     plane — or on the dissertation's seven inputs for an arm whose tool leaves that plane by more
     than ``max_out_of_plane_deg`` [deg] (the plane cannot describe its poses). ``samples``,
     ``epochs`` and ``test`` default to 2 000, 5 and 500 (smoke: 300, 2 and 100)."""
-    study = study_files.load_study(study_file)
-    study = study_files.smoke_study(study) if smoke else study
-    robot = study.robot
+    robot, data = _exercise_data(study_file, smoke, data_dir)
     samples = (300 if smoke else 2000) if samples is None else samples
     epochs = (2 if smoke else 5) if epochs is None else epochs
     test = (100 if smoke else 500) if test is None else test
-    datasets.build_datasets(study, data_dir)
-    directory = datasets.dataset_dir(study, data_dir)
-    data = {name: datasets.load(directory / f"{name}.npz", robot, study)
-            for name in ("ik_train", "ik_val", "ik_test", "id_train", "id_val")}
     plane = np.radians(max_out_of_plane_deg)
     notice = ""
-    if out_of_plane(data["ik_train"]["T"], arm_chart(robot)).max() <= plane:
+    if _in_plane(robot, data, plane):
         options = dict(encoding="arm_plane", partition="grid", n_mfs=[1, 2, 2, 2, 2, 1], epochs=epochs,
                        max_out_of_plane=plane)
     else:
