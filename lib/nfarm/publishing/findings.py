@@ -33,7 +33,7 @@ import numpy as np
 from ..presentation.wording import listed, times, times_range
 from ..study.measured_test import NE, MeasuredTest, against
 from ..study.paired import orientation_by_structure, paired_difference, paired_judge
-from ..study.result_tables import SUMMARY_FLOORS, read_long_table, read_paired
+from ..study.result_tables import SUMMARY_FLOORS, read_long_table, read_paired, table_number
 from ..study.rows import ROLE_RESIDUAL_BASELINE, WORST_ID, Row, interval_text, rows_from_table
 from ..study.verdict_rows import ID_TARGET_PCT, IK_TARGETS, target_verdict
 
@@ -233,8 +233,8 @@ def measured_in_words(t: MeasuredTest, rmse: Mapping, targets: Mapping[str, Row]
 
 def _side(row: Mapping[str, str]) -> int:
     """The side of 0 a verdict row's paired interval lies on (-1: the ANFIS lower, 0: holds 0),
-    whatever a family-wise correction says."""
-    return -1 if float(row["gap_high"].lstrip("<")) < 0 else 1 if float(row["gap_low"].lstrip("<")) > 0 else 0
+    whatever a family-wise correction says; an end below the table's floor ("< 1e-06") counts as 0."""
+    return -1 if table_number(row["gap_high"]) < 0 else 1 if table_number(row["gap_low"]) > 0 else 0
 
 
 def shifted_in_words(shifted: Mapping[str, str], main: Mapping[str, str], *, rival: str, described: str) -> str:

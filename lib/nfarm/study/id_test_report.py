@@ -9,10 +9,12 @@ and every interval resamples the held-out trajectories; the worst joint is taken
 a sensor resolves, fixed on validation (:func:`nfarm.study.rows.resolved_on_validation`).
 NRMSEs are shares of each joint's torque spread (shown in %), torques are in N·m.
 
-Example (the best of three timings of a function, per sample of its first argument):
+Example (the worst joint's interval in %, one value when both ends lie below the floor):
     >>> import numpy as np
-    >>> per_sample(lambda q: q.sum(), np.zeros((4, 2))) >= 0.0
-    True
+    >>> from nfarm.study.statistics import Interval
+    >>> ci = lambda low, high: Interval(np.zeros(2), np.zeros(2), np.zeros(2), high, low, high, 0.95, 200, 12)
+    >>> interval(ci(0.018, 0.0235)), interval(ci(1e-12, 2e-12))
+    ('1.8–2.35', '< 1e-6')
 """
 
 from __future__ import annotations

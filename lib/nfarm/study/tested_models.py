@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -73,7 +73,6 @@ class TestedModels:
     other_seeds: tuple[int, ...]
     lm_targets: int
     bootstrap_draws: int
-    spread_seeds: Sequence[int] | None = field(default=None)
 
     @property
     def robot(self):
@@ -142,4 +141,4 @@ def load_tested(study_file: str | os.PathLike, *, smoke: bool = False, data_dir=
         raise RuntimeError(f"chapter 07 compares chapter 06's contest rivals, and {store.root} holds none for "
                            f"{robot.name}: run chapter 06 for it first")
     return TestedModels(study, notes, directory, data, store, learned, recipe, rivals, *id_models, id_seed_like,
-                  tuple(other_seeds), lm_targets, bootstrap_draws, spread_seeds)
+                        tuple(other_seeds), lm_targets, bootstrap_draws)

@@ -185,14 +185,16 @@ def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Map
     return verdicts, values
 
 
-def ik_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, exact: str, draws: int = 2000,
-               level: float = 0.95, seed: int = 0) -> Verdict:
+def ik_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, exact: str = "",
+               task: str = "inverse kinematics", units: str = "test poses", draws: int = 2000, level: float = 0.95,
+               seed: int = 0) -> Verdict:
     """The learned-IK task's verdict: ``anfis`` against ``rival`` by the 95th-percentile tool position
     error [mm] over their seeds (``values`` as :func:`ik_values_over_seeds` gives them), with the
-    study's IK targets (:data:`nfarm.study.verdict_rows.IK_TARGETS`); ``exact`` names the exact method."""
-    return judge_task(arm, "inverse kinematics", "position p95", "mm", values, anfis, rival, ik=True,
+    study's IK targets (:data:`nfarm.study.verdict_rows.IK_TARGETS`); ``exact`` names the exact method,
+    ``task`` and ``units`` the population judged (the test split's poses, or another's)."""
+    return judge_task(arm, task, "position p95", "mm", values, anfis, rival, ik=True,
                       targets=[(metric, limit, unit) for _, metric, limit, unit in IK_TARGETS], exact=exact,
-                      draws=draws, level=level, seed=seed)
+                      units=units, draws=draws, level=level, seed=seed)
 
 
 def rigid_id_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, resolved,
@@ -236,10 +238,8 @@ def shifted_verdict(study, published: Mapping[str, tuple[Any, str | os.PathLike]
     targets = shifted_ik(study)
     values = ik_values_over_seeds(study.robot, {name: published[name] for name in (anfis, rival)}, targets["T"],
                                   targets["q"], probe=probe, seed=seed)
-    return with_holm([judge_task(
-        study.robot.name, "inverse kinematics, shifted population", "position p95", "mm", values, anfis, rival, ik=True,
-        targets=[(metric, limit, unit) for _, metric, limit, unit in IK_TARGETS], units="shifted targets",
-        draws=draws, level=level, seed=seed)])[0]
+    return with_holm([ik_verdict(study.robot.name, values, anfis, rival, task="inverse kinematics, shifted population",
+                                 units="shifted targets", draws=draws, level=level, seed=seed)])[0]
 
 
 def shifted_caption(study, level: float = 0.95) -> str:
