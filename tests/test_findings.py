@@ -72,3 +72,21 @@ def test_shifted_in_words_reads_both_rows_and_says_where_the_intervals_lie(shift
     assert ("the paired interval lies on the same side of 0 on both." in text) == same
     assert ("on the shifted population the paired interval holds 0, on the test split it excludes 0" in text) == (not same)
     assert text.endswith("the shifted one is a single comparison.)")
+
+
+def test_shifted_id_in_words_reads_each_pair_and_the_family_size():
+    from nfarm.publishing.findings import shifted_id_in_words
+    row = lambda task, gap, low, high, verdict, n="": {**_verdict_row(gap, low, high, verdict), "task": task,   # noqa: E731
+                                                      "anfis": "ANFIS, affine", "rival": "ridge", "comparisons": n}
+    pairs = [(row("rigid-body inverse dynamics, shifted population", "0.5", "0.2", "0.9", "rival better", "3"),
+              row("rigid-body inverse dynamics", "0.3", "0.1", "0.4", "rival better (Holm)")),
+             (row("measured arm, every tier, shifted population", "0.1", "-0.2", "0.4", "no difference shown", "3"),
+              row("measured arm, every tier", "-1", "-1.5", "-0.5", "ANFIS better (Holm)"))]
+    text = shifted_id_in_words(pairs, described="40 trajectories run 1.5 times as fast")
+    assert text.startswith("**Faster trajectories.**") and "40 trajectories run 1.5 times as fast" in text
+    assert "rigid-body inverse dynamics: ANFIS, affine 1.0 % (0.9–1.1), ridge 2.0 % (1.8–2.2)" in text
+    assert "the gap 0.5 (0.2 to 0.9) points: **rival better**, against 0.3 (0.1 to 0.4)" in text
+    assert "the paired interval on the same side of 0 on both" in text
+    assert "**the paired interval holds 0 on the shifted trajectories, on the test split it excludes 0**" in text
+    assert text.endswith("the shifted ones over their own 3.)")
+    assert shifted_id_in_words([], described="x") == ""

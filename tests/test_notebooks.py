@@ -269,11 +269,16 @@ def check_verdict(tables: Path, arm: str) -> None:
     one whose p-value Holm's correction leaves at 0.05 or above)."""
     rows = read_table(tables / "07_verdict.csv")
     assert [r["task"] for r in rows] == VERDICT_TASKS
-    shifted = tables / "07_verdict_shifted.csv"          # the shifted population's verdict (issue 66), where declared
+    shifted = tables / "07_verdict_shifted.csv"          # the shifted populations' verdicts (issue 66), where declared
     if shifted.is_file():
         extra = read_table(shifted)
-        assert [r["task"] for r in extra] == ["inverse kinematics, shifted population"]
-        assert extra[0]["rival"] == rows[0]["rival"] and extra[0]["comparisons"] == "1", extra[0]
+        main = {r["task"]: r for r in rows}
+        assert [r["task"] for r in extra] == [f"{t}, shifted population" for t in main
+                                             if t in ("inverse kinematics", "rigid-body inverse dynamics",
+                                                      "measured arm, every tier")][:len(extra)], [r["task"] for r in extra]
+        for r in extra:        # the main verdict's pair, frozen; Holm's correction over the shifted family
+            of = main[r["task"].replace(", shifted population", "")]
+            assert (r["anfis"], r["rival"]) == (of["anfis"], of["rival"]) and r["comparisons"] == str(len(extra)), r
         rows = rows + extra
     for row in rows:
         assert row["arm"] == arm, row["arm"]

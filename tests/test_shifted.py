@@ -13,7 +13,8 @@ from nfarm.infra.reading import ParamsError
 from nfarm.model.kinematics import fk
 from nfarm.study import datasets
 from nfarm.study.regions import IKRegion
-from nfarm.study.shifted import beyond_box, boundary_distance, describe, shifted_ik
+from nfarm.model.dynamics import rnea
+from nfarm.study.shifted import beyond_box, boundary_distance, describe, describe_id, faster, shifted_id, shifted_ik
 from nfarm.study.study_files import load_study, study_from_dict
 
 STUDIES = ("intelbot5", "so101")
@@ -54,6 +55,9 @@ def test_declaring_a_shifted_population_rebuilds_no_data_set():
     ("ik_band", 0.7, r"shifted.ik_band"),
     ("ik_samples", 0, r"shifted.ik_samples"),
     ("seed", -1, r"shifted.seed"),
+    ("id_trajectories", 0, r"shifted.id_trajectories"),
+    ("id_speed", 1.0, r"shifted.id_speed"),
+    ("id_speed", "fast", r"shifted.id_speed"),
     ("colour", "red", r"shifted.*colour"),
 ])
 def test_a_bad_shifted_section_is_refused_naming_the_field(field, value, rule):
@@ -72,3 +76,56 @@ def test_beyond_box_refuses_a_bad_band_or_a_box_at_the_limits():
         beyond_box(IKRegion(robot, np.array([[-1.0, 1.0]] * 5)), 10, 0.6, 0)
     with pytest.raises(ValueError, match=r"the region's box lies at every joint's limits"):
         beyond_box(IKRegion.full(robot), 10, 0.05, 0)
+
+
+@pytest.mark.parametrize("arm", STUDIES)
+def test_the_shifted_trajectories_run_faster_than_any_the_models_met(arm):
+    """Beyond the generator's bounds every split keeps (speeds up to id_speed times them, accelerations
+    up to its square), within the joints' limits; the model's torques, and the built arm's readings
+    on the states its encoders give, different from the model's; the same draws from the same seed."""
+    study = load_study(PARAMS / "studies" / f"{arm}.yaml")
+    s, settings = study.shifted, study.id
+    data = shifted_id(study)
+    assert len(np.unique(data["trajectory"])) == s.id_trajectories
+    speed, accel = np.abs(data["qd"]).max(axis=0), np.abs(data["qdd"]).max(axis=0)
+    assert (speed <= s.id_speed * settings.max_velocity * (1 + 1e-9)).all()
+    assert (accel <= s.id_speed ** 2 * settings.max_acceleration * (1 + 1e-9)).all()
+    assert (speed > settings.max_velocity).any() and (accel > settings.max_acceleration).any()
+    assert ((data["q"] >= study.robot.qlim[:, 0]) & (data["q"] <= study.robot.qlim[:, 1])).all()
+    np.testing.assert_array_equal(data["tau"], rnea(study.robot, data["q"], data["qd"], data["qdd"]))
+    assert {"tau_measured", "tau_payload", "q_measured", "qd_measured", "qdd_measured"} <= set(data)
+    assert not np.allclose(data["tau_measured"], data["tau"]) and not np.array_equal(data["q_measured"], data["q"])
+    again = shifted_id(study)
+    for k in data:
+        np.testing.assert_array_equal(again[k], data[k])
+    assert f"{s.id_trajectories} trajectories" in describe_id(study) and f"{s.id_speed:g} times as fast" in describe_id(study)
+
+
+def test_the_shifted_trajectories_are_drawn_apart_from_the_test_split():
+    """Their own seed: no trajectory of the shifted population is one of the test split's sped up."""
+    study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    from nfarm.study.id_trajectories import random_trajectories
+    test = random_trajectories(study.robot, faster(study.id, study.shifted.id_speed), study.shifted.id_trajectories,
+                               np.random.SeedSequence([datasets.split_seed(study, "test"), 1]))
+    assert not np.allclose(test["q"][:50], shifted_id(study)["q"][:50])
+
+
+def test_faster_compresses_the_timing_and_refuses_a_bad_speed():
+    settings = load_study(PARAMS / "studies" / "so101.yaml").id
+    f = faster(settings, 3.0)
+    np.testing.assert_allclose(f.max_acceleration, 9 * settings.max_acceleration)
+    assert f.segment_time == pytest.approx(tuple(t / 3 for t in settings.segment_time)) and f.dt == settings.dt
+    for bad in (0, -1.0, True, "2"):
+        with pytest.raises(ValueError, match="speed must be a positive number"):
+            faster(settings, bad)
+
+
+def test_a_study_without_shifted_trajectories_declares_none():
+    study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    params = json.loads(json.dumps(study.params))
+    for k in ("id_trajectories", "id_speed", "id_declared"):
+        params["shifted"].pop(k)
+    without = study_from_dict(params, source="ik-only.yaml")
+    assert without.shifted.id_trajectories is None and describe_id(without) == "no shifted ID population"
+    with pytest.raises(ValueError, match=r"ik-only.yaml: shifted: id_trajectories: the study declares no shifted ID"):
+        shifted_id(without)

@@ -123,3 +123,48 @@ def test_seed_values_by_task_keys_every_method_by_its_task():
                               ("inverse kinematics", "A")]
     assert values["ID, measured arm", "NE"].shape == (1, 4, 10)
     assert resolved_by == {"inverse dynamics": "r", "ID, measured arm": "m"}
+
+
+class _Scaled:
+    """A model predicting ``factor`` times the true torques it was made for (a function of the states)."""
+
+    def __init__(self, truth, factor):
+        self.truth, self.factor = truth, factor
+
+    def predict(self, q, qd, qdd):
+        return self.factor * self.truth(q, qd, qdd)
+
+
+def test_the_shifted_id_verdicts_judge_the_main_pairs_on_the_faster_trajectories():
+    """The rigid-body pair on the model's torques and the measured pair on the built arm's readings
+    (the states its encoders give), each over its seeds: a model that is the truth beats one 20 % off;
+    one of NRMSE 1 % meets the 5 % target; no verdict where the study declares no ID population."""
+    import json
+
+    from nfarm.infra.paths import PARAMS
+    from nfarm.model.dynamics import rnea
+    from nfarm.study.shifted import shifted_id
+    from nfarm.study.study_files import load_study, study_from_dict
+
+    study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    data = shifted_id(study)
+    robot = study.robot
+    exact = lambda q, qd, qdd: rnea(robot, q, qd, qdd)            # noqa: E731
+
+    def measured(q, qd, qdd):          # what the built arm read on the states its encoders give, by lookup
+        return data["tau_measured"] if np.array_equal(q, data["q_measured"]) else np.full_like(q, np.nan)
+
+    rigid = {"ANFIS": [_Scaled(exact, 1.0), _Scaled(exact, 1.0)], "ridge": [_Scaled(exact, 1.2), _Scaled(exact, 1.2)]}
+    known = {"ANFIS: m": [_Scaled(measured, 1.2)] * 2, "MLP: m": [_Scaled(measured, 1.0)] * 2}
+    resolved = np.ones(robot.n, bool)
+    out = verdicts.shifted_id_verdicts(study, rigid, ("ANFIS", "ridge"), resolved=resolved, measured=known,
+                                       measured_pair=("ANFIS: m", "MLP: m"), measured_resolved=resolved, draws=200)
+    assert [v.task for v in out] == ["rigid-body inverse dynamics, shifted population",
+                                     "measured arm, every tier, shifted population"]
+    assert out[0].verdict == "ANFIS better" and out[0].anfis_value == 0 and out[0].rival_value > 0
+    assert out[1].verdict == "rival better" and out[1].rival_value == 0
+    assert "shifted trajectories" in out[0].interval and out[0].anfis_targets.startswith("1 of 1")
+    params = json.loads(json.dumps(study.params))
+    params["shifted"].pop("id_trajectories")
+    assert verdicts.shifted_id_verdicts(study_from_dict(params, source="ik-only.yaml"), rigid, ("ANFIS", "ridge"),
+                                        resolved=resolved) == []

@@ -38,7 +38,7 @@ from ..study.rows import ROLE_RESIDUAL_BASELINE, WORST_ID, Row, interval_text, r
 from ..study.verdict_rows import ID_TARGET_PCT, IK_TARGETS, target_verdict
 
 __all__ = ["PublishedResults", "study_in_words", "residual_baseline", "measured_in_words", "TIER_WORDS",
-           "shifted_in_words"]
+           "shifted_in_words", "shifted_id_in_words"]
 
 IK = "inverse kinematics"
 ID = "inverse dynamics"
@@ -256,5 +256,38 @@ def shifted_in_words(shifted: Mapping[str, str], main: Mapping[str, str], *, riv
             + ("the paired interval lies on the same side of 0 on both." if _side(shifted) == _side(main) else
                f"**on the shifted population the paired interval {'holds 0' if _side(shifted) == 0 else 'excludes 0'}, "
                f"on the test split it {'holds 0' if _side(main) == 0 else 'excludes 0'}**.")
-            + (" (The main verdict's words carry Holm's correction over the arm's comparisons; the shifted one is a single "
-               "comparison.)" if "Holm" in main["verdict"] else ""))
+            + _holm_note(shifted, main))
+
+
+def _holm_note(shifted: Mapping[str, str], main: Mapping[str, str]) -> str:
+    """What the two verdicts' words carry of Holm's correction (the shifted family's size read from
+    its row's ``comparisons``, one where the row has none)."""
+    if "Holm" not in main["verdict"]:
+        return ""
+    n = int(shifted.get("comparisons") or 1)
+    return (" (The main verdict's words carry Holm's correction over the arm's comparisons; "
+            + ("the shifted one is a single comparison.)" if n == 1 else f"the shifted ones over their own {n}.)"))
+
+
+def shifted_id_in_words(pairs: Sequence[tuple[Mapping[str, str], Mapping[str, str]]], *, described: str) -> str:
+    """The shifted ID trajectories' verdicts against the main ones, in words (chapter 7.7): ``pairs``
+    of published verdict rows (``07_verdict_shifted.csv``'s ID rows, each with ``07_verdict.csv``'s
+    row of the same task), ``described`` the population (:func:`nfarm.study.shifted.describe_id`);
+    ``""`` for no pairs."""
+    if not pairs:
+        return ""
+    said = []
+    for shifted, main in pairs:
+        task = shifted["task"].replace(", shifted population", "")
+        said.append(f"{task}: {shifted['anfis']} {shifted['anfis_value']} % ({shifted['anfis_low']}–"
+                    f"{shifted['anfis_high']}), {shifted['rival']} {shifted['rival_value']} % ({shifted['rival_low']}–"
+                    f"{shifted['rival_high']}), the gap {shifted['gap']} ({shifted['gap_low']} to {shifted['gap_high']}) "
+                    f"points: **{shifted['verdict']}**, against {main['gap']} ({main['gap_low']} to {main['gap_high']}), "
+                    f"{main['verdict']}, on the test split — "
+                    + ("the paired interval on the same side of 0 on both" if _side(shifted) == _side(main) else
+                       f"**the paired interval {'holds 0' if _side(shifted) == 0 else 'excludes 0'} on the shifted "
+                       f"trajectories, on the test split it {'holds 0' if _side(main) == 0 else 'excludes 0'}**"))
+    return (f"**Faster trajectories.** Declared in the study file before they were drawn, {described}: states "
+            f"beyond the speeds and accelerations of every trajectory the models were trained, tuned and chosen on. "
+            f"By the worst resolved joint's NRMSE against the shifted torques' own spread — " + "; ".join(said) + "."
+            + _holm_note(pairs[0][0], pairs[0][1]))

@@ -47,7 +47,7 @@ from .id_trajectories import current_sensed, measured_states, random_trajectorie
 from .regions import STREAMS, IKRegion, ik_samples
 from .study_files import SPLITS, Study
 
-__all__ = ["Dataset", "build_datasets", "built_arm", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
+__all__ = ["Dataset", "build_datasets", "built_arm", "measured_readings", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
            "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
@@ -229,17 +229,29 @@ def _measured_torques(study: Study, data: dict, split: str) -> dict[str, np.ndar
     ``data`` — its rigid body, its drives (Stribeck and load terms from the study) and its
     sensors (:func:`nfarm.study.id_trajectories.current_sensed`); on the test split with a
     payload, also ``tau_payload``, the same arm carrying it (its own noise draws)."""
+    return measured_readings(study, data, [split_seed(study, split), STREAMS["id_noise"], _SPLIT_STREAM[split]],
+                             payload=split == "test")
+
+
+def measured_readings(study: Study, data: Mapping[str, np.ndarray], stream: list[int], *,
+                      payload: bool = False) -> dict[str, np.ndarray]:
+    """The built arm's torque readings on the exact states ``data`` (``q, qd, qdd (N, n)``, ``tau``
+    the model's rigid-body torques): ``tau_measured (N, n)`` [N·m] — its rigid body, its drives and
+    its sensors, their noise drawn from ``numpy.random.SeedSequence(stream)`` — and with ``payload``
+    (and a study whose built arm declares one) ``tau_payload``, the same arm carrying it (the noise
+    from ``stream + [1]``). The data sets' splits use it with their own streams; a shifted
+    population (:mod:`nfarm.study.shifted`) with its own."""
     settings = study.id
     arm, offset = built_arm(study)
     cases = {"tau_measured": arm}
-    if split == "test" and settings.true_arm is not None and settings.true_arm.payload > 0:
+    if payload and settings.true_arm is not None and settings.true_arm.payload > 0:
         cases["tau_payload"] = with_payload(arm, settings.true_arm.payload)
     out = {}
     for k, (key, built) in enumerate(cases.items()):
-        stream = [split_seed(study, split), STREAMS["id_noise"], _SPLIT_STREAM[split]] + ([k] if k else [])
+        draws = [*stream] + ([k] if k else [])
         rigid = data["tau"] if built is settings.measured else rnea(built, data["q"], data["qd"], data["qdd"])
         drive = stribeck_drive_torques(built, data["qd"], data["qdd"], rigid, **settings.friction)
-        out[key] = current_sensed(rigid + drive, np.random.default_rng(np.random.SeedSequence(stream)),
+        out[key] = current_sensed(rigid + drive, np.random.default_rng(np.random.SeedSequence(draws)),
                                   noise=settings.noise, torque_per_count=settings.torque_per_count, offset=offset)
     return out
 

@@ -555,15 +555,14 @@ def _id_split(p: dict, study, directory: Path, split: str) -> dict:
     return out
 
 
-def id_baseline(p: dict) -> dict:
-    if p["split"] not in ("val", "test"):
-        raise ParamsError(f"split must be 'val' or 'test', got {p['split']!r}")
+def _fit_baseline(p: dict):
+    """An ``id_baseline`` cell's model, trained or reused (:func:`fit_cached`), with its training
+    and validation splits."""
     study, directory, models = _study_data(p)
     robot = study.robot
     train = _first(_id_split(p, study, directory, "train"), ("q", "qd", "qdd", "tau"), p["fraction"],
                    None, p["stride"])
     val = _id_split(p, study, directory, "val")
-    judged = val if p["split"] == "val" else _test_split(p, _id_split)
     learner = p["learner"]
     if learner not in BASELINE_OPTIONS:
         raise ParamsError(f"learner must be one of {', '.join(BASELINE_OPTIONS)}, got {learner!r}")
@@ -573,7 +572,21 @@ def id_baseline(p: dict) -> dict:
     model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"])
     where = _options_dir(models, "id_baselines", {**json.loads(json.dumps(model.get_params(), default=str)),
                                                   "torques": p["torques"], "fraction": p["fraction"], "stride": p["stride"]})
-    model = fit_cached(model, robot, train, val, where)[0]
+    return fit_cached(model, robot, train, val, where)[0], train, val
+
+
+def id_baseline_model(params: Mapping[str, Any]):
+    """The model an ``id_baseline`` cell trains (``params``: the cell's parameters), reused from
+    where the cell keeps it: a :class:`BaselineID`."""
+    with cell_threads():
+        return _fit_baseline(JOBS["id_baseline"].complete(params))[0]
+
+
+def id_baseline(p: dict) -> dict:
+    if p["split"] not in ("val", "test"):
+        raise ParamsError(f"split must be 'val' or 'test', got {p['split']!r}")
+    model, train, val = _fit_baseline(p)
+    judged = val if p["split"] == "val" else _test_split(p, _id_split)
     start = time.perf_counter()
     predicted = model.predict(judged["q"], judged["qd"], judged["qdd"])
     seconds = time.perf_counter() - start

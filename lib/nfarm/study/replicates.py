@@ -36,7 +36,8 @@ __all__ = ["SEEDS_FILE", "MODEL_OF", "write_seeds", "read_seeds", "seed_models"]
 #: The file beside a published model that lists its configuration's cells over the seeds.
 SEEDS_FILE = "seeds.json"
 #: The jobs whose cells train a model, and the function that gives a cell's model.
-MODEL_OF = {"ik_contest": jobs.contest_model, "learned_id": jobs.id_model, "id_contest": jobs.id_contest_model}
+MODEL_OF = {"ik_contest": jobs.contest_model, "learned_id": jobs.id_model, "id_contest": jobs.id_contest_model,
+            "id_baseline": jobs.id_baseline_model}
 
 
 def write_seeds(directory: str | os.PathLike, job: str, cells: Sequence[Mapping[str, Any]]) -> Path:

@@ -12,9 +12,18 @@ trained, tuned or chosen on, each a small step past the data, where every learne
 It is drawn by independent uniform draws from its own seed, in batches, until ``ik_samples`` are
 kept.
 
-It is made in memory when a chapter asks for it (a few thousand forward kinematics), and is not a
-data set of :mod:`nfarm.study.datasets`: the data sets' hash leaves the ``shifted`` section out, so
-declaring it retrains nothing.
+The shifted ID population (:func:`shifted_id`, where the section declares ``id_trajectories``) is
+**faster than any trajectory the models met**: the study's generator with its paths run ``id_speed``
+times as fast — the velocity bounds times ``id_speed``, the acceleration bounds times its square,
+the segments' nominal times divided by it — so that the states lie beyond the training data's
+speeds and accelerations, where the rigid body's velocity-product and inertial torques and the
+drives' friction all grow. Its torques are the model's (the rigid-body task) and, for a study with
+a measured arm, the built arm's as its sensors read them, on the states its encoders give
+(:func:`nfarm.study.datasets.measured_readings`), each from streams of the section's ``seed``.
+
+Both are made in memory when a chapter asks for them (a few thousand forward kinematics; tens of
+trajectories), and are not data sets of :mod:`nfarm.study.datasets`: the data sets' hash leaves the
+``shifted`` section out, so declaring it retrains nothing.
 """
 
 from __future__ import annotations
@@ -23,11 +32,17 @@ import dataclasses
 
 import numpy as np
 
+from ..model.dynamics import rnea
 from ..model.kinematics import fk
-from .regions import IKRegion
+from .datasets import measured_readings
+from .id_trajectories import measured_states, random_trajectories
+from .regions import STREAMS, IKRegion
 from .study_files import Study
 
-__all__ = ["boundary_distance", "beyond_box", "shifted_ik", "describe"]
+__all__ = ["boundary_distance", "beyond_box", "shifted_ik", "shifted_id", "faster", "describe", "describe_id"]
+
+#: The shifted ID population's stream below the section's seed (the IK one draws from the seed itself).
+_ID_STREAM = 1
 
 
 def boundary_distance(region: IKRegion, q: np.ndarray) -> np.ndarray:
@@ -93,6 +108,59 @@ def shifted_ik(study: Study) -> dict[str, np.ndarray]:
     s = study.shifted
     q = beyond_box(study.ik_region, s.ik_samples, s.ik_band, s.seed)
     return {"q": q, "T": fk(study.robot, q)}
+
+
+def faster(settings, speed: float):
+    """The ID generator's ``settings`` (:class:`nfarm.study.id_trajectories.IDSettings`) with its
+    paths run ``speed`` times as fast: velocity bounds × ``speed``, acceleration bounds ×
+    ``speed``², the segments' nominal times ÷ ``speed`` (a path's timing compressed by ``speed``).
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.study.study_files import load_study
+        >>> s = load_study(PARAMS / "studies" / "intelbot5.yaml").id
+        >>> f = faster(s, 2.0)
+        >>> bool(np.allclose(f.max_velocity, 2 * s.max_velocity)), f.segment_time == (0.3, 0.9)
+        (True, True)
+    """
+    if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed > 0:
+        raise ValueError(f"speed must be a positive number, got {speed!r}")
+    return dataclasses.replace(settings, max_velocity=speed * settings.max_velocity,
+                               max_acceleration=speed ** 2 * settings.max_acceleration,
+                               segment_time=tuple(t / speed for t in settings.segment_time))
+
+
+def shifted_id(study: Study) -> dict[str, np.ndarray]:
+    """The study's shifted ID trajectories (module docstring): ``q, qd, qdd (N, n)`` [rad, rad/s,
+    rad/s²], ``trajectory (N,)``, ``tau (N, n)`` [N·m] the model's rigid-body torques and, for a
+    measured arm, ``tau_measured`` (and ``tau_payload`` where its built arm declares a payload)
+    with the states its encoders give (``q_measured``, ``qd_measured``, ``qdd_measured``).
+
+    Raises:
+        ValueError: a study that declares no shifted ID population.
+    """
+    s = study.shifted
+    if s is None or s.id_trajectories is None:
+        raise ValueError(f"{study.source}: shifted: id_trajectories: the study declares no shifted ID population")
+    settings = faster(study.id, s.id_speed)
+    data = random_trajectories(study.robot, settings, s.id_trajectories, np.random.SeedSequence([s.seed, _ID_STREAM]))
+    data["tau"] = rnea(study.robot, data["q"], data["qd"], data["qdd"])
+    if settings.measured is not None:
+        data.update(measured_readings(study, data, [s.seed, _ID_STREAM, STREAMS["id_noise"]], payload=True))
+        if settings.encoder_counts is not None:
+            data["q_measured"], data["qd_measured"], data["qdd_measured"] = measured_states(
+                data["q"], data["trajectory"], settings.dt, settings.encoder_counts, settings.filter_window)
+    return data
+
+
+def describe_id(study: Study) -> str:
+    """The shifted ID population in words, for captions and prose."""
+    s = study.shifted
+    if s is None or s.id_trajectories is None:
+        return "no shifted ID population"
+    return (f"{s.id_trajectories:,} trajectories of the study's generator run {s.id_speed:g} times as fast (speeds up to "
+            f"{s.id_speed:g}×, accelerations up to {s.id_speed ** 2:g}× the training trajectories' bounds; seed {s.seed}, "
+            f"declared {s.id_declared or s.declared})")
 
 
 def describe(study: Study) -> str:

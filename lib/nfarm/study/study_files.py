@@ -140,12 +140,18 @@ class ShiftedSection:
     just beyond the region — every joint within ``ik_band`` of its range's width beyond the ends of
     the region's box (and within its limits), at least one outside it, the task-space filters kept
     (``nfarm.study.shifted``) — ``ik_samples`` of them, drawn from ``seed``; ``declared`` says when
-    it was declared."""
+    it was declared. With ``id_trajectories``, also ID trajectories faster than any the models met:
+    the generator's paths run ``id_speed`` times as fast (velocity bounds × ``id_speed``,
+    acceleration bounds × ``id_speed``², segment times ÷ ``id_speed``), their torques the model's and,
+    for a measured arm, the built arm's as its sensors read them; ``id_declared`` says when."""
 
     seed: Annotated[int, Range(lo=0, hi=2 ** 63 - 1)]
     declared: Annotated[str, TEXT]
     ik_band: Annotated[float, Range(lo=0.0, lo_open=True, hi=0.5)]
     ik_samples: Annotated[int, Range(lo=1, hi=1_000_000)]
+    id_trajectories: Annotated[Optional[int], Range(lo=1, hi=10_000)] = None
+    id_speed: Annotated[float, Range(lo=1.0, lo_open=True, hi=10.0)] = 1.5
+    id_declared: Annotated[str, TEXT] = ""
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -35,17 +35,18 @@ from typing import Any
 
 import numpy as np
 
+from ..learning.baselines import load_id_model
 from ..learning.learned import ik_errors
 from .statistics import distinct_resamples, trajectory_sums
 from . import contest, replicates
-from .shifted import describe as describe_shifted, shifted_ik
+from .shifted import describe as describe_shifted, describe_id as describe_shifted_id, shifted_id, shifted_ik
 from .paired import seed_comparison
 from .rows import WORST_ID, Row, ik_seed_values, seed_estimates
 from .verdict_rows import ID_TARGET_PCT, IK_TARGETS, Verdict, targets_met, task_verdict, with_holm
 from .sweep import sweep_results
 
 __all__ = ["seed_models", "seed_sums", "summary_row", "judge_task", "ik_values_over_seeds", "id_values_over_seeds",
-           "measured_verdicts", "ik_verdict", "rigid_id_verdict", "seed_values_by_task", "shifted_verdict", "shifted_caption",
+           "measured_verdicts", "measured_verdict", "ik_verdict", "rigid_id_verdict", "shifted_id_verdicts", "baseline_models", "finalist_models", "seed_values_by_task", "shifted_verdict", "shifted_caption",
            "verdict_caption", "summary_caption", "paired_caption", "wide_caption"]
 
 
@@ -168,20 +169,10 @@ def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Map
     on_val = {contest.id_label(contest.id_family(g.cell.params)): g.metrics["worst_nrmse"] for g in idc.standings}
     best_anfis = min((n for n in names if n.endswith(": ANFIS") and n in on_val), key=on_val.get)
     best_other = min((n for n in names if n != reference and not n.endswith(": ANFIS") and n in on_val), key=on_val.get)
-    verdicts = []
-    for tier, (a, b) in [*pairs.items(), ("every tier", (best_anfis, best_other))]:
-        # Ranked by what chapter 6.8's contest ranked by and the ≤ 5 % target judges: the worst resolved joint's NRMSE
-        # [%] against the measured torques' spread (the summary's "worst NRMSE"); the target also over every joint
-        pair = {n: values[n] for n in (a, b)}
-        verdict = judge_task(arm, f"measured arm, {tier}", "worst NRMSE", "%", pair, a, b, units="test trajectories",
-                             scale=100.0, resolved=resolved, **boot)
-        rows: dict[str, list[Row]] = {n: [] for n in (a, b)}
-        for mask in (resolved, np.ones(n_joints, bool)):
-            est, _ = seed_comparison(pair, a, b, WORST_ID, resolved=mask, **boot)
-            for n in (a, b):
-                rows[n].append(summary_row("measured", n, WORST_ID, "%", est[n], 100.0))
-        met = {n: targets_met(r, [ID_TARGET_PCT, ID_TARGET_PCT]) for n, r in rows.items()}
-        verdicts.append(replace(verdict, anfis_targets=met[a], rival_targets=met[b]))
+    # Ranked by what chapter 6.8's contest ranked by and the ≤ 5 % target judges: the worst resolved joint's NRMSE
+    # [%] against the measured torques' spread (the summary's "worst NRMSE"); the target also over every joint
+    verdicts = [measured_verdict(arm, values, a, b, resolved=resolved, tier=tier, **boot)
+                for tier, (a, b) in [*pairs.items(), ("every tier", (best_anfis, best_other))]]
     return verdicts, values
 
 
@@ -198,13 +189,36 @@ def ik_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: st
 
 
 def rigid_id_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, resolved,
+                     task: str = "rigid-body inverse dynamics", units: str = "test trajectories",
                      draws: int = 2000, level: float = 0.95, seed: int = 0) -> Verdict:
     """The rigid-body ID task's verdict: ``anfis`` against ``rival`` by the worst ``resolved`` joint's
     NRMSE [%] over their seeds and the test trajectories (``values`` as :func:`id_values_over_seeds`
-    gives them), with the study's ≤ 5 % target; Newton–Euler, which made the torques, is exact."""
-    return judge_task(arm, "rigid-body inverse dynamics", WORST_ID, "%", values, anfis, rival,
+    gives them), with the study's ≤ 5 % target; Newton–Euler, which made the torques, is exact.
+    ``task`` and ``units`` name the population judged (the test split's trajectories, or another's)."""
+    return judge_task(arm, task, WORST_ID, "%", values, anfis, rival,
                       targets=[(WORST_ID, ID_TARGET_PCT, "%")], exact="Newton–Euler (the rigid-body model that made the torques)",
-                      units="test trajectories", scale=100.0, resolved=resolved, draws=draws, level=level, seed=seed)
+                      units=units, scale=100.0, resolved=resolved, draws=draws, level=level, seed=seed)
+
+
+def measured_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, resolved, tier: str,
+                     units: str = "test trajectories", draws: int = 2000, level: float = 0.95, seed: int = 0) -> Verdict:
+    """One measured-arm verdict: ``anfis`` against ``rival`` by the worst ``resolved`` joint's NRMSE [%]
+    against the measured torques' spread, over their seeds and the trajectories (``values``:
+    method → ``(S, T, 1 + 3n)`` trajectory sums), with the study's ≤ 5 % target on the resolved joints
+    and on every joint (``anfis_targets`` and ``rival_targets`` count both); ``tier`` names the
+    comparison (``"every tier"``, or a tier), ``units`` the trajectories judged."""
+    boot = {"draws": draws, "level": level, "seed": seed}
+    pair = {n: values[n] for n in (anfis, rival)}
+    n_joints = (next(iter(pair.values())).shape[-1] - 1) // 3
+    verdict = judge_task(arm, f"measured arm, {tier}", "worst NRMSE", "%", pair, anfis, rival, units=units,
+                         scale=100.0, resolved=resolved, **boot)
+    rows: dict[str, list[Row]] = {n: [] for n in (anfis, rival)}
+    for mask in (resolved, np.ones(n_joints, bool)):
+        est, _ = seed_comparison(pair, anfis, rival, WORST_ID, resolved=mask, **boot)
+        for n in (anfis, rival):
+            rows[n].append(summary_row("measured", n, WORST_ID, "%", est[n], 100.0))
+    met = {n: targets_met(r, [ID_TARGET_PCT, ID_TARGET_PCT]) for n, r in rows.items()}
+    return replace(verdict, anfis_targets=met[anfis], rival_targets=met[rival])
 
 
 def seed_values_by_task(ik_values: Mapping[str, np.ndarray], id_values: Mapping[str, np.ndarray], resolved, *,
@@ -231,22 +245,92 @@ def shifted_verdict(study, published: Mapping[str, tuple[Any, str | os.PathLike]
     :func:`nfarm.study.shifted.shifted_ik`; ``None`` where it declares none), read once by the
     frozen models of the main verdict: ``anfis`` against ``rival``, each over its seeds
     (``published`` as :func:`ik_values_over_seeds` takes it, checked on the poses ``probe``), by
-    the 95th-percentile tool position error with the study's IK targets, one comparison (Holm's
-    correction over one: none)."""
+    the 95th-percentile tool position error with the study's IK targets; one comparison of the
+    shifted family (:func:`shifted_id_verdicts` gives the others; Holm's correction over them is the
+    caller's, :func:`nfarm.study.verdict_rows.with_holm`)."""
     if study.shifted is None:
         return None
     targets = shifted_ik(study)
     values = ik_values_over_seeds(study.robot, {name: published[name] for name in (anfis, rival)}, targets["T"],
                                   targets["q"], probe=probe, seed=seed)
-    return with_holm([ik_verdict(study.robot.name, values, anfis, rival, task="inverse kinematics, shifted population",
-                                 units="shifted targets", draws=draws, level=level, seed=seed)])[0]
+    return ik_verdict(study.robot.name, values, anfis, rival, task="inverse kinematics, shifted population",
+                      units="shifted targets", draws=draws, level=level, seed=seed)
 
 
-def shifted_caption(study, level: float = 0.95) -> str:
-    """The shifted verdict table's caption: what the population is and how it was judged."""
-    return (f"The learned-IK verdict on a shifted population read once: {describe_shifted(study)} — the chosen ANFIS "
-            f"and the best other method of the main verdict, frozen, over the same seeds, with the same two-level "
-            f"{level:.0%} bootstrap (one comparison: no family-wise correction)")
+def baseline_models(group, *, seed: int = 0) -> list:
+    """The models of an ``id_baseline`` configuration's cells over its seeds (``group``: its
+    :class:`~nfarm.study.sweep.Replicates`), the chapter's ``seed`` first, each reused where its
+    cell keeps it (:data:`nfarm.study.replicates.MODEL_OF`)."""
+    runs = sorted(group.runs, key=lambda r: (r.cell.params["seed"] != seed, r.cell.params["seed"]))
+    return [replicates.MODEL_OF["id_baseline"](r.cell.params) for r in runs]
+
+
+def finalist_models(idc, label: str, where_of: Callable[[str, str], Path], robot, probe: Sequence[np.ndarray], *,
+                    seed: int = 0) -> list:
+    """The models of the measured arm's finalist ``label`` (a label of chapter 6.8's contest ``idc``)
+    over its seeds, the chapter's ``seed`` first, from where chapter 6 published it (``where_of(tier,
+    slot)``, e.g. :meth:`nfarm.study.chosen_models.ChosenModels.id_finalist`), checked on the states
+    ``probe``.
+
+    Raises:
+        ValueError: ``label`` is not one of the tiers' published finalists.
+    """
+    family = {contest.id_label(f): f for f in idc.chosen}.get(label)
+    tier = family.rsplit(":", 1)[0] if family else None
+    pair = idc.pair(tier) if tier else (None, None)
+    slot = next((k for k, g in zip(("anfis", "rival"), pair) if g is not None and contest.id_family(g.cell.params) == family),
+                None)
+    if slot is None:
+        raise ValueError(f"{label!r} is not a published finalist of the measured arm's contest")
+    where = where_of(tier, slot)
+    return seed_models(where, load_id_model(where, robot), probe, seed=seed)
+
+
+def shifted_id_verdicts(study, rigid: Mapping[str, Sequence[Any]], rigid_pair: tuple[str, str], *, resolved,
+                        measured: Mapping[str, Sequence[Any]] | None = None, measured_pair: tuple[str, str] | None = None,
+                        measured_resolved=None, draws: int = 2000, level: float = 0.95, seed: int = 0) -> list[Verdict]:
+    """The ID verdicts on the shifted trajectories ``study`` declares (:func:`nfarm.study.shifted.shifted_id`;
+    ``[]`` where it declares none), read once by the frozen models of the main verdict, each over its
+    seeds (``rigid``, ``measured``: method → its models, the chapter's seed first): the rigid-body
+    task's ``rigid_pair`` (ANFIS, best other) by the worst ``resolved`` joint's NRMSE on the model's
+    torques, and, for a measured arm, the measured arm's headline pair ``measured_pair`` over every
+    tier on the built arm's readings and the states its encoders give (``measured_resolved``: the
+    joints its sensors resolve, fixed on validation). The NRMSE divides by the shifted torques'
+    own spread. Holm's correction over the shifted family is the caller's."""
+    if study.shifted is None or study.shifted.id_trajectories is None:
+        return []
+    data = shifted_id(study)
+    boot = {"draws": draws, "level": level, "seed": seed}
+
+    def sums(models, states, tau):
+        return np.stack([trajectory_sums(m.predict(*states), tau, data["trajectory"]) for m in models])
+
+    with warnings.catch_warnings(record=True) as caught:       # a model's warnings are the caller's to show
+        warnings.simplefilter("always")
+        exact = tuple(data[k] for k in ("q", "qd", "qdd"))
+        values = {name: sums(rigid[name], exact, data["tau"]) for name in rigid_pair}
+        out = [rigid_id_verdict(study.robot.name, values, *rigid_pair, resolved=resolved, units="shifted trajectories",
+                                task="rigid-body inverse dynamics, shifted population", **boot)]
+        if measured is not None and measured_pair is not None and "tau_measured" in data:
+            known = tuple(data.get(f"{k}_measured", data[k]) for k in ("q", "qd", "qdd"))
+            values = {name: sums(measured[name], known, data["tau_measured"]) for name in measured_pair}
+            out.append(measured_verdict(study.robot.name, values, *measured_pair, resolved=measured_resolved,
+                                        tier="every tier, shifted population", units="shifted trajectories", **boot))
+    for w in caught:
+        warnings.warn(w.message, w.category, stacklevel=2)
+    return out
+
+
+def shifted_caption(study, level: float = 0.95, comparisons: int = 1, alpha: float = 0.05) -> str:
+    """The shifted verdict table's caption: what the populations are and how they were judged
+    (``comparisons`` of them, Holm's correction at family-wise error ``alpha`` over more than one)."""
+    ids = study.shifted is not None and study.shifted.id_trajectories is not None
+    return (f"The verdict on shifted populations read once: for inverse kinematics {describe_shifted(study)}"
+            + (f"; for inverse dynamics {describe_shifted_id(study)}" if ids else "")
+            + f" — the ANFIS and the best other method of each main verdict, frozen, over the same seeds, with the same "
+            f"two-level {level:.0%} bootstrap"
+            + (f"; Holm's correction over these {comparisons} comparisons at a family-wise error of {alpha:.0%}"
+               if comparisons > 1 else " (one comparison: no family-wise correction)"))
 
 
 # --------------------------------------------------------------------------------------------
