@@ -90,3 +90,12 @@ def test_shifted_id_in_words_reads_each_pair_and_the_family_size():
     assert "**the paired interval holds 0 on the shifted trajectories, on the test split it excludes 0**" in text
     assert text.endswith("the shifted ones over their own 3.)")
     assert shifted_id_in_words([], described="x") == ""
+
+
+def test_joint_groups_in_words_says_what_the_verdict_judges():
+    from nfarm.publishing.findings import joint_groups_in_words
+    both = joint_groups_in_words({"rigid-dominated": [False, True, True], "friction-dominated": [True, False, False]},
+                                 ["yaw", "shoulder", "elbow"], "arm")
+    assert "on shoulder, elbow (rigid-dominated)" in both and "exceeds it on yaw (friction-dominated)" in both
+    only = joint_groups_in_words({"rigid-dominated": [False, False], "friction-dominated": [True, True]}, ["a", "b"], "s")
+    assert "on every joint (a, b)" in only and "not what it learned of the rigid body's dynamics" in only

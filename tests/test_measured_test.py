@@ -112,3 +112,28 @@ def test_the_measured_figure_counts_its_predictions():
     shown = {NE: t.measured[mask] + 0.1, "nominal model + learned: ANFIS": t.measured[mask]}
     fig, caption = measured_figure(t, shown, np.arange(len(t.measured)) * 0.01, mask, 0, ["a", "b", "c"])
     assert caption == "Held-out trajectory 0: measured torques and 2 predictions" and len(fig.axes) >= 3
+
+
+def test_joint_groups_split_the_joints_by_what_moves_them():
+    """A joint is rigid-dominated where the built arm's rigid-body torque's RMS exceeds its drives';
+    the two groups partition the joints; on the SO-101's hobby servos friction moves every joint."""
+    import numpy as np
+
+    from nfarm.infra.paths import PARAMS
+    from nfarm.model.dynamics import rnea, stribeck_drive_torques
+    from nfarm.study.datasets import built_arm
+    from nfarm.study.id_trajectories import random_trajectories
+    from nfarm.study.measured_test import JOINT_GROUPS, joint_groups
+    from nfarm.study.study_files import load_study
+
+    for arm, expected in (("intelbot5", [0, 1, 1, 1, 0]), ("so101", [0, 0, 0, 0, 0])):
+        study = load_study(PARAMS / "studies" / f"{arm}.yaml")
+        data = random_trajectories(study.robot, study.id, 20, np.random.SeedSequence([7, 1]))
+        groups = joint_groups(study, data)
+        assert tuple(groups) == JOINT_GROUPS
+        assert (groups["rigid-dominated"] ^ groups["friction-dominated"]).all()
+        assert groups["rigid-dominated"].astype(int).tolist() == expected
+        built, _ = built_arm(study)
+        rigid = rnea(built, data["q"], data["qd"], data["qdd"])
+        drive = stribeck_drive_torques(built, data["qd"], data["qdd"], rigid, **study.id.friction)
+        np.testing.assert_array_equal(groups["rigid-dominated"], np.sqrt((rigid ** 2).mean(0)) > np.sqrt((drive ** 2).mean(0)))

@@ -168,3 +168,30 @@ def test_the_shifted_id_verdicts_judge_the_main_pairs_on_the_faster_trajectories
     params["shifted"].pop("id_trajectories")
     assert verdicts.shifted_id_verdicts(study_from_dict(params, source="ik-only.yaml"), rigid, ("ANFIS", "ridge"),
                                         resolved=resolved) == []
+
+
+def _joint_sums(rng, nrmse, trajectories=12):
+    """Trajectory sums ``(T, 1 + 3n)`` whose joints' NRMSE are about ``nrmse (n,)``."""
+    nrmse = np.asarray(nrmse, float)
+    counts = np.full((trajectories, 1), 100.0)
+    tau = np.zeros((trajectories, nrmse.size))
+    tau2 = np.full((trajectories, nrmse.size), 100.0 * 4.0)          # spread 2 N·m on every joint
+    err2 = 100.0 * (2.0 * nrmse) ** 2 * (1 + 0.05 * rng.random((trajectories, nrmse.size)))
+    return np.hstack([counts, err2, tau, tau2])[None]
+
+
+def test_a_measured_verdict_on_a_group_judges_only_its_joints():
+    """The ANFIS worse on the friction joint, better on the rigid ones: the group's verdicts differ, and the
+    target over every joint is judged over the group's joints only."""
+    rng = np.random.default_rng(4)
+    values = {"ANFIS": _joint_sums(rng, [0.30, 0.02, 0.03]), "MLP": _joint_sums(rng, [0.10, 0.08, 0.09])}
+    rigid, friction = np.array([False, True, True]), np.array([True, False, False])
+    on_rigid = verdicts.measured_verdict("arm", values, "ANFIS", "MLP", resolved=rigid, every=rigid,
+                                         tier="every tier, rigid-dominated joints", **BOOT)
+    on_friction = verdicts.measured_verdict("arm", values, "ANFIS", "MLP", resolved=friction, every=friction,
+                                            tier="every tier, friction-dominated joints", **BOOT)
+    whole = verdicts.measured_verdict("arm", values, "ANFIS", "MLP", resolved=np.ones(3, bool), tier="every tier", **BOOT)
+    assert on_rigid.task == "measured arm, every tier, rigid-dominated joints"
+    assert (on_rigid.verdict, on_friction.verdict, whole.verdict) == ("ANFIS better", "rival better", "rival better")
+    assert on_rigid.anfis_value == pytest.approx(3.0, rel=0.05) and on_rigid.anfis_targets == "2 of 2"
+    assert whole.anfis_targets == "0 of 2" and on_friction.rival_targets == "0 of 2"

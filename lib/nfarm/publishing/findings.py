@@ -38,7 +38,7 @@ from ..study.rows import ROLE_RESIDUAL_BASELINE, WORST_ID, Row, interval_text, r
 from ..study.verdict_rows import ID_TARGET_PCT, IK_TARGETS, target_verdict
 
 __all__ = ["PublishedResults", "study_in_words", "residual_baseline", "measured_in_words", "TIER_WORDS",
-           "shifted_in_words", "shifted_id_in_words"]
+           "shifted_in_words", "shifted_id_in_words", "joint_groups_in_words"]
 
 IK = "inverse kinematics"
 ID = "inverse dynamics"
@@ -291,3 +291,29 @@ def shifted_id_in_words(pairs: Sequence[tuple[Mapping[str, str], Mapping[str, st
             f"beyond the speeds and accelerations of every trajectory the models were trained, tuned and chosen on. "
             f"By the worst resolved joint's NRMSE against the shifted torques' own spread — " + "; ".join(said) + "."
             + _holm_note(pairs[0][0], pairs[0][1]))
+
+
+def joint_groups_in_words(groups: Mapping[str, Sequence[bool]], joint_names: Sequence[str], arm: str) -> str:
+    """Which of the measured arm's joints the rigid body moves and which the drives' friction moves
+    (``groups``: :func:`nfarm.study.measured_test.joint_groups`), in words, and what the measured
+    arm's verdict then judges (chapter 7.7).
+
+    Example:
+        >>> print(joint_groups_in_words({"rigid-dominated": [False, True], "friction-dominated": [True, False]},
+        ...                             ["yaw", "pitch"], "arm"))
+        **What moves the joints.** On arm's built arm the rigid body's torque exceeds the drives' (RMS on the test trajectories) on pitch (rigid-dominated); the drives' torque (their friction and armature) exceeds it on yaw (friction-dominated). The verdict judges the every-tier pair on each group apart: on the rigid-dominated joints what a method learned of the dynamics, on the friction-dominated ones how well it fits the drives' friction.
+    """
+    named = {g: [j for j, on in zip(joint_names, mask) if on] for g, mask in groups.items()}
+    rigid, friction = named.get("rigid-dominated", []), named.get("friction-dominated", [])
+    head = f"**What moves the joints.** On {arm}'s built arm "
+    if not rigid:
+        return (head + f"the drives' torque (their friction and armature) exceeds the rigid body's (RMS on the test trajectories) "
+                f"on every joint "
+                f"({', '.join(friction)}): **its measured-arm verdict judges how well each method fits the drives' friction, "
+                f"not what it learned of the rigid body's dynamics**.")
+    return (head + f"the rigid body's torque exceeds the drives' (RMS on the test trajectories) on {', '.join(rigid)} "
+            f"(rigid-dominated)" + (f"; the drives' torque (their friction and armature) exceeds it on {', '.join(friction)} (friction-dominated)"
+                                    if friction else "")
+            + ". The verdict judges the every-tier pair on each group apart: on the rigid-dominated joints what a method "
+            "learned of the dynamics" + (", on the friction-dominated ones how well it fits the drives' friction." if friction
+                                          else "."))

@@ -29,11 +29,12 @@ from matplotlib.figure import Figure
 from ..infra.paths import shown_path
 from ..learning.baselines import load_id_model
 from ..learning.bases import tier_of
-from ..model.dynamics import rnea
+from ..model.dynamics import rnea, stribeck_drive_torques
 from ..presentation.plotting import plot_per_joint
 from ..presentation.tables import Table
 from ..presentation.wording import times, worst_of
 from . import contest
+from .datasets import built_arm
 from .id_test_report import per_sample
 from .statistics import (Interval, bootstrap_nrmse, resolved_joints, trajectory_maxima, trajectory_sums,
                          worst_difference)
@@ -43,7 +44,7 @@ from .verdict_rows import ID_TARGET_PCT, target_verdict
 from .sweep import sweep_results
 from .sweep_files import Sweep
 
-__all__ = ["NE", "MeasuredTest", "measured_test", "rmse_table", "nrmse_table", "payload_table", "against",
+__all__ = ["JOINT_GROUPS", "joint_groups", "NE", "MeasuredTest", "measured_test", "rmse_table", "nrmse_table", "payload_table", "against",
            "MeasuredTables", "measured_tables", "shown_predictions", "measured_figure", "deploy_times", "deploy_table",
            "deploy_prose"]
 
@@ -332,3 +333,31 @@ def deploy_prose(t: MeasuredTest, rmse: Mapping[str, Interval], deploy_us: Mappi
             + "; ".join(f"{tier}: {name.split(': ', 1)[1]}, {rmse[name].worst:.3g} N·m, "
                         f"{times(deploy_us[name] / deploy_us[NE])} rnea's time"
                         for tier, name in zip(t.contest.tiers, chosen) if name in rmse) + ".")
+
+
+#: The joint groups of :func:`joint_groups`, in the verdict's order.
+JOINT_GROUPS = ("rigid-dominated", "friction-dominated")
+
+
+def joint_groups(study, data: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The measured arm's joints by what moves them on the exact states of ``data`` (``q, qd, qdd
+    (N, n)``, e.g. the test split's): **rigid-dominated** where the built arm's rigid-body torque's
+    RMS exceeds its drives' (armature, viscous, Coulomb, Stribeck and load-dependent friction:
+    :func:`nfarm.model.dynamics.stribeck_drive_torques` with the study's terms), **friction-dominated**
+    elsewhere — so that "learns the dynamics" and "fits the friction law" are judged apart. Returns
+    ``{group: (n,) bool}`` in :data:`JOINT_GROUPS`' order; no model's output enters it.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.study.study_files import load_study
+        >>> study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+        >>> q = np.zeros((4, 5)); qd = np.tile([1.0, 0.0, 0.0, 0.0, 1.0], (4, 1))
+        >>> {k: v.astype(int).tolist() for k, v in joint_groups(study, {"q": q, "qd": qd, "qdd": 0 * q}).items()}
+        {'rigid-dominated': [0, 1, 1, 1, 0], 'friction-dominated': [1, 0, 0, 0, 1]}
+    """
+    arm, _ = built_arm(study)
+    q, qd, qdd = (np.asarray(data[k], float) for k in ("q", "qd", "qdd"))
+    rigid = rnea(arm, q, qd, qdd)
+    drive = stribeck_drive_torques(arm, qd, qdd, rigid, **study.id.friction)
+    dominated = np.sqrt((rigid ** 2).mean(axis=0)) > np.sqrt((drive ** 2).mean(axis=0))
+    return {JOINT_GROUPS[0]: dominated, JOINT_GROUPS[1]: ~dominated}

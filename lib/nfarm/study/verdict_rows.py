@@ -112,8 +112,9 @@ class Verdict:
 def with_holm(verdicts: Sequence[Verdict]) -> list[Verdict]:
     """``verdicts`` (one arm's) with Holm's correction of their p-values over the arm's distinct
     comparisons: a row comparing the same two methods on the same metric as an earlier one (the
-    measured arm's "every tier", which repeats its best tier's) is the same test and counts once.
-    A row without a p-value (NaN) is left out of the family and keeps its interval's verdict.
+    measured arm's "every tier", which repeats its best tier's) is the same test and counts once;
+    one on a group of joints (a task ending in "… joints", judged on those joints only) is a test
+    of its own. A row without a p-value (NaN) is left out of the family and keeps its interval's verdict.
 
     Example:
         >>> v = [task_verdict("a", f"t{k}", "m", "mm", {"ANFIS": 1.0, f"R{k}": 2.0}, "ANFIS", (-1.0, -1.5, -0.5),
@@ -124,8 +125,13 @@ def with_holm(verdicts: Sequence[Verdict]) -> list[Verdict]:
         ['ANFIS better', 'no difference shown (Holm)', 'no difference shown (Holm)']
         >>> [w.comparisons for w in with_holm(v + [replace(v[0], task="t0, every tier")])]   # the same test twice
         [3, 3, 3, 3]
+        >>> [w.comparisons for w in with_holm(v + [replace(v[0], task="t0, every tier, rigid-dominated joints")])]
+        [4, 4, 4, 4]
     """
-    key = lambda v: (v.arm, v.metric, v.anfis, v.rival)      # noqa: E731 — one test per pair of methods and metric
+    def key(v: Verdict) -> tuple:           # one test per pair of methods, metric and group of joints judged
+        group = v.task.rsplit(", ", 1)[-1] if v.task.endswith(" joints") else ""
+        return v.arm, v.metric, v.anfis, v.rival, group
+
     first: dict[tuple, Verdict] = {}
     for v in verdicts:
         if math.isfinite(v.p):

@@ -146,14 +146,17 @@ def id_values_over_seeds(published: Mapping[str, tuple[Any, str | os.PathLike]],
 
 
 def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Mapping[str, Sequence[str]], *,
-                      resolved: np.ndarray, n_joints: int, reference: str, sweeps_dir=None, workers: int | None = None,
-                      draws: int = 2000, level: float = 0.95, seed: int = 0,
+                      resolved: np.ndarray, n_joints: int, reference: str, groups: Mapping[str, np.ndarray] | None = None,
+                      sweeps_dir=None, workers: int | None = None, draws: int = 2000, level: float = 0.95, seed: int = 0,
                       run: Callable = sweep_results) -> tuple[list[Verdict], dict[str, np.ndarray]]:
     """The measured arm's verdicts: for each tier of ``pairs`` (tier → its ANFIS and its best
     rival, by label), and over every tier (the best ANFIS and the best other method by
     validation), the two judged on the test trajectories over their seeds by the worst resolved
     joint's NRMSE [%] against the measured torques' spread — with the study's ≤ 5 % target met on
-    the ``resolved`` joints and on every joint. ``idc`` is chapter 6.8's contest
+    the ``resolved`` joints and on every joint; then the every-tier pair again on each group of
+    ``groups`` (name → ``(n,)`` bool, :func:`nfarm.study.measured_test.joint_groups`) that holds a
+    resolved joint and not every joint, by the worst of those (task ``"measured arm, every tier, <name> joints"``), so
+    that the joints the rigid body moves and those the drives' friction moves are judged apart. ``idc`` is chapter 6.8's contest
     (:func:`nfarm.study.contest.id_contest`) and ``idc_sweep`` its sweep; ``names`` every tested
     method's label, ``reference`` (Newton–Euler alone) among them but never a contestant. Each
     contestant's test cells are run or reused through ``run`` (:func:`nfarm.study.sweep.sweep_results`).
@@ -173,6 +176,11 @@ def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Map
     # [%] against the measured torques' spread (the summary's "worst NRMSE"); the target also over every joint
     verdicts = [measured_verdict(arm, values, a, b, resolved=resolved, tier=tier, **boot)
                 for tier, (a, b) in [*pairs.items(), ("every tier", (best_anfis, best_other))]]
+    for group, mask in (groups or {}).items():
+        mask = np.asarray(mask, bool)
+        if (mask & resolved).any() and not mask.all():          # a group of every joint is the every-tier row
+            verdicts.append(measured_verdict(arm, values, best_anfis, best_other, resolved=mask & resolved, every=mask,
+                                             tier=f"every tier, {group} joints", **boot))
     return verdicts, values
 
 
@@ -201,19 +209,21 @@ def rigid_id_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, riv
 
 
 def measured_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, rival: str, *, resolved, tier: str,
-                     units: str = "test trajectories", draws: int = 2000, level: float = 0.95, seed: int = 0) -> Verdict:
+                     units: str = "test trajectories", every=None, draws: int = 2000, level: float = 0.95,
+                     seed: int = 0) -> Verdict:
     """One measured-arm verdict: ``anfis`` against ``rival`` by the worst ``resolved`` joint's NRMSE [%]
     against the measured torques' spread, over their seeds and the trajectories (``values``:
     method → ``(S, T, 1 + 3n)`` trajectory sums), with the study's ≤ 5 % target on the resolved joints
-    and on every joint (``anfis_targets`` and ``rival_targets`` count both); ``tier`` names the
-    comparison (``"every tier"``, or a tier), ``units`` the trajectories judged."""
+    and on ``every`` joint (``(n,)`` bool, default all; ``anfis_targets`` and ``rival_targets`` count
+    both); ``tier`` names the comparison (``"every tier"``, a tier, or a group of joints), ``units``
+    the trajectories judged."""
     boot = {"draws": draws, "level": level, "seed": seed}
     pair = {n: values[n] for n in (anfis, rival)}
     n_joints = (next(iter(pair.values())).shape[-1] - 1) // 3
     verdict = judge_task(arm, f"measured arm, {tier}", "worst NRMSE", "%", pair, anfis, rival, units=units,
                          scale=100.0, resolved=resolved, **boot)
     rows: dict[str, list[Row]] = {n: [] for n in (anfis, rival)}
-    for mask in (resolved, np.ones(n_joints, bool)):
+    for mask in (resolved, np.ones(n_joints, bool) if every is None else np.asarray(every, bool)):
         est, _ = seed_comparison(pair, anfis, rival, WORST_ID, resolved=mask, **boot)
         for n in (anfis, rival):
             rows[n].append(summary_row("measured", n, WORST_ID, "%", est[n], 100.0))
