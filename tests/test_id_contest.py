@@ -55,6 +55,41 @@ def _rigid(seed, nrmse, **params):
     return CellResult(Cell(params, f"{sorted(params.items())}"), "ok", {"nrmse": nrmse}, 1.0, "w")
 
 
+
+def test_a_rival_within_reach_of_its_leader_stays_in_the_contest_and_the_best_mean_is_the_tiers_rival():
+    """Issue 65: the boosted trees' seed-0 value lies inside the MLP's range over its seeds, so they are
+    trained on the other draws too, and the rival of the tier is the better of the two by the mean; the
+    kernel, outside the range, is pruned. id_spread_runs runs the leaders first, then those within reach."""
+    def _at(learner, seed, nrmse, **options):          # a cell of the sweep's own kind: its study file among its parameters
+        r = _result(learner, seed, nrmse, **options)
+        return CellResult(Cell({**r.cell.params, "study_file": "params/studies/so101.yaml"}, r.cell.key), "ok",
+                          r.metrics, 1.0, "w")
+
+    seed0 = [_at("anfis", 0, 0.05, inputs="own"), _at("mlp", 0, 0.0272, hidden=[8]),
+             _at("boosting", 0, 0.0303, max_iter=5), _at("kernel", 0, 0.05, gamma=1.0)]
+    values = {("mlp", 1): 0.0336, ("mlp", 2): 0.0300, ("boosting", 1): 0.0280, ("boosting", 2): 0.0281}
+    asked = []
+
+    def run(sweep):
+        asked.append(sorted((c.params["learner"], c.params["seed"]) for c in sweep.cells))
+        return [_at(c.params["learner"], c.params["seed"], values.get((c.params["learner"], c.params["seed"]), 0.06),
+                        **c.params["options"]) for c in sweep.cells]
+
+    sweep = load_sweep(PARAMS / "sweeps" / "id_contest.yaml", smoke=True)
+    spread = contest.id_spread_runs(sweep, seed0, (1, 2), run)
+    assert asked == [[("anfis", 1), ("anfis", 2), ("mlp", 1), ("mlp", 2)],
+                     [("anfis", 1), ("anfis", 2), ("boosting", 1), ("boosting", 2), ("mlp", 1), ("mlp", 2)]]
+    outcome = contest.id_contest(seed0, spread)
+    assert outcome.finalists == ("generic:anfis", "generic:mlp", "generic:boosting")
+    assert outcome.leaders == ("generic:anfis", "generic:mlp")
+    anfis, rival = outcome.pair("generic")
+    assert contest.id_family(rival.cell.params) == "generic:boosting" and rival.n == 3     # mean 0.0288 < 0.0303
+    assert outcome.group("generic:kernel").n == 1                                          # out of reach: pruned
+    # no spread yet: the leaders only; a rival just outside the leader's range stays out
+    assert contest.id_contending(outcome.chosen) == ["generic:anfis", "generic:mlp"]
+    narrow = [r for r in spread if r.cell.params["learner"] == "mlp" and r.cell.params["seed"] == 2]   # range to 0.0300
+    assert contest.id_contending(outcome.chosen, spread=narrow) == ["generic:anfis", "generic:mlp"]
+
 def test_the_rigid_body_sweeps_keep_each_tiers_best_on_seed_0_over_the_resolved_joints():
     """Chapter 6.4's input sets and 6.5's baselines: each tier's best configuration on seed 0
     (over the joints a sensor resolves) goes on to the other seeds; the others are pruned."""

@@ -30,9 +30,11 @@ follows the same rules with its own contestants and metric: a contestant is a le
 the tier from :func:`nfarm.learning.bases.tier_of`), every learner of a tier has the same number
 of configurations, and they are ranked by :data:`ID_RANKED_BY` — the study's target metric, the
 worst resolved joint's NRMSE against the measured torques' spread, then the worst joint's RMSE.
-In contention after seed 0 (:func:`id_contending`): each tier's best ANFIS and best rival, so
-that every tier's verdict — ANFIS against the best of the others with the same knowledge — has
-its spread over the seeds. Pass ``family_of=id_family, ranked_by=ID_RANKED_BY`` to
+In contention after seed 0 (:func:`id_contending`): each tier's best ANFIS and best rival (its
+leaders), and every other rival of the tier within reach of its leader — its seed-0 value at most
+the largest the leader reached over its seeds — so that every tier's verdict — ANFIS against the
+best of the others with the same knowledge, by the mean over the seeds — has its spread over the
+seeds and no rival is pruned that another draw could rank first (:func:`id_spread_runs`). Pass ``family_of=id_family, ranked_by=ID_RANKED_BY`` to
 :func:`choose`, :func:`budgets` and :func:`standings`.
 """
 
@@ -40,7 +42,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -53,9 +55,9 @@ from ..learning.ik_rivals import RivalIK
 from ..learning.learned import ik_errors
 from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
-from .sweep_files import Sweep
+from .sweep_files import Cell, Sweep
 
-__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
+__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -150,15 +152,44 @@ def id_family(params: Mapping[str, Any]) -> str:
     return f"{id_tier(params)}:{params['learner']}"
 
 
-def id_contending(chosen: Mapping[str, CellResult], ranked_by: Sequence[str] = ID_RANKED_BY) -> list[str]:
+def id_contending(chosen: Mapping[str, CellResult], ranked_by: Sequence[str] = ID_RANKED_BY,
+                  spread: Iterable[CellResult] = ()) -> list[str]:
     """The learned-ID contestants still in contention after seed 0: in each tier, the best ANFIS
-    and the best of the other learners (by ``ranked_by`` on validation)."""
+    and the best of the other learners (by ``ranked_by`` on validation) — the tier's **leaders** —
+    and, once the leaders' cells on the other draws are given (``spread``), every other learner of
+    the tier **within reach**: its seed-0 value of ``ranked_by[0]`` at most the largest its tier's
+    best other learner reached over its seeds (seed 0 and ``spread``), since another draw of the
+    data could then rank the two the other way round (issue 65: the SO-101's boosted trees, 3.03 %
+    on seed 0, had been pruned inside the MLP's range of 2.72–3.36 %).
+
+    Example (a tier whose MLP leads on seed 0, the trees inside its range, the kernel outside):
+        >>> def cell(learner, seed, worst):
+        ...     return CellResult(Cell({"learner": learner, "options": {"inputs": "own"}, "seed": seed}, "x"), "ok",
+        ...                       {"worst_nrmse": worst, "worst_rmse": worst}, 0.0, "local")
+        >>> chosen = {f"generic:{k}": cell(k, 0, v) for k, v in (("anfis", 0.05), ("mlp", 0.027), ("boosting", 0.030),
+        ...                                                      ("kernel", 0.05))}
+        >>> id_contending(chosen)
+        ['generic:anfis', 'generic:mlp']
+        >>> id_contending(chosen, spread=[cell("mlp", 1, 0.0336), cell("mlp", 2, 0.0272)])
+        ['generic:anfis', 'generic:mlp', 'generic:boosting']
+    """
     best: dict[tuple[str, bool], str] = {}
     for name, r in chosen.items():
         slot = (name.rsplit(":", 1)[0], name.endswith(":anfis"))
         if slot not in best or _key(r, ranked_by) < _key(chosen[best[slot]], ranked_by):
             best[slot] = name
-    return [name for name in chosen if name in best.values()]
+    reach: dict[str, float] = {}
+    spread = list(spread)
+    for (tier, anfis), name in best.items():
+        if not anfis:
+            same = json_key(chosen[name].cell.params)
+            values = [chosen[name].metrics[ranked_by[0]]] + [r.metrics[ranked_by[0]] for r in spread
+                                                             if json_key(r.cell.params) == same]
+            if len(values) > 1:
+                reach[tier] = float(max(values))
+    return [name for name in chosen if name in best.values() or (
+        not name.endswith(":anfis") and name.rsplit(":", 1)[0] in reach
+        and chosen[name].metrics[ranked_by[0]] <= reach[name.rsplit(":", 1)[0]])]
 
 
 def family(params: Mapping[str, Any]) -> str:
@@ -393,12 +424,19 @@ class IDContest:
         return next(g for g in self.standings if id_family(g.cell.params) == name)
 
     def pair(self, tier: str) -> tuple[Replicates | None, Replicates | None]:
-        """The tier's ANFIS finalist and its best rival over their seeds (``None`` where the tier
-        has no such contestant)."""
+        """The tier's ANFIS finalist and its best rival over their seeds — of the finalists of other
+        learners (the leader and those within its reach), the least by the mean of
+        :data:`ID_RANKED_BY` over the seeds (``None`` where the tier has no such contestant)."""
         names = [n for n in self.finalists if n.rsplit(":", 1)[0] == tier]
         anfis = next((self.group(n) for n in names if n.endswith(":anfis")), None)
-        rival = next((self.group(n) for n in names if not n.endswith(":anfis")), None)
-        return anfis, rival
+        rivals = [self.group(n) for n in names if not n.endswith(":anfis")]
+        return anfis, min(rivals, key=lambda g: _key(g, ID_RANKED_BY)) if rivals else None
+
+    @property
+    def leaders(self) -> tuple[str, ...]:
+        """The finalists that led their tier's ANFIS or other learners on seed 0 (those within reach
+        of a leader aside)."""
+        return tuple(id_contending(self.chosen))
 
     def winner(self, tier: str) -> Replicates:
         """The tier's best finalist by the mean of :data:`ID_RANKED_BY` over the seeds."""
@@ -420,18 +458,31 @@ def id_contest(seed0: Iterable[CellResult], spread: Iterable[CellResult] = ()) -
     finalists' cells on the other draws (``spread``, those of :func:`id_spread_params`)."""
     seed0 = [r for r in seed0 if r.cell.params.get("split", "val") == "val"]
     chosen = choose(seed0, family_of=id_family, ranked_by=ID_RANKED_BY)
-    finalists = tuple(id_contending(chosen))
+    spread = list(spread)
+    finalists = tuple(id_contending(chosen, spread=spread))
     wanted = {json_key(chosen[n].cell.params) for n in finalists}
     spread = [r for r in spread if json_key(r.cell.params) in wanted]
     groups = standings({n: chosen[n] for n in chosen}, spread, family_of=id_family, ranked_by=ID_RANKED_BY)
     return IDContest(chosen, finalists, tuple(groups), budgets(seed0, family_of=id_family))
 
 
-def id_spread_params(seed0: Iterable[CellResult], seeds: Sequence[int] = SPREAD_SEEDS) -> list[dict]:
-    """The cells that train each learned-ID finalist on the other draws."""
+def id_spread_params(seed0: Iterable[CellResult], seeds: Sequence[int] = SPREAD_SEEDS,
+                     spread: Iterable[CellResult] = ()) -> list[dict]:
+    """The cells that train each learned-ID finalist on the other draws: the leaders' without
+    ``spread``, and with the leaders' cells on those draws (``spread``) also those within their reach
+    (:func:`id_contending`)."""
     seed0 = [r for r in seed0 if r.cell.params.get("split", "val") == "val"]
     chosen = choose(seed0, family_of=id_family, ranked_by=ID_RANKED_BY)
-    return spread_params(chosen, seeds, names=id_contending(chosen))
+    return spread_params(chosen, seeds, names=id_contending(chosen, spread=spread))
+
+
+def id_spread_runs(sweep: Sweep, seed0: Sequence[CellResult], seeds: Sequence[int], run: Callable[[Sweep], list]
+                   ) -> list[CellResult]:
+    """The learned-ID finalists' cells on the other draws ``seeds``, run (or reused) by ``run`` (a
+    sweep → its results): the leaders' first, then those within their reach (:func:`id_contending`)."""
+    spread = run(sweep.with_cells(id_spread_params(seed0, seeds)))
+    more = id_spread_params(seed0, seeds, spread)
+    return run(sweep.with_cells(more)) if len(more) > len(spread) else spread
 
 
 # --------------------------------------------------------------------------------------------

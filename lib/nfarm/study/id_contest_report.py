@@ -93,7 +93,8 @@ def budget_table(idc: contest.IDContest) -> Table:
 
 def joints_table(idc: contest.IDContest, id_val: Mapping[str, np.ndarray], ne_rmse: np.ndarray, noise) -> Table:
     """Every joint's validation RMSE [N·m] on the measured torques: Newton–Euler alone
-    (``ne_rmse``, :func:`newton_euler_rmse`), each tier's two finalists (mean over the seeds),
+    (``ne_rmse``, :func:`newton_euler_rmse`), each tier's finalists (its leaders and the rivals within
+    their reach, :func:`nfarm.study.contest.id_contending`; mean over the seeds),
     the sensor noise σ (``noise (n,)`` [N·m]) and the measured torque's spread; a joint whose
     spread is below σ is marked "(below noise)": shown, not judged."""
     spread = measured_validation(id_val)["tau"].std(axis=0)
@@ -105,16 +106,17 @@ def joints_table(idc: contest.IDContest, id_val: Mapping[str, np.ndarray], ne_rm
              ["measured torque's spread (standard deviation)", "", *(f"{x:.3g}" for x in spread), ""]]
     return Table(["model", "tier", *(f"τ{j + 1} [N·m]" + ("" if resolved[j] else " (below noise)") for j in range(len(spread))),
                   "seeds"], rows,
-                 caption="Every joint's validation RMSE on the measured torques for each tier's two finalists (mean over the "
-                         "seeds), beside the sensor noise σ and the measured torque's spread; a joint whose spread is below "
+                 caption="Every joint's validation RMSE on the measured torques for each tier's finalists — its best ANFIS and "
+                         "best other learner on seed 0, and every other learner within reach of that one (its seed-0 "
+                         "value inside the leader's range over the seeds) — (mean over the seeds), beside the sensor noise σ and the measured torque's spread; a joint whose spread is below "
                          "σ is shown but not judged")
 
 
 def size_curves(idc: contest.IDContest, size_runs: Sequence[CellResult]) -> dict[str, list[tuple[int, float]]]:
-    """Each finalist's ``(training states, worst resolved joint NRMSE [%])`` on seed 0, at the
-    contest's size and at every other size it ran (``size_runs``), by the finalist's words."""
+    """Each tier leader's ``(training states, worst resolved joint NRMSE [%])`` on seed 0, at the
+    contest's size and at every other size it ran (``size_runs``), by the leader's words."""
     curves: dict[str, list[tuple[int, float]]] = {}
-    for r in [*size_runs, *(idc.chosen[name] for name in idc.finalists)]:
+    for r in [*size_runs, *(idc.chosen[name] for name in idc.leaders)]:
         curves.setdefault(contest.id_label(contest.id_family(r.cell.params)), []).append(
             (r.metrics["train_samples"], 100 * r.metrics["worst_nrmse"]))
     return curves

@@ -144,8 +144,8 @@ def measured_test(robot, id_test: Mapping[str, np.ndarray], sweep, *, other_seed
     states = tuple(id_test.get(f"{k}_measured", id_test[k]) for k in ("q", "qd", "qdd"))
     measured, payload, trajectory = id_test["tau_measured"], id_test.get("tau_payload"), id_test["trajectory"]
     seed0 = run(sweep, sweeps_dir, workers=workers)
-    idc = contest.id_contest(seed0, run(sweep.with_cells(contest.id_spread_params(seed0, other_seeds)), sweeps_dir,
-                                        workers=workers))
+    idc = contest.id_contest(seed0, contest.id_spread_runs(sweep, seed0, other_seeds,
+                                                           lambda s: run(s, sweeps_dir, workers=workers)))
     nominal, identification = tier_of({"residual": True}), tier_of({"learner": "identification"})
     references = [name for name in idc.chosen if name in (f"{nominal}:friction", f"{identification}:identification")]
     tested = list(dict.fromkeys([*idc.finalists, *references]))

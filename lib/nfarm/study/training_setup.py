@@ -198,13 +198,16 @@ class TrainingSweeps:
                                                                      seeds=self.other_seeds)),
                 self.id_contest]
 
-    def measured_finalists(self, idc_runs: Sequence[CellResult], strides: Sequence[int]) -> list[Sweep]:
+    def measured_finalists(self, idc_runs: Sequence[CellResult], strides: Sequence[int],
+                           spread: Sequence[CellResult] = ()) -> list[Sweep]:
         """The measured arm's finalists (of the tuning round ``idc_runs``, seed 0) on the other
-        draws, and on every ``strides``-th training state (seed 0)."""
+        draws — the leaders' without ``spread``, and with their cells on those draws (``spread``)
+        also those within their reach (:func:`nfarm.study.contest.id_contending`) — and the leaders
+        on every ``strides``-th training state (seed 0)."""
         first = contest.id_contest(idc_runs)
-        return [self.id_contest.with_cells(contest.id_spread_params(idc_runs, self.other_seeds)),
+        return [self.id_contest.with_cells(contest.id_spread_params(idc_runs, self.other_seeds, spread)),
                 self.id_contest.with_cells([{**first.chosen[name].cell.params, "stride": s}
-                                            for name in first.finalists for s in strides])]
+                                            for name in first.leaders for s in strides])]
 
 
 def training_sweeps(setup: TrainingSetup, *, study_file: str, data_dir=None, models_dir=None, smoke: bool = False,
