@@ -23,6 +23,7 @@ import dataclasses
 
 import numpy as np
 
+from ..infra.arguments import check_number
 from ..model.kinematics import fk
 from .regions import IKRegion
 from .study_files import Study
@@ -60,8 +61,8 @@ def beyond_box(region: IKRegion, n: int, band: float, seed: int, *, batch: int =
         ValueError: a ``band`` outside ``(0, 0.5]``; a box at every joint's limits (nothing lies
             beyond it); too few draws kept within ``max_draws``.
     """
-    if isinstance(band, bool) or not isinstance(band, (int, float)) or not 0 < band <= 0.5:
-        raise ValueError(f"band must be in (0, 0.5], got {band!r}")
+    check_number("band", band, 0, 0.5, open_lo=True, open_hi=False, finite=False, numpy=False,
+                 message=f"band must be in (0, 0.5], got {band!r}")
     lo, hi = region.box[:, 0], region.box[:, 1]
     limits = region.robot.qlim
     wide = np.column_stack([np.maximum(lo - band * (hi - lo), limits[:, 0]), np.minimum(hi + band * (hi - lo), limits[:, 1])])
