@@ -17,7 +17,7 @@ from nfarm.infra.reading import ParamsError, ParamsWarning, load_yaml
 from nfarm.model.dynamics import rnea
 from nfarm.model.kinematics import fk
 from nfarm.model.robot import load_robot
-from nfarm.model.urdf import from_urdf
+from nfarm.model.urdf_import import from_urdf
 from nfarm.study.add_arm import add_arm
 from nfarm.study.study_files import load_study
 

@@ -528,7 +528,7 @@ def near_arm(tmp_path, rpy: str) -> Robot:
     import warnings
 
     from nfarm.infra.reading import ParamsWarning
-    from nfarm.model.urdf import from_urdf
+    from nfarm.model.urdf_import import from_urdf
     path = tmp_path / f"near_{rpy.replace(' ', '_')}.urdf"
     path.write_text(NEAR.format(rpy=rpy))
     with warnings.catch_warnings():
@@ -591,7 +591,7 @@ def test_front_is_where_the_arm_reaches_at_home_whatever_frame_0_faces(tmp_path)
     names the side the arm reaches to at home, in the labels and in the columns."""
     import warnings
 
-    from nfarm.model.urdf import from_urdf
+    from nfarm.model.urdf_import import from_urdf
     from test_add_arm import write_arm
     arms = {}
     for axis in ("0 1 0", "0 -1 0"):

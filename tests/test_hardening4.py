@@ -19,7 +19,7 @@ from nfarm.infra.paths import PARAMS, ROOT
 from nfarm.infra.reading import ParamsError, load_yaml
 from nfarm.infra.typed import CELL_TIMEOUT_S, MASS, Range, parse_number
 from nfarm.model.robot import is_robot_name, load_robot, robot_from_dict, robot_to_dict
-from nfarm.model.urdf import from_urdf
+from nfarm.model.urdf_import import from_urdf
 from nfarm.study.add_arm import MAX_LICENCE_BYTES, add_arm
 from test_add_arm import write_arm
 

@@ -37,7 +37,7 @@ def edit(package: Path, module: str) -> None:
 def test_the_closure_follows_imports_and_stops_at_the_layers_above():
     learned = provenance.code_modules("learning.model_cache")      # the key of every fitted model
     assert {"learning.learned", "learning.learned_id", "learning.anfis", "learning.fuzzy", "learning.bases", "model.kinematics",
-            "__init__", "learning.__init__", "model.__init__", "model.urdf"} <= set(learned)
+            "__init__", "learning.__init__", "model.__init__", "model.urdf_import"} <= set(learned)
     assert not {m for m in learned if m.split(".")[0] in ("presentation", "study", "publishing")}
     # A function-level import counts: jobs imports the learners at the top, sweep runs notebooks lazily.
     assert "infra.notebook_runs" in provenance.code_modules("study.sweep")

@@ -21,7 +21,8 @@ from nfarm.infra.paths import PARAMS
 from nfarm.infra.reading import ParamsError, ParamsWarning
 from nfarm.model.rotations import quat_to_matrix, matrix_to_rpy
 from nfarm.model.robot import load_robot
-from nfarm.model.urdf import from_urdf, to_urdf
+from nfarm.model.urdf_export import to_urdf
+from nfarm.model.urdf_import import from_urdf
 
 TOL = 1e-12
 
@@ -398,3 +399,10 @@ def test_the_chapters_reference_for_a_urdf_arm_is_pinocchios_own_parse_and_catch
     assert np.abs(fk(wrong, q) - np.array([reference.fk(x) for x in q])).max() > 1e-4, "the source sees it"
     dh_only, what = pinocchio_source(PARAMS / "robots" / "intelbot5.yaml", load_robot(PARAMS / "robots" / "intelbot5.yaml"))
     assert what == "the robot built joint by joint in Pinocchio from nfarm's DH table"
+
+
+def test_nfarm_model_urdf_re_exports_the_public_names_from_their_modules():
+    from nfarm.model import urdf, urdf_export, urdf_import, urdf_tree
+    assert (urdf.to_urdf, urdf.from_urdf, urdf.urdf_outline, urdf.URDFOutline, urdf.URDFJoint) == \
+        (urdf_export.to_urdf, urdf_import.from_urdf, urdf_tree.urdf_outline, urdf_tree.URDFOutline,
+         urdf_tree.URDFJoint)

@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 
 from nfarm.infra.reading import ParamsError, ParamsWarning
-from nfarm.model import urdf as urdf_module
+from nfarm.model import urdf_import
 from nfarm.model.robot import load_robot, robot_from_dict, robot_to_dict
 from nfarm.model.rotations import log_so3
-from nfarm.model.urdf import from_urdf, to_urdf
+from nfarm.model.urdf_export import to_urdf
+from nfarm.model.urdf_import import from_urdf
 from test_urdf import GOOD, check_against_pinocchio
 
 
@@ -102,8 +103,8 @@ def test_an_entity_without_a_doctype_and_a_comment_are_handled(tmp_path):
 
 def test_the_size_limit_is_checked_before_the_file_is_parsed(tmp_path, monkeypatch):
     big = GOOD.replace("</robot>", "<!--" + "x" * (2 << 20) + "--></robot>")
-    monkeypatch.setattr(urdf_module, "_parse", lambda *a: pytest.fail("parsed a file over the limit"))
-    refused(tmp_path, big, r"file is \d+ bytes, over the limit of 1048576 for a URDF$")   # _parse never ran
+    monkeypatch.setattr(urdf_import, "parse_urdf", lambda *a: pytest.fail("parsed a file over the limit"))
+    refused(tmp_path, big, r"file is \d+ bytes, over the limit of 1048576 for a URDF$")   # parse_urdf never ran
     (tmp_path / "big.urdf").write_text(big)
     (tmp_path / "big.yaml").write_text("name: big\nurdf: big.urdf\n")
     with pytest.raises(ParamsError, match=r"big.urdf: file is \d+ bytes, over the limit of 1048576"):

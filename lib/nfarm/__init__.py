@@ -52,7 +52,8 @@ PUBLIC: dict[str, str] = {
                      "joint_drive_torques"], "model.dynamics"),
     **dict.fromkeys(["pose_error", "matrix_to_quat", "quat_to_matrix", "matrix_to_rpy",
                      "rpy_to_matrix"], "model.rotations"),
-    **dict.fromkeys(["to_urdf", "from_urdf"], "model.urdf"),
+    "to_urdf": "model.urdf_export",
+    "from_urdf": "model.urdf_import",
     "ik": "solvers.ik",
     **dict.fromkeys(["LM", "DLS", "Pinv", "JT"], "solvers.ik"),
     **dict.fromkeys(["closed_form"], "solvers.geometric_ik"),
@@ -123,7 +124,8 @@ if TYPE_CHECKING:   # for readers and type checkers; at run time the names come 
     from .model.kinematics import fk, fk_all, jacobian, manipulability, min_singular_value
     from .model.robot import ParamsError, ParamsWarning, Robot, load_robot, robot_hash, sample_configurations
     from .model.rotations import matrix_to_quat, matrix_to_rpy, pose_error, quat_to_matrix, rpy_to_matrix
-    from .model.urdf import from_urdf, to_urdf
+    from .model.urdf_export import to_urdf
+    from .model.urdf_import import from_urdf
     from .solvers import ik
     from .solvers.ik import DLS, JT, LM, Pinv
     from .solvers.geometric_ik import closed_form

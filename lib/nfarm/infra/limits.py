@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-import math
 import time
 from collections.abc import Iterator
+
+from .arguments import check_number
 
 __all__ = ["TimeLimitError", "time_limit", "check_time"]
 
@@ -33,9 +34,8 @@ def time_limit(seconds: float | None) -> Iterator[None]:
     if seconds is None:
         yield
         return
-    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not seconds > 0 \
-            or math.isnan(seconds):
-        raise ValueError(f"a time limit must be a positive number of seconds, got {seconds!r}")
+    check_number("seconds", seconds, 0, open_lo=True, finite=False, numpy=False,
+                 message=f"a time limit must be a positive number of seconds, got {seconds!r}")
     deadline = time.monotonic() + seconds
     outer = _DEADLINE.get()
     token = _DEADLINE.set((deadline, seconds) if outer is None or deadline < outer[0] else outer)

@@ -33,6 +33,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from . import progress as _progress
+from .arguments import check_number
 from .paths import NOTEBOOKS, atomic_path, shown_path
 
 __all__ = ["ReportError", "run_notebook", "chapters", "declared_parameters", "KERNEL_NAME", "CHAPTER"]
@@ -310,9 +311,8 @@ def run_notebook(notebook: str | os.PathLike, output: str | os.PathLike, paramet
         to_run = output.with_name(f".{output.stem}.source.ipynb")
         with atomic_path(to_run) as tmp:
             nbformat.write(nb, tmp)
-    if cell_timeout is not None and not (isinstance(cell_timeout, (int, float)) and not isinstance(cell_timeout, bool)
-                                         and 0 < cell_timeout < float("inf")):
-        raise ValueError(f"cell_timeout must be a positive, finite number of seconds or None, got {cell_timeout!r}")
+    check_number("cell_timeout", cell_timeout, 0, float("inf"), open_lo=True, finite=False, numpy=False, or_none=True,
+                 message=f"cell_timeout must be a positive, finite number of seconds or None, got {cell_timeout!r}")
     quiet = DropMessage("Kernel died")      # reported below, in one line
     logging.getLogger("papermill").addFilter(quiet)
     cells = len(nbformat.read(to_run, 4).cells)

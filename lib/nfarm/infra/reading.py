@@ -36,6 +36,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from .arguments import is_integer, is_number
+
 __all__ = ["ParamsError", "ParamsWarning", "read_bytes", "load_yaml", "load_json", "Validator",
            "show", "json_ready", "with_content_digest", "checked_content", "MAX_BYTES", "MAX_DEPTH",
            "MAX_NODES", "MAX_DIGITS", "listed", "MAX_LISTED"]
@@ -475,7 +477,7 @@ class Validator:
     def number(self, value: Any, at: str, *, lo: float | None = None, hi: float | None = None,
                lo_open: bool = False) -> float:
         """A finite number (``lo <= value <= hi``, or ``lo < value`` with ``lo_open``)."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if not is_number(value, numpy=False):
             self.fail(at, f"must be a number, got {show(value)}")
         try:
             x = float(value)
@@ -490,7 +492,7 @@ class Validator:
         return x
 
     def integer(self, value: Any, at: str, *, lo: int | None = None, hi: int | None = None) -> int:
-        if isinstance(value, bool) or not isinstance(value, int):
+        if not is_integer(value, numpy=False):
             self.fail(at, f"must be a whole number, got {show(value)}")
         if lo is not None and value < lo:
             self.fail(at, f"must be >= {lo}, got {value}")

@@ -57,8 +57,8 @@ from . import hybrid
 from .estimator import Estimator, model_file, write_model
 from .fuzzy import (MF_TYPES, cluster_params, fcm_memberships, fuzzy_cmeans, grid_params, mf_rows,
                     mf_values, subtractive_clustering)
+from ..infra.arguments import check_choice, check_integer, check_number, is_integer
 from ..infra.reading import Validator, checked_content, json_ready, load_json, show
-from ..solvers.arguments import check_integer, check_number
 
 __all__ = ["ANFIS", "ANFISMulti", "ANFISWarning", "MF_TYPES", "PARTITIONS", "SOLVERS", "FILE_NAME", "load",
            "fit_shared"]
@@ -185,12 +185,9 @@ class ANFIS(Estimator):
     # -- validation ---------------------------------------------------------------------------
 
     def _check_options(self, n_features: int) -> list[int]:
-        if self.mf not in MF_TYPES:
-            raise ValueError(f"mf must be one of {', '.join(MF_TYPES)}, got {self.mf!r}")
-        if self.partition not in PARTITIONS:
-            raise ValueError(f"partition must be one of {', '.join(PARTITIONS)}, got {self.partition!r}")
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, got {self.solver!r}")
+        check_choice("mf", self.mf, MF_TYPES)
+        check_choice("partition", self.partition, PARTITIONS)
+        check_choice("solver", self.solver, SOLVERS)
         for name in ("step_size", "step_increase", "step_decrease", "radius", "memory_budget",
                      "fcm_tolerance"):
             check_number(name, getattr(self, name), 0, None, open_lo=True)
@@ -201,18 +198,17 @@ class ANFIS(Estimator):
         check_number("min_improvement", self.min_improvement, 0, 1, open_lo=False)
         for name in ("error_goal", "ridge"):
             check_number(name, getattr(self, name), 0, None, open_lo=False)
-        if self.partition == "fcm" and not (isinstance(self.n_rules, (int, np.integer))
-                                            and not isinstance(self.n_rules, bool) and self.n_rules >= 2):
-            raise ValueError(f"partition 'fcm' needs n_rules (an integer) >= 2, got {self.n_rules!r}")
+        if self.partition == "fcm":
+            check_integer("n_rules", self.n_rules, 2,
+                          message=f"partition 'fcm' needs n_rules (an integer) >= 2, got {self.n_rules!r}")
         premise = self._premise(n_features)
-        if isinstance(self.n_mfs, (int, np.integer)) and not isinstance(self.n_mfs, bool):
+        if is_integer(self.n_mfs):
             n_mfs = [self.n_mfs] * len(premise)
         elif isinstance(self.n_mfs, (Sequence, np.ndarray)) and not isinstance(self.n_mfs, str):
             n_mfs = list(self.n_mfs)
         else:
             n_mfs = []
-        if len(n_mfs) != len(premise) or not all(isinstance(m, (int, np.integer))
-                                                 and not isinstance(m, bool) and m >= 1 for m in n_mfs):
+        if len(n_mfs) != len(premise) or not all(is_integer(m) and m >= 1 for m in n_mfs):
             raise ValueError(f"n_mfs must be an integer >= 1 or one per premise input ({len(premise)}), "
                              f"got {self.n_mfs!r}")
         if self.feature_names is not None and len(self.feature_names) != n_features:
@@ -225,8 +221,7 @@ class ANFIS(Estimator):
             return np.arange(n_features)
         given = self.premise_inputs
         if isinstance(given, (str, bytes)) or not isinstance(given, (Sequence, np.ndarray)) or \
-                len(given) == 0 or not all(isinstance(i, (int, np.integer)) and not isinstance(i, bool)
-                                           and 0 <= i < n_features for i in given) \
+                len(given) == 0 or not all(is_integer(i) and 0 <= i < n_features for i in given) \
                 or len(set(int(i) for i in given)) != len(given):
             raise ValueError(f"premise_inputs must be None or distinct column indices in 0..{n_features - 1}, "
                              f"got {given!r}")

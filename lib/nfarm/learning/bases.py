@@ -54,6 +54,7 @@ import functools
 
 import numpy as np
 
+from ..infra.arguments import check_choice
 from ..model.kinematics import jacobian
 from ..model.robot import Robot
 
@@ -171,8 +172,7 @@ def drive_terms(qd: np.ndarray) -> np.ndarray:
 
 def _kind(kind: str) -> tuple[str, bool]:
     """A basis's rigid part and whether it has the drive terms."""
-    if kind not in BASES:
-        raise ValueError(f"basis must be one of {', '.join(BASES)}, got {kind!r}")
+    check_choice("basis", kind, BASES)
     return (kind[:-len(DRIVES)], True) if kind.endswith(DRIVES) else (kind, False)
 
 

@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from ..infra.arguments import check_choice
 from ..infra.reading import Validator, show
 from ..model.kinematics import fk_all
 from ..model.robot import Robot
@@ -116,8 +117,7 @@ def _in_chart(T: np.ndarray, chart: np.ndarray | None) -> np.ndarray:
 def encode(T_0e: np.ndarray, encoding: str, chart: np.ndarray | None = None) -> np.ndarray:
     """Input features ``(..., d)`` of tool poses ``T_0e (..., 4, 4)`` (module docstring);
     ``"arm_plane"`` reads the poses in the robot's :func:`arm_chart` when given."""
-    if encoding not in ENCODINGS:
-        raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {encoding!r}")
+    check_choice("encoding", encoding, ENCODINGS)
     T = np.asarray(T_0e, dtype=float)
     if encoding == "arm_plane":
         T = _in_chart(T, chart)
@@ -226,8 +226,7 @@ class PoseEncoder(Estimator):
             ValueError: an unknown encoding, or ``"arm_plane"`` for poses that leave the arm's
                 plane by more than ``max_out_of_plane`` (naming the robot and the angle).
         """
-        if self.encoding not in ENCODINGS:
-            raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
+        check_choice("encoding", self.encoding, ENCODINGS)
         self.chart_ = arm_chart(robot) if self.encoding == "arm_plane" else None
         if self.encoding == "arm_plane":
             worst = float(out_of_plane(T, self.chart_).max())

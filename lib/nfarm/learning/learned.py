@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from ..infra.arguments import check_choice, check_integer, check_number, is_integer
 from ..infra.reading import Validator, json_ready, show
 from ..model.kinematics import fk
 from ..model.robot import Robot, robot_hash
@@ -129,8 +130,7 @@ class LearnedIK(PerJointModel):
 
     def _options(self, n: int) -> list[dict]:
         """The ANFIS options of each joint, validated before any training."""
-        if self.encoding not in ENCODINGS:
-            raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
+        check_choice("encoding", self.encoding, ENCODINGS)
         return joint_anfis_options(self.anfis_options, self.joint_options, n,
                                     [ENCODINGS[self.encoding]] * n)
 
@@ -171,8 +171,7 @@ class LearnedIK(PerJointModel):
             return []
         given = self.shared_joints
         if isinstance(given, (str, bytes, Mapping)) or not isinstance(given, Sequence) or len(given) < 2 \
-                or not all(isinstance(j, (int, np.integer)) and not isinstance(j, bool) and 0 <= j < n
-                           for j in given) or len(set(given)) != len(given):
+                or not all(is_integer(j) and 0 <= j < n for j in given) or len(set(given)) != len(given):
             raise ValueError(f"shared_joints must be None or at least two distinct joint indices in "
                              f"[0, {n}), got {show(given)}")
         different = [j for j in given if options[j] != options[given[0]]]
@@ -228,8 +227,7 @@ class LearnedIK(PerJointModel):
         if threads is None:
             threads = min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                           else os.cpu_count() or 1, 8)
-        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
-            raise ValueError(f"threads must be a whole number >= 1, got {threads!r}")
+        check_integer("threads", threads, 1, message=f"threads must be a whole number >= 1, got {threads!r}")
         size = np.size(T_0e) // 16 if isinstance(T_0e, np.ndarray) else 0
 
         check_far(far)
@@ -352,8 +350,8 @@ def fit_pitch_closure(encoder: PoseEncoder, X: np.ndarray, q: np.ndarray, tolera
     if encoder.encoding != "arm_plane" or n < 3:
         raise ValueError("pitch_closure needs the 'arm_plane' encoding and at least 3 joints, got "
                          f"{encoder.encoding!r} and {n}")
-    if isinstance(tolerance, bool) or not (isinstance(tolerance, (int, float)) and 0 < tolerance < math.pi):
-        raise ValueError(f"closure_tolerance must be in (0, pi) rad, got {show(tolerance)}")
+    check_number("closure_tolerance", tolerance, 0, math.pi, open_lo=True, finite=False, numpy=False,
+                 message=f"closure_tolerance must be in (0, pi) rad, got {show(tolerance)}")
     phi, total = _pitch(encoder, X), q[:, 1:n - 1].sum(axis=1)
     fits = []
     for sign in (1, -1):
@@ -450,10 +448,8 @@ class Baseline(Estimator):
         from scipy.interpolate import RBFInterpolator
         from scipy.spatial import cKDTree
 
-        if self.kind not in BASELINES:
-            raise ValueError(f"kind must be one of {', '.join(BASELINES)}, got {self.kind!r}")
-        if self.encoding not in ENCODINGS:
-            raise ValueError(f"encoding must be one of {', '.join(ENCODINGS)}, got {self.encoding!r}")
+        check_choice("kind", self.kind, BASELINES)
+        check_choice("encoding", self.encoding, ENCODINGS)
         T, q = ik_pairs(train, robot, "train")
         self.encoder_ = PoseEncoder(self.encoding, self.max_out_of_plane)   # the learned IK's inputs
         X = self.encoder_.fit_transform(robot, T)

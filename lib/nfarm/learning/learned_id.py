@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from ..infra.arguments import check_bool, check_choice
 from ..infra.reading import Validator, json_ready, show
 from ..model.dynamics import regressor, rnea
 from ..model.robot import Robot, joint_array, robot_hash
@@ -225,12 +226,9 @@ class LearnedID(PerJointModel):
         Raises:
             ValueError: bad options or data (shapes, NaN, lengths), before any training.
         """
-        if self.inputs not in INPUT_SETS:
-            raise ValueError(f"inputs must be one of {', '.join(INPUT_SETS)}, got {self.inputs!r}")
-        if not isinstance(self.residual, bool):
-            raise ValueError(f"residual must be True or False, got {self.residual!r}")
-        if not isinstance(self.shared_premises, bool):
-            raise ValueError(f"shared_premises must be True or False, got {self.shared_premises!r}")
+        check_choice("inputs", self.inputs, INPUT_SETS)
+        check_bool("residual", self.residual)
+        check_bool("shared_premises", self.shared_premises)
         if self.shared_premises and self.inputs not in SHARED_INPUT_SETS:
             raise ValueError(f"shared_premises needs inputs every joint sees alike "
                              f"({', '.join(SHARED_INPUT_SETS)}), got inputs {self.inputs!r}")

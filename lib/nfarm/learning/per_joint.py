@@ -7,13 +7,13 @@ summary line per joint model, and the warning for inputs far outside the trainin
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
+from ..infra.arguments import check_number
 from ..infra.reading import Validator, show
 from ..model.robot import Robot
 from .anfis import ANFIS
@@ -56,8 +56,8 @@ FAR = 0.5
 
 def check_far(far: Any) -> None:
     """A ``ValueError`` unless ``far`` (spans of the training range) is a number ``>= 0``."""
-    if isinstance(far, bool) or not isinstance(far, (int, float)) or not far >= 0 or math.isnan(far):
-        raise ValueError(f"far must be a number >= 0 (spans of the training range; inf: never warn), got {far!r}")
+    check_number("far", far, 0, finite=False, numpy=False,
+                 message=f"far must be a number >= 0 (spans of the training range; inf: never warn), got {far!r}")
 
 
 def beyond_range(X: np.ndarray) -> np.ndarray:

@@ -21,6 +21,7 @@ import functools
 
 import numpy as np
 
+from ..infra.arguments import check_choice
 from .robot import Robot, joint_array
 
 __all__ = ["dh_transform", "fk", "fk_all", "jacobian", "numerical_jacobian", "pose_jacobian_T",
@@ -442,8 +443,7 @@ _ROWS = {"position": slice(0, 3), "orientation": slice(3, 6), "full": slice(0, 6
 
 
 def _singular_values(robot: Robot, q, part: str) -> np.ndarray:
-    if part not in _ROWS:
-        raise ValueError(f"part must be one of {', '.join(_ROWS)}, got {part!r}")
+    check_choice("part", part, _ROWS)
     return np.linalg.svd(jacobian(robot, q)[..., _ROWS[part], :], compute_uv=False)
 
 

@@ -3,7 +3,7 @@
 Used by the tests, the benchmarks and the chapters to check nfarm's own algorithms against
 Pinocchio (Featherstone's spatial algebra, a different derivation from the DH recursions).
 The model is built with ``Model.addJoint`` from :func:`nfarm.model.kinematics.joint_placements`, not from
-the URDF, so it also checks :func:`nfarm.model.urdf.to_urdf` (see the tests).
+the URDF, so it also checks :func:`nfarm.model.urdf_export.to_urdf` (see the tests).
 
 For a robot read from a URDF, a model built from nfarm's own DH table would check nothing of the
 conversion: :func:`pinocchio_source` gives Pinocchio's own parse of the URDF the robot file
@@ -109,13 +109,13 @@ def pinocchio_model(robot: Robot, *, armature: bool = False) -> PinocchioRobot:
 
 
 def pinocchio_from_urdf(urdf: str) -> PinocchioRobot:
-    """Load a URDF written by :func:`nfarm.model.urdf.to_urdf` into Pinocchio.
+    """Load a URDF written by :func:`nfarm.model.urdf_export.to_urdf` into Pinocchio.
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
         >>> from nfarm.model.robot import load_robot
         >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
-        >>> from nfarm.model.urdf import to_urdf
+        >>> from nfarm.model.urdf_export import to_urdf
         >>> q = np.array([0.3, 0.2, -0.4, 0.5, 0.1])     # [rad]
         >>> np.allclose(pinocchio_from_urdf(to_urdf(robot)).fk_all(q), pinocchio_model(robot).fk_all(q))
         True

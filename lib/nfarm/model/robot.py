@@ -22,7 +22,7 @@ carries the ``tool``: ``T_0e = base · A_1 ··· A_n · tool``.
 A standard-DH joint may carry a ``fixed`` transform ``E_i`` after its row, ``A_i = Rz(q_i +
 offset_i) · Tz(d_i) · Tx(a_i) · Rx(alpha_i) · E_i`` (default identity): the joint placements DH
 cannot hold exactly, such as nearly parallel axes of a URDF written with a rounded π (DH would
-put their common normal kilometres away; :func:`nfarm.model.urdf.from_urdf` writes the pair as
+put their common normal kilometres away; :func:`nfarm.model.urdf_import.from_urdf` writes the pair as
 parallel with the small tilt in ``E_i``). Link i's frame is then the DH frame followed by
 ``E_i``: its z axis is joint i+1's axis, and ``com`` and ``inertia`` are in it.
 """
@@ -183,7 +183,7 @@ class Robot:
 
 
 #: Readers of robot descriptions in other formats, by file suffix. The URDF reader registers
-#: itself (:mod:`nfarm.model.urdf`, imported by the package), so that this model layer does not
+#: itself (:mod:`nfarm.model.urdf_import`, imported by the package), so that this model layer does not
 #: import the file-format layer.
 _READERS: dict[str, Any] = {}
 URDF_FILE_KEYS = {"name": True, "urdf": True, "tip": False, "lock": False, "gravity": False,
@@ -197,8 +197,8 @@ def register_reader(suffix: str, reader) -> None:
 
     Example:
         >>> from nfarm.infra.paths import PARAMS
-        >>> from nfarm.model.urdf import from_urdf
-        >>> register_reader(".urdf", from_urdf)     # what importing nfarm.model.urdf does
+        >>> from nfarm.model.urdf_import import from_urdf
+        >>> register_reader(".urdf", from_urdf)     # what importing nfarm.model.urdf_import does
         >>> load_robot(PARAMS / "robots" / "so101.yaml").n     # a robot file naming a .urdf
         5
     """
@@ -207,7 +207,7 @@ def register_reader(suffix: str, reader) -> None:
 
 def load_robot(path: str | Path) -> Robot:
     """Load and validate a robot file: a DH parameter file (YAML; schema in
-    ``params/README.md``), a URDF (``.urdf``: :func:`nfarm.model.urdf.from_urdf`, its single leaf the
+    ``params/README.md``), a URDF (``.urdf``: :func:`nfarm.model.urdf_import.from_urdf`, its single leaf the
     tip), or a YAML file naming a URDF with its ``tip``, the ``lock`` positions of joints off the
     chain, and optional ``gravity``, joint ``drive`` terms and ``description``.
 

@@ -40,6 +40,8 @@ from __future__ import annotations
 
 import re
 
+from ..infra.arguments import check_choice
+
 __all__ = ["number", "clear", "chapter_of", "citation_keys", "anchor", "equations", "CITATION", "CITATION_HTML", "KINDS", "DISPLAY",
            "EQUATION", "EQ_CITATION", "EQ_CITATION_HTML"]
 
@@ -71,8 +73,7 @@ def number(kind: str, name: str) -> str | None:
     """The number (``"6.3"``) of the figure or table ``name`` in its chapter, in the order first
     shown in this process (an IPython kernel runs one chapter); ``None`` for a name that is not
     a chapter's (``"NN_…"``)."""
-    if kind not in KINDS:
-        raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    check_choice("kind", kind, KINDS)
     chapter = chapter_of(name)
     if chapter is None:
         return None

@@ -1,6 +1,6 @@
 """Rerun recordings (``.rrd``) of joint trajectories, replayable in the rerun viewer.
 
-:func:`record_trajectory` holds the robot (its URDF from :func:`nfarm.model.urdf.to_urdf`, loaded by rerun's own
+:func:`record_trajectory` holds the robot (its URDF from :func:`nfarm.model.urdf_export.to_urdf`, loaded by rerun's own
 URDF loader), the joint transforms over time (so the robot moves), the tool path growing with
 time (one segment a step, which the viewer accumulates up to the time cursor), and joint positions [deg], velocities [deg/s] and (optionally) torques [N·m] as
 scalar time series, in degrees like every figure of the report. It carries its viewer layout
@@ -29,11 +29,12 @@ import rerun as rr
 import rerun.blueprint as rrb
 import rerun.urdf as rru
 
+from ..infra.arguments import check_integer
 from ..infra.paths import atomic_path, shown_path
 from ..model.kinematics import fk
 from ..model.robot import Robot
 from ..model.rotations import pose_error
-from ..model.urdf import to_urdf
+from ..model.urdf_export import to_urdf
 from ..solvers.trajectory import Trajectory
 
 __all__ = ["record_trajectory", "record_ik_paths", "record_id_trajectory", "TIMELINE", "RecordingTooLarge",
@@ -71,9 +72,9 @@ def expected_bytes(samples: int, *, transforms: int, scalars: int, paths: int = 
 def _check_size(path: Path, samples: int, max_bytes: int, **counts) -> None:
     """Raise :class:`RecordingTooLarge` (one line) before a byte is written when the recording of
     ``path`` would exceed ``max_bytes``."""
-    if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes <= 0:
-        raise ValueError(f"max_bytes must be a positive whole number of bytes, got {type(max_bytes).__name__} "
-                         f"{max_bytes}")
+    check_integer("max_bytes", max_bytes, 1, numpy=False,
+                  message=f"max_bytes must be a positive whole number of bytes, got {type(max_bytes).__name__} "
+                          f"{max_bytes}")
     size = expected_bytes(samples, **counts)
     if size > max_bytes:
         raise RecordingTooLarge(f"{shown_path(path)}: a recording of {samples:,} samples would take about "

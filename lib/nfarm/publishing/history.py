@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..infra.arguments import is_integer
 from ..infra.paths import ROOT
 from .editions import Edition
 
@@ -65,7 +66,7 @@ def _split(study_text: str | None) -> str:
     except yaml.YAMLError:
         return DEVELOPMENT
     seed = data.get("test_seed") if isinstance(data, dict) else None
-    return str(seed) if isinstance(seed, int) and not isinstance(seed, bool) else DEVELOPMENT
+    return str(seed) if is_integer(seed, numpy=False) else DEVELOPMENT
 
 
 def _rows(text: str, arm: str, split: str, commit: str, date: str) -> list[SplitVerdict]:

@@ -24,6 +24,7 @@ import socket
 import sys
 from pathlib import Path
 
+from ..infra.arguments import check_integer
 from ..infra.paths import BUILD, NOTEBOOKS, ROOT, shown_path
 
 __all__ = ["PANEL_NOTEBOOK", "DEFAULT_PORT", "new_token", "panel_url", "voila_command", "voila_environment",
@@ -68,8 +69,8 @@ def voila_command(port: int, notebook: Path = PANEL_NOTEBOOK, *, connection_dir:
     ``cull_idle_s=0``: never). A page's kernel also ends when the page closes."""
     for name, value, low in (("max_kernels", max_kernels, 1), ("cull_idle_s", cull_idle_s, 0),
                              ("cull_interval_s", cull_interval_s, 1)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise ValueError(f"{name}: a whole number >= {low} needed, got {_plain(value)}")
+        check_integer(name, value, low, numpy=False,
+                      message=f"{name}: a whole number >= {low} needed, got {_plain(value)}")
     command = [sys.executable, "-m", "nfarm.publishing.panel_app", str(notebook), "--no-browser",
                f"--port={port}", "--Voila.port_retries=0", "--Voila.ip=127.0.0.1", f"--template={TEMPLATE}",
                f"--VoilaConfiguration.extension_denylist={_NOT_LOADED}",
@@ -103,8 +104,8 @@ def voila_environment(state_dir: Path, token: str) -> dict[str, str]:
 
 def check_port(port: int) -> None:
     """Raise ``ValueError`` (one line) unless ``port`` is a port number free on 127.0.0.1."""
-    if isinstance(port, bool) or not isinstance(port, int) or not 1 <= port <= 65535:
-        raise ValueError(f"PORT must be a whole number from 1 to 65535, got {_plain(port)}")
+    check_integer("PORT", port, 1, 65535, numpy=False,
+                  message=f"PORT must be a whole number from 1 to 65535, got {_plain(port)}")
     with socket.socket() as s:
         try:
             s.bind(("127.0.0.1", port))

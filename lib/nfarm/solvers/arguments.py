@@ -1,13 +1,14 @@
-"""Checks of the solvers' arguments (and, for numbers and integers, the learners' options):
-each refuses a bad value with one ``ValueError`` line naming the argument (and, for a batch of
-target poses, the first bad one by its index), before any work.
+"""Checks of the solvers' pose arguments: a batch of target poses (:func:`check_targets`) and
+a pose error's weights (:func:`check_weights`). Each refuses a bad value with one ``ValueError``
+line naming the argument (for a batch of target poses, the first bad one by its index), before
+any work; numbers, integers and choices are checked by :mod:`nfarm.infra.arguments`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_targets", "check_number", "check_integer", "check_weights"]
+__all__ = ["check_targets", "check_weights"]
 
 
 def _where(shape: tuple, flat_index: int) -> str:
@@ -109,42 +110,3 @@ def check_weights(weights) -> np.ndarray:
     if not np.isfinite(w).all() or (w < 0).any() or not w.any():
         raise ValueError(f"weights must be finite, >= 0 and not all zero, got {w.tolist()}")
     return w
-
-
-def check_number(name: str, value, lo: float, hi: float | None, open_lo: bool) -> None:
-    """A ``ValueError`` naming ``name`` unless ``value`` is a finite real number ``> lo`` (``>= lo``
-    unless ``open_lo``) and ``< hi`` (``hi`` ``None``: no upper bound).
-
-    Example:
-        >>> check_number("tol_pos", 0.0, 0, None, open_lo=True)
-        Traceback (most recent call last):
-        ...
-        ValueError: tol_pos must be a finite number > 0, got 0.0
-    """
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(value) or (value <= lo if open_lo else value < lo) \
-            or (hi is not None and value >= hi):
-        bounds = f"{'>' if open_lo else '>='} {lo}" + ("" if hi is None else f" and < {hi}")
-        raise ValueError(f"{name} must be a finite number {bounds}, got {value!r}")
-
-
-def check_integer(name: str, value, lo: int, *, or_none: bool = False) -> None:
-    """A ``ValueError`` naming ``name`` unless ``value`` is an integer ``>= lo`` (or, with
-    ``or_none``, ``None``).
-
-    Example:
-        >>> check_integer("restarts", 2.0, 0)
-        Traceback (most recent call last):
-        ...
-        ValueError: restarts must be an integer >= 0, got 2.0
-        >>> check_integer("patience", None, 1, or_none=True)    # accepted
-        >>> check_integer("patience", 0, 1, or_none=True)
-        Traceback (most recent call last):
-        ...
-        ValueError: patience must be an integer >= 1 or None, got 0
-    """
-    if or_none and value is None:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name} must be an integer >= {lo}{' or None' if or_none else ''}, "
-                         f"got {value!r}")

@@ -111,10 +111,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..infra.arguments import check_integer, check_number
 from ..model.kinematics import fk
 from ..model.robot import Robot, joint_array
 from ..model.rotations import pose_error
-from .arguments import check_integer, check_number, check_targets, check_weights
+from .arguments import check_targets, check_weights
 from .arm_class import BRANCHES, ArmConstants, branch_of, check_class, class_refusal, in_class
 from .iterative import solve
 

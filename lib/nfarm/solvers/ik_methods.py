@@ -35,8 +35,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..infra.arguments import check_number
 from ..model.linalg import cholesky_solve_T, gram_T
-from .arguments import check_number
 
 __all__ = ["Method", "LM", "DLS", "Pinv", "JT", "METHODS", "method_of"]
 

@@ -30,10 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..infra.arguments import check_integer, check_number
 from ..model.kinematics import fk, pose_jacobian_T
 from ..model.robot import Robot, sample_configurations
 from ..model.rotations import relative_log_T
-from .arguments import check_integer, check_number, check_targets, check_weights
+from .arguments import check_targets, check_weights
 from .arm_class import BRANCHES, branch_of, in_class
 from .ik_methods import Method, method_of
 

@@ -1,10 +1,10 @@
 """A new arm from its URDF: the robot file and the study file, with defaults derived from the arm
 (``python -m nfarm add-arm PATH.urdf``, ``make arm URDF=…``).
 
-:func:`add_arm` reads the URDF's tree (:func:`nfarm.model.urdf.urdf_outline`), chooses the tip
+:func:`add_arm` reads the URDF's tree (:func:`nfarm.model.urdf_tree.urdf_outline`), chooses the tip
 (the only leaf, or the one asked for), locks the joints off the chain inside their limits (mimic
 joints follow their drivers, and must land inside theirs too), converts the chain
-(:func:`nfarm.model.urdf.from_urdf`, unchanged), and chooses
+(:func:`nfarm.model.urdf_import.from_urdf`, unchanged), and chooses
 
 * the IK region: a joint box inside the limits with the tool in front of the base axis, shrunk
   until every sampled target has one solution in it, counted by
@@ -41,7 +41,8 @@ from ..infra.paths import PARAMS, shown_path
 from ..infra.reading import ParamsError, ParamsWarning, listed, read_bytes
 from ..model.kinematics import fk
 from ..model.robot import ROBOT_NAME, Robot, load_robot
-from ..model.urdf import URDFOutline, from_urdf, urdf_outline
+from ..model.urdf_import import from_urdf
+from ..model.urdf_tree import URDFOutline, urdf_outline
 from ..solvers.ik import class_refusal
 from .regions import IKRegion, SingleValuedness, check_single_valued, stream_rng
 from .study_files import load_study
@@ -143,7 +144,7 @@ def _check_chain(outline: URDFOutline, tip: str) -> list[str]:
 
 def _mimic_positions(outline: URDFOutline, lock: Mapping[str, float]) -> dict[str, float]:
     """Every joint off the chain that moves: its lock, or its driver's position through its
-    ``<mimic>`` (drivers with no lock at 0), as :func:`nfarm.model.urdf.from_urdf` places it."""
+    ``<mimic>`` (drivers with no lock at 0), as :func:`nfarm.model.urdf_import.from_urdf` places it."""
     out = dict(lock)
     joints = outline.joints
 
@@ -576,7 +577,7 @@ def add_arm(urdf: str | Path, *, name: str | None = None, tip: str | None = None
         ParamsError: one line naming the file and the reason: a name that is not a robot name
             or already exists (unless ``force``), a chain that is not five revolute joints from
             the root to the tip, several leaves and no ``tip``, a lock outside its joint's
-            limits, a URDF :func:`~nfarm.model.urdf.from_urdf` refuses, no single-valued region.
+            limits, a URDF :func:`~nfarm.model.urdf_import.from_urdf` refuses, no single-valued region.
     """
     started = time.perf_counter()
     say = say or (lambda line: None)

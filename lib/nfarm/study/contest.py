@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from ..infra.arguments import is_number
 from ..learning.bases import tier_of
 from ..learning.ik_rivals import KINDS as RIVAL_KINDS
 from ..learning.ik_rivals import RivalIK
@@ -311,10 +312,9 @@ def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
 def _size(value: Any) -> float | None:
     """A numerical option's size for :func:`at_edge`: the number itself, or a list of numbers'
     sum (an MLP's ``hidden`` widths: its hidden units); ``None`` for anything else."""
-    if isinstance(value, (list, tuple)) and value and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                          for v in value):
+    if isinstance(value, (list, tuple)) and value and all(is_number(v, numpy=False) for v in value):
         return float(sum(value))
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if not is_number(value, numpy=False):
         return None
     return float(value)
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import qmc
 
+from ..infra.arguments import check_integer, check_number
 from ..model.kinematics import fk
 from ..model.robot import Robot, joint_array
 from ..solvers.geometric_ik import wrapped_gap as _wrapped_gap
@@ -242,10 +243,9 @@ def check_single_valued(region: IKRegion, n_targets: int = 1000, n_starts: int =
         method = "closed form" if in_class(robot) else "lm"
     if method not in ("closed form", "lm"):
         raise ValueError(f"method must be 'auto', 'closed form' or 'lm', got {method!r}")
-    if isinstance(batch, bool) or not isinstance(batch, (int, np.integer)) or batch < 1:
-        raise ValueError(f"batch must be a whole number >= 1, got {batch!r}")
-    if isinstance(near, bool) or not isinstance(near, (int, float)) or not near > 0:
-        raise ValueError(f"near must be a number > 0 [m and rad], got {near!r}")
+    check_integer("batch", batch, 1, message=f"batch must be a whole number >= 1, got {batch!r}")
+    check_number("near", near, 0, open_lo=True, finite=False, numpy=False,
+                 message=f"near must be a number > 0 [m and rad], got {near!r}")
     q = region.sample(n_targets, stream_rng(seed, STREAMS["check"]), method="uniform")
     if method == "closed form":
         if ik_options:

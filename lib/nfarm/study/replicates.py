@@ -27,6 +27,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..infra.arguments import check_choice, is_integer
 from ..infra.paths import atomic_path
 from ..infra.reading import ParamsError, Validator, load_json, show
 from . import jobs
@@ -47,10 +48,9 @@ def write_seeds(directory: str | os.PathLike, job: str, cells: Sequence[Mapping[
     Raises:
         ValueError: an unknown job, no cells, a cell without a whole-number seed or two cells of one seed.
     """
-    if job not in MODEL_OF:
-        raise ValueError(f"job must be one of {', '.join(MODEL_OF)}, got {job!r}")
+    check_choice("job", job, MODEL_OF)
     seeds = [c.get("seed") for c in cells]
-    if not cells or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds) \
+    if not cells or not all(is_integer(s, numpy=False) and s >= 0 for s in seeds) \
             or len(set(seeds)) != len(seeds):
         raise ValueError(f"cells must be one or more, each with a distinct whole-number seed >= 0, got seeds {seeds}")
     ordered = sorted((dict(c) for c in cells), key=lambda c: c["seed"])

@@ -32,6 +32,7 @@ import dataclasses
 
 import numpy as np
 
+from ..infra.arguments import check_number
 from ..model.dynamics import rnea
 from ..model.kinematics import fk
 from .datasets import measured_readings
@@ -75,8 +76,8 @@ def beyond_box(region: IKRegion, n: int, band: float, seed: int, *, batch: int =
         ValueError: a ``band`` outside ``(0, 0.5]``; a box at every joint's limits (nothing lies
             beyond it); too few draws kept within ``max_draws``.
     """
-    if isinstance(band, bool) or not isinstance(band, (int, float)) or not 0 < band <= 0.5:
-        raise ValueError(f"band must be in (0, 0.5], got {band!r}")
+    check_number("band", band, 0, 0.5, open_lo=True, open_hi=False, finite=False, numpy=False,
+                 message=f"band must be in (0, 0.5], got {band!r}")
     lo, hi = region.box[:, 0], region.box[:, 1]
     limits = region.robot.qlim
     wide = np.column_stack([np.maximum(lo - band * (hi - lo), limits[:, 0]), np.minimum(hi + band * (hi - lo), limits[:, 1])])
@@ -123,8 +124,7 @@ def faster(settings, speed: float):
         >>> bool(np.allclose(f.max_velocity, 2 * s.max_velocity)), f.segment_time == (0.3, 0.9)
         (True, True)
     """
-    if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed > 0:
-        raise ValueError(f"speed must be a positive number, got {speed!r}")
+    check_number("speed", speed, 0, None, open_lo=True, numpy=False, message=f"speed must be a positive number, got {speed!r}")
     return dataclasses.replace(settings, max_velocity=speed * settings.max_velocity,
                                max_acceleration=speed ** 2 * settings.max_acceleration,
                                segment_time=tuple(t / speed for t in settings.segment_time))

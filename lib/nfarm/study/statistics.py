@@ -42,6 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats
 
+from ..infra.arguments import check_integer
+
 __all__ = ["trajectory_sums", "trajectory_maxima", "nrmse_from_sums", "Interval", "bootstrap_nrmse",
            "worst_difference", "Estimate", "bootstrap_rows", "bootstrap_counts", "resampled_quantile",
            "bootstrap_seeds", "bootstrap_p", "holm", "distinct_resamples", "ranges_separate", "separation_level",
@@ -244,10 +246,8 @@ def bootstrap_counts(n_rows: int, statistic, *, draws: int = 2000, level: float 
         >>> est.value, bool(est.low < 4.5 < est.high)
         (4.5, True)
     """
-    if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 2:
-        raise ValueError(f"n_rows must be a whole number >= 2, got {n_rows!r}")
-    if not (isinstance(draws, int) and draws >= 100):
-        raise ValueError(f"draws must be an integer >= 100, got {draws!r}")
+    check_integer("n_rows", n_rows, 2, message=f"n_rows must be a whole number >= 2, got {n_rows!r}")
+    check_integer("draws", draws, 100, numpy=False)
     if not 0 < level < 1:
         raise ValueError(f"level must be in (0, 1), got {level!r}")
     n = int(n_rows)

@@ -27,6 +27,7 @@ from typing import Annotated, Any, Literal, Optional, Union, get_args
 
 import numpy as np
 
+from ..infra.arguments import check_integer
 from ..infra.paths import project_path
 from ..infra.reading import ParamsError, Validator, load_yaml
 from ..infra.typed import (ACCELERATION_DEG_S2, CURRENT_PER_COUNT, DRIVE, JOINTS, MASS, N_MFS, ORDERED,
@@ -484,8 +485,7 @@ def redrawn(study: Study, draw: int) -> Study:
     Raises:
         ValueError: ``draw`` is not a non-negative integer.
     """
-    if isinstance(draw, bool) or not isinstance(draw, (int, np.integer)) or draw < 0:
-        raise ValueError(f"draw must be a non-negative integer, got {draw!r}")
+    check_integer("draw", draw, 0, message=f"draw must be a non-negative integer, got {draw!r}")
     if draw == 0:
         return study
     params = json.loads(json.dumps(study.params))

@@ -54,6 +54,7 @@ from typing import Any
 
 from ..infra import progress as _progress
 from ..infra import provenance
+from ..infra.arguments import is_number
 from ..infra.limits import time_limit
 from ..infra.paths import BUILD, PARAMS, ROOT, atomic_path, project_path, shown_path
 from ..infra.provenance import digest_files
@@ -128,7 +129,7 @@ class Replicates:
         out = {}
         for name, first in self.runs[0].metrics.items():
             same = all(canonical(r.metrics.get(name)) == canonical(first) for r in self.runs)
-            numeric = isinstance(first, (int, float)) and not isinstance(first, bool) or \
+            numeric = is_number(first, numpy=False) or \
                 isinstance(first, list) and all(isinstance(v, (int, float)) for v in first)
             out[name] = first if same or not numeric else self.values(name).mean(axis=0).tolist()
         return out
@@ -245,9 +246,8 @@ def _run_notebook_cell(notebook: str, params: dict, timeout: float | None) -> tu
 
 def _metric(name: str, value: Any) -> Any:
     value = json_ready(value)
-    ok = isinstance(value, (int, float, str)) and not isinstance(value, bool) or \
-        isinstance(value, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                        for x in value)
+    ok = is_number(value, numpy=False) or isinstance(value, str) or \
+        isinstance(value, list) and all(is_number(x, numpy=False) for x in value)
     if not ok:
         raise TypeError(f"metric {name!r} must be a number, a text or a list of numbers, "
                         f"got {show(value)}")
