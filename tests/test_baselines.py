@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nfarm.learning.baselines import DEFAULTS, LEARNERS, BaselineID
+from nfarm.learning.baselines import BASELINES, BaselineID, baseline_id
 from nfarm.model.dynamics import rnea
 from test_bases import ROBOT, nrmse, random_states, trajectories  # noqa: F401 — the shared data fixtures
 
@@ -19,22 +19,22 @@ SMALL = {"linear": {}, "ridge": {"basis": "generic"}, "kernel": {"n_components":
          "identification": {}}
 
 
-@pytest.mark.parametrize("learner", LEARNERS)
+@pytest.mark.parametrize("learner", list(BASELINES))
 def test_baselines_are_seeded_functions_of_their_options(learner, trajectories):
     train, val = trajectories["train"], trajectories["val"]
-    fit = lambda: BaselineID(learner, SMALL[learner], residual=learner == "friction",   # noqa: E731
-                             random_state=3).fit(ROBOT, train)
+    fit = lambda: baseline_id(learner, SMALL[learner], residual=learner == "friction",   # noqa: E731
+                              random_state=3).fit(ROBOT, train)
     a, b = fit(), fit()
     pa = a.predict(val["q"], val["qd"], val["qdd"])
     assert pa.shape == val["tau"].shape and np.isfinite(pa).all()
     np.testing.assert_array_equal(pa, b.predict(val["q"], val["qd"], val["qdd"]))
-    assert set(DEFAULTS[learner]) >= set(SMALL[learner])
+    assert set(BASELINES[learner].hyper_params()) >= set(SMALL[learner])
 
 
 def test_ridge_on_the_chain_basis_identifies_the_arm_and_the_linear_floor_does_not(random_states):
     train, val = random_states["train"], random_states["val"]
-    exact = BaselineID("ridge", {"basis": "chain", "alpha": 1e-9}).fit(ROBOT, train)
-    floor = BaselineID("linear").fit(ROBOT, train)
+    exact = baseline_id("ridge", {"basis": "chain", "alpha": 1e-9}).fit(ROBOT, train)
+    floor = baseline_id("linear").fit(ROBOT, train)
     X = (val["q"], val["qd"], val["qdd"])
     assert nrmse(exact.predict(*X), val["tau"]).max() < 1e-3
     assert nrmse(floor.predict(*X), val["tau"]).max() > 0.3
@@ -45,13 +45,13 @@ def test_residual_baseline_adds_newton_euler(trajectories):
     the friction identification recovers each joint's armature, viscous and Coulomb values."""
     train = dict(trajectories["train"])
     train["tau"] = train["tau"] + 0.05 * train["qd"]
-    model = BaselineID("linear", residual=True).fit(ROBOT, train)
+    model = baseline_id("linear", residual=True).fit(ROBOT, train)
     v = trajectories["val"]
     np.testing.assert_allclose(model.predict(v["q"], v["qd"], v["qdd"]), v["tau"] + 0.05 * v["qd"], atol=1e-9)
     law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
     train["tau"] = trajectories["train"]["tau"] + np.einsum(
         "njk,jk->nj", np.stack([train["qdd"], train["qd"], np.sign(train["qd"])], axis=-1), law)
-    friction = BaselineID("friction", residual=True).fit(ROBOT, train)
+    friction = baseline_id("friction", residual=True).fit(ROBOT, train)
     np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
 
 
@@ -77,12 +77,12 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
     not, by far more than rounding."""
     train, val = _built_arm_torques(trajectories)
     X = (val["q"], val["qd"], val["qdd"])
-    full = BaselineID("identification").fit(ROBOT, train)
-    nominal = BaselineID("friction", residual=True).fit(ROBOT, train)
+    full = baseline_id("identification").fit(ROBOT, train)
+    nominal = baseline_id("friction", residual=True).fit(ROBOT, train)
     assert np.abs(full.predict(*X) - val["tau"]).max() < 1e-8 * np.abs(val["tau"]).max()
     assert np.abs(nominal.predict(*X) - val["tau"]).max() > 1e-3 * np.abs(val["tau"]).max()
     with pytest.raises(ValueError, match="learner 'identification' fits the whole torque"):
-        BaselineID("identification", residual=True).fit(ROBOT, train)
+        baseline_id("identification", residual=True).fit(ROBOT, train)
 
 
 @pytest.mark.parametrize("learner, options, message", [
@@ -103,9 +103,9 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
 ])
 def test_bad_baseline_options_are_refused_before_any_work(learner, options, message, trajectories):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        BaselineID(learner, options).fit(ROBOT, trajectories["train"])
+        baseline_id(learner, options).fit(ROBOT, trajectories["train"])
     with pytest.raises(ValueError, match="not fitted yet"):
-        BaselineID().predict(*np.zeros((3, 2, 5)))
+        baseline_id().predict(*np.zeros((3, 2, 5)))
 
 
 @pytest.mark.parametrize("learner, options", [("boosting", {"max_iter": 12}), ("mlp", {"hidden": [16], "max_iter": 12})])
@@ -118,12 +118,12 @@ def test_the_time_limited_learners_compute_what_scikit_learn_does(learner, optio
     from nfarm.learning import baselines
 
     train, val = trajectories["train"], trajectories["val"]
-    ours = BaselineID(learner, options, random_state=4).fit(ROBOT, train)
+    ours = baseline_id(learner, options, random_state=4).fit(ROBOT, train)
     plain = {"boosting": HistGradientBoostingRegressor, "mlp": MLPRegressor}[learner]
     timed = baselines._timed_learners()[learner == "mlp"]
     assert timed is not plain and issubclass(timed, plain)
     monkeypatch.setattr(baselines, "_timed_learners", lambda: (HistGradientBoostingRegressor, MLPRegressor))
-    reference = BaselineID(learner, options, random_state=4).fit(ROBOT, train)
+    reference = baseline_id(learner, options, random_state=4).fit(ROBOT, train)
     X = (val["q"], val["qd"], val["qdd"])
     np.testing.assert_array_equal(ours.predict(*X), reference.predict(*X))
 
@@ -138,7 +138,7 @@ def test_a_time_limit_stops_an_iterative_baseline_within_an_iteration(learner, o
 
     small = {k: v[:200] for k, v in trajectories["train"].items()}
     with pytest.raises(TimeLimitError, match=f"{what}: over the time limit of 0.2 s"), time_limit(0.2):
-        BaselineID(learner, options).fit(ROBOT, small)
+        baseline_id(learner, options).fit(ROBOT, small)
 
 
 @pytest.mark.parametrize("patience", [2, 5])
@@ -147,23 +147,23 @@ def test_the_mlp_stops_early_on_the_validation_states_and_keeps_its_best_epoch(p
     `patience` epochs after it: the same run cut right after that epoch predicts the same bits."""
     train, val = trajectories["train"], trajectories["val"]
     options = {"hidden": [16], "max_iter": 300, "patience": patience, "alpha": 1e-4}
-    model = BaselineID("mlp", options, random_state=1).fit(ROBOT, train, val)
+    model = baseline_id("mlp", options, random_state=1).fit(ROBOT, train, val)
     assert model.epochs_ == 300 or model.epochs_ - model.best_epoch_ - 1 == patience
     assert model.epochs_ > model.best_epoch_ + 1 or model.epochs_ == 300
     X = (val["q"], val["qd"], val["qdd"])
-    cut = BaselineID("mlp", {**options, "max_iter": model.best_epoch_ + 1}, random_state=1).fit(ROBOT, train, val)
+    cut = baseline_id("mlp", {**options, "max_iter": model.best_epoch_ + 1}, random_state=1).fit(ROBOT, train, val)
     assert cut.best_epoch_ == model.best_epoch_
     np.testing.assert_array_equal(cut.predict(*X), model.predict(*X))
-    without = BaselineID("mlp", {**options, "max_iter": 5}, random_state=1).fit(ROBOT, train)
+    without = baseline_id("mlp", {**options, "max_iter": 5}, random_state=1).fit(ROBOT, train)
     assert without.epochs_ is None and without.model_[-1].n_iter_ == 5       # no validation: the fixed budget
     with pytest.raises(ValueError, match="mlp: patience must be an integer from 2"):
-        BaselineID("mlp", {"patience": 0}).fit(ROBOT, train, val)
+        baseline_id("mlp", {"patience": 0}).fit(ROBOT, train, val)
 
 
 # -- saving: JSON, the same bits as scikit-learn's predict ---------------------------------------
 
 
-@pytest.mark.parametrize("learner, residual", [(learner, residual) for learner in LEARNERS for residual in (False, True)
+@pytest.mark.parametrize("learner, residual", [(learner, residual) for learner in BASELINES for residual in (False, True)
                                                if (learner, residual) not in (("friction", False), ("identification", True))])
 def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, residual, trajectories, tmp_path):
     """The arrays read out of the fitted estimator predict what the estimator itself predicts, bit
@@ -172,7 +172,7 @@ def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, resid
     from nfarm.learning.baselines import load_id_model
 
     train, val = trajectories["train"], trajectories["val"]
-    model = BaselineID(learner, SMALL[learner], residual=residual, random_state=2).fit(ROBOT, train, val)
+    model = baseline_id(learner, SMALL[learner], residual=residual, random_state=2).fit(ROBOT, train, val)
     X = (val["q"], val["qd"], val["qdd"])
     features = model._features(*X)
     scaled = model.model_.predict(features).reshape(len(val["q"]), -1)           # scikit-learn's own arithmetic
@@ -196,12 +196,12 @@ def test_the_structure_informed_rivals_see_the_parallel_joints_angle_sums(learne
 
     train, val = trajectories["train"], trajectories["val"]
     options = {**SMALL[learner], "angles": "chain"}
-    model = BaselineID(learner, options, random_state=1).fit(ROBOT, train, val)
+    model = baseline_id(learner, options, random_state=1).fit(ROBOT, train, val)
     X = (val["q"], val["qd"], val["qdd"])
     sums = angle_sums(ROBOT, val["q"])
     assert sums.shape[1] == ROBOT.n + 3 and model.n_features_ == 2 * sums.shape[1] + 2 * ROBOT.n
     np.testing.assert_array_equal(model._features(*X)[:, :sums.shape[1]], np.sin(sums))
-    plain = BaselineID(learner, SMALL[learner], random_state=1).fit(ROBOT, train, val)
+    plain = baseline_id(learner, SMALL[learner], random_state=1).fit(ROBOT, train, val)
     assert plain.n_features_ == 4 * ROBOT.n and not np.array_equal(plain.predict(*X), model.predict(*X))
     assert tier_of({**model.options_, "learner": learner}) == "structure-informed"
     assert tier_of({**plain.options_, "learner": learner}) == "generic"
@@ -217,7 +217,7 @@ def test_an_edited_or_foreign_baseline_file_is_refused_in_one_line(trajectories,
     from nfarm.model.robot import load_robot
     from nfarm.infra.paths import PARAMS
 
-    model = BaselineID("boosting", {"max_iter": 3}).fit(ROBOT, trajectories["train"])
+    model = baseline_id("boosting", {"max_iter": 3}).fit(ROBOT, trajectories["train"])
     path = model.save(tmp_path / "m")
     data = json.loads(path.read_text())
     data["state"]["joints"][0]["trees"][0]["value"][0] += 1.0          # an edit without its content hash

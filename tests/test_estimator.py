@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 
 from nfarm.learning.anfis import ANFIS, ANFISMulti
-from nfarm.learning.baselines import BaselineID
-from nfarm.learning.ik_rivals import RivalIK
+from nfarm.learning.baselines import MLPID
+from nfarm.learning.ik_rivals import MLPRival
 from nfarm.learning.learned import Baseline, LearnedIK
 from nfarm.learning.learned_id import LearnedID
 
 LEARNERS = [(ANFIS, {"n_mfs": 3}), (ANFISMulti, {"n_mfs": 3}), (LearnedIK, {"encoding": "arm_plane", "n_mfs": 3}),
-            (LearnedID, {"inputs": "affine", "epochs": 5}), (BaselineID, {"learner": "mlp"}),
-            (Baseline, {"kind": "rbf"}), (RivalIK, {"kind": "mlp"})]
+            (LearnedID, {"inputs": "affine", "epochs": 5}), (MLPID, {"hidden": [8]}),
+            (Baseline, {"kind": "rbf"}), (MLPRival, {"hidden": [8]})]
 
 
 @pytest.mark.parametrize("cls, changed", LEARNERS, ids=lambda x: getattr(x, "__name__", ""))

@@ -13,7 +13,7 @@ import pytest
 from nfarm.infra.paths import PARAMS
 from nfarm.infra.reading import ParamsError
 from nfarm.learning.anfis import ANFIS, fit_shared
-from nfarm.learning.ik_rivals import KINDS, RivalIK
+from nfarm.learning.ik_rivals import RIVALS as REGISTERED, RivalIK, rival_ik
 from nfarm.learning.learned import LearnedIK, ik_errors
 from nfarm.model.kinematics import fk
 from nfarm.study.regions import ik_samples
@@ -118,7 +118,7 @@ RIVALS = [("knn", {"neighbors": 3}), ("rbf", {"neighbors": 16}), ("rbf", {"neigh
 @pytest.fixture(scope="module", params=RIVALS, ids=lambda r: f"{r[0]}-{len(r[1])}")
 def rival(request, data):
     kind, options = request.param
-    return RivalIK(kind, "arm_plane", options, random_state=0).fit(ROBOT, data["train"], data["val"])
+    return rival_ik(kind, "arm_plane", options, random_state=0).fit(ROBOT, data["train"], data["val"])
 
 
 def test_every_rival_learns_the_map_well_beyond_a_constant(rival, data):
@@ -136,9 +136,10 @@ def test_every_rival_is_saved_and_loaded_bit_for_bit(rival, data, tmp_path):
     np.testing.assert_array_equal(again.predict(data["val"]["T"]), rival.predict(data["val"]["T"]))
     # The saved options are the fitted ones, every default written out (a later change of a
     # default cannot change a saved model)
-    assert again.options == {**KINDS[rival.kind], **rival.options}
-    assert {k: v for k, v in again.get_params().items() if k != "options"} == \
-        {k: v for k, v in rival.get_params().items() if k != "options"}
+    assert type(again) is type(rival) and again.options_ == rival.options_
+    assert set(again.options_) == set(rival.hyper_params())
+    assert {k: v for k, v in again.get_params().items() if k not in again.options_} == \
+        {k: v for k, v in rival.get_params().items() if k not in rival.options_}
 
 
 def test_the_mlp_keeps_its_best_validation_epoch_and_predicts_as_scikit_learn(data):
@@ -146,8 +147,8 @@ def test_the_mlp_keeps_its_best_validation_epoch_and_predicts_as_scikit_learn(da
     least validation error, and training stopped ``patience`` epochs after it (or at the cap)."""
     from sklearn.neural_network import MLPRegressor
 
-    model = RivalIK("mlp", "arm_plane", {"hidden": [16, 16], "max_epochs": 40, "patience": 3},
-                    random_state=0).fit(ROBOT, data["train"], data["val"])
+    model = rival_ik("mlp", "arm_plane", {"hidden": [16, 16], "max_epochs": 40, "patience": 3},
+                     random_state=0).fit(ROBOT, data["train"], data["val"])
     assert model.epochs_ == 40 or model.epochs_ == model.best_epoch_ + 1 + 3
     net = MLPRegressor(hidden_layer_sizes=(16, 16))
     net.coefs_, net.intercepts_ = model.weights_, model.biases_
@@ -163,11 +164,11 @@ def test_the_mlp_counts_only_falls_of_min_improvement(data, patience):
     """A ``min_improvement`` no fall can reach (all but the whole error) leaves only the first
     epoch as the reference: training stops ``patience`` epochs after it, whatever the errors do,
     and keeps the least of those epochs; an impossible share is refused in one line."""
-    model = RivalIK("mlp", "arm_plane", {"hidden": [16, 16], "max_epochs": 40, "patience": patience,
-                                         "min_improvement": 1 - 1e-12}, random_state=0).fit(ROBOT, data["train"], data["val"])
+    model = rival_ik("mlp", "arm_plane", {"hidden": [16, 16], "max_epochs": 40, "patience": patience,
+                                          "min_improvement": 1 - 1e-12}, random_state=0).fit(ROBOT, data["train"], data["val"])
     assert model.epochs_ == 1 + patience and 0 <= model.best_epoch_ <= patience
     with pytest.raises(ValueError, match="mlp: min_improvement must be below 1"):
-        RivalIK("mlp", "arm_plane", {"min_improvement": 1.0}).fit(ROBOT, data["train"], data["val"])
+        rival_ik("mlp", "arm_plane", {"min_improvement": 1.0}).fit(ROBOT, data["train"], data["val"])
 
 
 def test_kernel_ridge_equals_scikit_learns_nystroem_and_ridge(data):
@@ -175,8 +176,8 @@ def test_kernel_ridge_equals_scikit_learns_nystroem_and_ridge(data):
     from sklearn.linear_model import Ridge
     from sklearn.pipeline import make_pipeline
 
-    model = RivalIK("kernel_ridge", "arm_plane", {"components": 150, "gamma": 4.0, "alpha": 1e-6},
-                    random_state=3).fit(ROBOT, data["train"])
+    model = rival_ik("kernel_ridge", "arm_plane", {"components": 150, "gamma": 4.0, "alpha": 1e-6},
+                     random_state=3).fit(ROBOT, data["train"])
     X = model.encoder_.transform(data["train"]["T"])
     Z = (data["train"]["q"] - model.y_mean_) / model.y_scale_
     pipe = make_pipeline(Nystroem(gamma=4.0, n_components=150, random_state=3), Ridge(alpha=1e-6)).fit(X, Z)
@@ -196,31 +197,31 @@ def test_kernel_ridge_equals_scikit_learns_nystroem_and_ridge(data):
 ])
 def test_bad_rival_options_are_one_clear_error_before_any_work(data, kind, options, message):
     with pytest.raises(ValueError, match=message):
-        RivalIK(kind, "arm_plane", options).fit(ROBOT, data["train"], data["val"])
+        rival_ik(kind, "arm_plane", options).fit(ROBOT, data["train"], data["val"])
 
 
 def test_an_mlp_without_validation_poses_is_refused(data):
     with pytest.raises(ValueError, match="an mlp rival keeps its best epoch on validation poses: give val"):
-        RivalIK("mlp").fit(ROBOT, data["train"])
+        rival_ik("mlp").fit(ROBOT, data["train"])
 
 
 def test_a_rival_loaded_for_another_robot_is_refused(data, tmp_path):
     from nfarm.model.robot import load_robot
 
-    RivalIK("knn", "arm_plane").fit(ROBOT, data["train"]).save(tmp_path)
+    rival_ik("knn", "arm_plane").fit(ROBOT, data["train"]).save(tmp_path)
     so101 = load_robot(PARAMS / "robots" / "so101.yaml")
     with pytest.raises(ParamsError, match=r"rival_ik.json: robot_params_sha256: trained for robot 'intelbot5'"):
         RivalIK.load(tmp_path, so101)
 
 
 def test_every_kind_is_covered():
-    assert {k for k, _ in RIVALS} == set(KINDS)
+    assert {k for k, _ in RIVALS} == set(REGISTERED)
 
 
 def test_a_quintic_rbf_with_too_few_neighbours_is_refused_in_one_line(data):
     with pytest.raises(ValueError, match=r"^rbf: the quintic kernel's degree-2 polynomial needs neighbors >= 28 "
                                          r"for the 6 inputs of 'arm_plane', got 16$"):
-        RivalIK("rbf", "arm_plane", {"neighbors": 16, "kernel": "quintic"}).fit(ROBOT, data["train"])
+        rival_ik("rbf", "arm_plane", {"neighbors": 16, "kernel": "quintic"}).fit(ROBOT, data["train"])
 
 
 # -- the contest's rules (nfarm.study.contest) --------------------------------------------------
@@ -298,8 +299,8 @@ def test_the_saved_rivals_are_ranked_as_the_contest_ranks(data, tmp_path):
     """Chapters 7 and 8 pick the best frozen rival by the contest's rule on validation poses."""
     from nfarm.study import contest
 
-    knn = RivalIK("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])
-    rbf = RivalIK("rbf", "arm_plane", {"neighbors": 16}).fit(ROBOT, data["train"])
+    knn = rival_ik("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])
+    rbf = rival_ik("rbf", "arm_plane", {"neighbors": 16}).fit(ROBOT, data["train"])
     knn.save(tmp_path / "ik_contest" / "knn")
     rbf.save(tmp_path / "ik_contest" / "rbf")
     rivals = contest.saved_rivals(ROBOT, tmp_path)

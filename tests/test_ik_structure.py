@@ -13,7 +13,7 @@ import pytest
 
 from nfarm.infra.paths import PARAMS
 from nfarm.infra.reading import ParamsError
-from nfarm.learning.ik_rivals import STRUCTURES, RivalIK
+from nfarm.learning.ik_rivals import STRUCTURES, RivalIK, rival_ik
 from nfarm.learning.learned import LearnedIK, ik_errors
 from nfarm.model.kinematics import fk
 from nfarm.study import contest
@@ -44,7 +44,7 @@ def anfis(data):
 
 @pytest.fixture(scope="module")
 def structured(data):
-    return {kind: RivalIK(kind, "arm_plane", options, structure="arm", random_state=0).fit(ROBOT, data["train"], data["val"])
+    return {kind: rival_ik(kind, "arm_plane", options, structure="arm", random_state=0).fit(ROBOT, data["train"], data["val"])
             for kind, options in KIND_OPTIONS.items()}
 
 
@@ -88,7 +88,7 @@ def test_without_the_closure_the_last_pitch_joint_is_the_models_own(anfis, struc
 
 def test_a_whole_rival_loads_as_before(data, tmp_path):
     """A rival saved before structures existed (no structure fields) loads as one model of all the joints."""
-    rival = RivalIK("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])
+    rival = rival_ik("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])
     path = rival.save(tmp_path)
     assert "structure" not in json.loads(path.read_text())
     loaded = RivalIK.load(path, ROBOT)
@@ -102,7 +102,7 @@ def test_a_whole_rival_loads_as_before(data, tmp_path):
 ])
 def test_bad_structures_are_refused_in_one_line(structure, encoding, rule, data):
     with pytest.raises(ValueError, match=rule):
-        RivalIK("knn", encoding, {"neighbors": 3}, structure=structure).fit(ROBOT, data["train"])
+        rival_ik("knn", encoding, {"neighbors": 3}, structure=structure).fit(ROBOT, data["train"])
 
 
 @pytest.mark.parametrize("field, value, rule", [
@@ -144,7 +144,7 @@ def test_the_sweep_file_gives_every_rival_its_seven_configurations_in_each_struc
 
 def test_the_ablation_holds_every_learner_in_every_structure_it_was_trained_in(anfis, structured, data):
     rivals = {**{f"{k}:arm": m for k, m in structured.items()},
-              "knn": RivalIK("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])}
+              "knn": rival_ik("knn", "arm_plane", {"neighbors": 3}).fit(ROBOT, data["train"])}
     models = structure_ablation(anfis, rivals)
     assert list(models)[:2] == [("ANFIS", "arm_open"), ("ANFIS", "arm")]
     assert ("k nearest neighbours", "whole") in models and ("k nearest neighbours", "arm") in models

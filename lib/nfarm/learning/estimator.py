@@ -15,6 +15,11 @@ model of another robot (:func:`check_robot`).
 A learner whose ``__init__`` takes ``**options`` passes them on to the learners it builds (an
 :class:`nfarm.learning.anfis.ANFIS` per joint): they are parameters too, kept in the attribute
 named like that argument and checked against the learner they go to (:attr:`Estimator._passed_to`).
+
+**One class per learner.** A task whose learners share their plumbing (the learned-IK rivals,
+:mod:`nfarm.learning.ik_rivals`; the ID baselines, :mod:`nfarm.learning.baselines`) has a base
+class and a :class:`Registry`: each learner is one class, registered where it is defined under the
+name sweep files give it (``learner: knn``), with its words for tables and figures (``label``).
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from ..infra.paths import atomic_path
 from ..infra.reading import Validator, checked_content, load_json, show, with_content_digest
 from ..model.robot import Robot, robot_hash
 
-__all__ = ["Estimator", "SavedModel", "write_model", "model_file", "checked_file", "check_robot"]
+__all__ = ["Estimator", "Registry", "SavedModel", "write_model", "model_file", "checked_file", "check_robot"]
 
 
 class Estimator:
@@ -114,6 +119,57 @@ class Estimator:
         if not hasattr(self, self._fitted):
             how = "fit or load" if hasattr(type(self), "load") else "fit"
             raise ValueError(f"this {type(self).__name__} is not fitted yet: call {how}")
+
+
+class Registry(dict):
+    """A task's learners by the name sweep files and saved models give them: ``name → class``,
+    filled by :meth:`register`, the decorator of each learner's class (``name`` its class
+    attribute ``field``, e.g. ``kind``); ``task`` names the task in messages.
+
+    Example:
+        >>> SCALERS = Registry("scaler", "kind")
+        >>> @SCALERS.register
+        ... class Doubling(Estimator):
+        ...     kind, label = "double", "doubling"
+        ...     def __init__(self, factor: float = 2.0):
+        ...         self.factor = factor
+        >>> SCALERS.make("double", factor=3.0), SCALERS.label("double"), SCALERS.label("halve")
+        (Doubling(factor=3.0), 'doubling', 'halve')
+        >>> SCALERS.make("halve")
+        Traceback (most recent call last):
+        ...
+        ValueError: kind must be one of double, got 'halve'
+    """
+
+    def __init__(self, task: str, field: str):
+        super().__init__()
+        self.task, self.field = task, field
+
+    def register(self, cls: type) -> type:
+        """Register ``cls`` under its ``field`` (a class decorator; a class defined again under
+        the same qualified name, as a notebook cell run twice defines it, replaces the first)."""
+        name = getattr(cls, self.field, None)
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{cls.__name__}: a {self.task} learner needs its {self.field} (a class attribute)")
+        old = self.get(name)
+        if old is not None and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
+            raise ValueError(f"{self.task}: {self.field} {name!r} is {old.__name__}'s, not {cls.__name__}'s")
+        self[name] = cls
+        return cls
+
+    def of(self, name: Any) -> type:
+        """The class registered as ``name``; a one-line ``ValueError`` naming the valid ones."""
+        if not isinstance(name, str) or name not in self:
+            raise ValueError(f"{self.field} must be one of {', '.join(self)}, got {show(name)}")
+        return self[name]
+
+    def make(self, name: Any, **params) -> Estimator:
+        """A learner of class ``name`` with ``params`` (an unknown one refused in one line)."""
+        return self.of(name)().set_params(**params)
+
+    def label(self, name: str) -> str:
+        """``name``'s words for tables and figures (its class's ``label``), or ``name`` itself."""
+        return getattr(self.get(name), "label", None) or name
 
 
 def _same(value: Any, default: Any) -> bool:

@@ -67,7 +67,7 @@ def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
     if isinstance(model, LearnedIK):
         cls, name, form = LearnedIK, FILE_NAME, FORMAT
         arrays = lambda data, what: ik_pairs(data, robot, what)          # noqa: E731
-    elif isinstance(model, RivalIK):
+    elif isinstance(model, RivalIK):            # any rival (nfarm.learning.ik_rivals): loaded by its kind
         cls, name, form = RivalIK, RIVAL_FILE_NAME, RIVAL_FORMAT
         arrays = lambda data, what: ik_pairs(data, robot, what)          # noqa: E731
     elif isinstance(model, (LearnedID, BaselineID)):
@@ -76,7 +76,7 @@ def fit_cached(model, robot: Robot, train: Mapping, val: Mapping | None,
         arrays = lambda data, what: id_states(data, robot, what)         # noqa: E731
     else:
         raise TypeError(f"model must be a LearnedIK, a LearnedID, a RivalIK or a BaselineID, got {type(model).__name__}")
-    parts = [cls.__name__, json.dumps(json_ready(model.get_params()), sort_keys=True),
+    parts = [type(model).__name__, json.dumps(json_ready(model.get_params()), sort_keys=True),
              fingerprint(*arrays(train, "train")), robot_hash(robot), form, code_digest("learning.model_cache"),
              json.dumps({k: os.environ.get(k) for k in NUMERICS_ENV})]
     if val is not None:

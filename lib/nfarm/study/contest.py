@@ -51,8 +51,8 @@ import numpy as np
 
 from ..infra.arguments import is_number
 from ..learning.bases import tier_of
-from ..learning.ik_rivals import KINDS as RIVAL_KINDS
-from ..learning.ik_rivals import RivalIK
+from ..learning.baselines import BASELINES
+from ..learning.ik_rivals import RIVALS, RivalIK
 from ..learning.learned import ik_errors
 from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
@@ -83,11 +83,9 @@ SPREAD_SEEDS = (1, 2, 3, 4)
 SMOKE_SPREAD_SEEDS = (1,)
 #: A contestant stays in contention within this factor of the best seed-0 95th percentile.
 KEEP_WITHIN = 2.0
-#: Each contestant in words a reader knows.
+#: The ANFIS contestants in words a reader knows (a rival's words are its class's ``label``: :func:`label`).
 LABELS = {"anfis:arm_plane": "ANFIS in the arm's plane", "anfis:quat_xyz": "ANFIS, the dissertation's 7 inputs",
-          "anfis:axes_xyz": "ANFIS on position and two tool axes", "rbf": "RBF interpolation",
-          "knn": "k nearest neighbours", "mlp": "multilayer perceptron", "kernel_ridge": "kernel ridge (Nyström)"}
-LABELS.update({f"{kind}:arm": f"{LABELS[kind]}, the ANFIS's structure" for kind in ("rbf", "knn", "mlp", "kernel_ridge")})
+          "anfis:axes_xyz": "ANFIS on position and two tool axes"}
 #: The structure each contestant computes the joints with: ``"arm"`` (the first and last joints affine
 #: maps, the pitch joints learned, the last pitch joint closed from the target's pitch), ``"whole"``
 #: (one model learns all the joints) or ``"recipe"`` (the dissertation's: one ANFIS per joint on its 7 inputs).
@@ -115,17 +113,20 @@ def learner_of(name: str) -> str:
 ID_RANKED_BY = ("worst_nrmse", "worst_rmse")
 
 
-#: Each learned-ID learner in words a reader knows.
-ID_LABELS = {"anfis": "ANFIS", "linear": "least squares on the states", "ridge": "ridge regression",
-             "kernel": "kernel ridge (Nyström)", "boosting": "gradient-boosted trees", "mlp": "multilayer perceptron",
-             "friction": "friction identification (least squares)",
-             "identification": "identification of the built arm (least squares)"}
+#: The learned-ID ANFIS in words (a baseline's words are its class's ``label``: :func:`id_label`).
+ID_LABELS = {"anfis": "ANFIS"}
 
 
 def id_label(name: str) -> str:
-    """A learned-ID contestant (``"<tier>:<learner>"``) in words: ``"generic: ANFIS"``."""
+    """A learned-ID contestant (``"<tier>:<learner>"``) in words: ``"generic: ANFIS"``, a
+    baseline's from its class (:data:`nfarm.learning.baselines.BASELINES`), else its name.
+
+    Example:
+        >>> id_label("generic:anfis"), id_label("generic:boosting"), id_label("generic:new")
+        ('generic: ANFIS', 'generic: gradient-boosted trees', 'generic: new')
+    """
     tier, learner = name.rsplit(":", 1)
-    return f"{tier}: {ID_LABELS.get(learner, learner)}"
+    return f"{tier}: {ID_LABELS.get(learner) or BASELINES.label(learner)}"
 
 
 def id_configuration(params: Mapping[str, Any]) -> str:
@@ -211,8 +212,19 @@ def family(params: Mapping[str, Any]) -> str:
 
 
 def label(name: str) -> str:
-    """A contestant's name in words (:data:`LABELS`), or its key."""
-    return LABELS.get(name, name)
+    """A contestant's name in words: an ANFIS's from :data:`LABELS`, a rival's from its class
+    (:data:`nfarm.learning.ik_rivals.RIVALS`, ``"<kind>:arm"`` in the ANFIS's structure), else its key.
+
+    Example:
+        >>> label("anfis:arm_plane"), label("knn"), label("mlp:arm"), label("svm")
+        ("ANFIS in the arm's plane", 'k nearest neighbours', "multilayer perceptron, the ANFIS's structure", 'svm')
+    """
+    if name in LABELS:
+        return LABELS[name]
+    kind, _, structure = name.partition(":")
+    if kind not in RIVALS or structure not in ("", "arm"):
+        return name
+    return RIVALS.label(kind) + (", the ANFIS's structure" if structure == "arm" else "")
 
 
 def _key(r: CellResult | Replicates, ranked_by: Sequence[str] = RANKED_BY) -> tuple[float, ...]:
@@ -381,7 +393,7 @@ def saved_rivals(robot: Robot, models_dir: str | os.PathLike) -> dict[str, Rival
     ``models_dir/ik_contest/<kind>/`` (one model of all joints) and ``<kind>_arm/`` (the ANFIS's
     structure), by contestant (``"rbf"``, ``"rbf:arm"``, …; those present)."""
     where = Path(models_dir) / "ik_contest"
-    names = [name for kind in RIVAL_KINDS for name in (kind, f"{kind}:arm")]
+    names = [name for kind in RIVALS for name in (kind, f"{kind}:arm")]
     return {name: RivalIK.load(where / name.replace(":", "_"), robot) for name in names
             if (where / name.replace(":", "_")).is_dir()}
 

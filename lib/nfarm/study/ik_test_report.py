@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from ..learning.ik_rivals import RivalIK
 from ..learning.learned import ik_errors
 from ..learning.model_cache import fit_cached
 from ..model.robot import Robot
@@ -299,8 +298,7 @@ def encoding_credit(robot: Robot, tested: IKTest, learned, recipe: Mapping[str, 
         if encoding == best.encoding:
             credit[encoding, f"best rival: {rbf}"] = tested.errors[rbf]
         else:       # one model of all the joints: the ANFIS's structure needs the arm's plane
-            moved = fit_cached(RivalIK(best.kind, encoding, best.options, max_out_of_plane=best.max_out_of_plane,
-                                       random_state=best.random_state), robot, train, data["ik_val"],
+            moved = fit_cached(_one_model(best, encoding), robot, train, data["ik_val"],
                                Path(cache_dir) / f"{tested.rbf_kind.replace(':', '_')}_{encoding}")[0]
             credit[encoding, moved_name] = ik_errors(robot, moved.predict(test["T"]), test["q"], test["T"])
     rows = {key: {r.metric: r for r in ik_rows(" ".join(key), "", e, draws=draws, level=level, seed=seed)}
@@ -313,6 +311,13 @@ def _interval_table(first: list[str], rows: Mapping[tuple[str, str], Mapping[str
     return Table([*first, *(f"{m} [{dict(IK_METRICS)[m]}]" for m in metrics)],
                  [[*labels(key), *(interval_text(rows[key][m], {"mm": floor, "deg": floor}) for m in metrics)]
                   for key in keys], caption=caption)
+
+
+def _one_model(rival, encoding: str):
+    """An unfitted copy of ``rival``'s configuration (its class and hyper-parameters, its
+    ``max_out_of_plane`` and seed) as one model of all the joints on ``encoding``."""
+    return type(rival)(**{k: rival.get_params()[k] for k in rival.hyper_params()}, encoding=encoding,
+                       max_out_of_plane=rival.max_out_of_plane, random_state=rival.random_state)
 
 
 def credit_table(credit: Credit, *, level: float = 0.95, floor: float = FLOOR) -> Table:

@@ -19,7 +19,7 @@ and returns its metrics, a flat mapping of numbers, strings or lists of numbers.
   each joint's NRMSE, the fit's seconds and the prediction's microseconds per state.
 * ``ik_contest`` — one contestant of the learned-IK contest (chapter 6): a ``learner``
   (``"anfis"``: :class:`nfarm.learning.learned.LearnedIK` with ``options`` as its keyword
-  arguments; or a rival kind of :class:`nfarm.learning.ik_rivals.RivalIK` with its ``options``)
+  arguments; or a rival of :data:`nfarm.learning.ik_rivals.RIVALS` with its ``options``)
   trained on all of the study's training poses (or the first ``fraction``), judged **at the
   tool** on the ``split`` (``val`` to choose, ``test`` once for the frozen chosen models): the
   median and 95th percentile of the position error [mm] and of the orientation error [deg],
@@ -67,11 +67,9 @@ from ..infra.reading import ParamsError, Validator, show
 from ..infra.typed import COUNT, EPOCHS, ITERATIONS, N_MFS, N_RULES, Range
 from ..learning import jang
 from ..learning.anfis import ANFIS
-from ..learning.baselines import DEFAULTS as BASELINE_OPTIONS
-from ..learning.baselines import BaselineID
+from ..learning.baselines import BASELINES, baseline_id, option_names
 from ..learning.bases import tier_of
-from ..learning.ik_rivals import KINDS as RIVAL_KINDS
-from ..learning.ik_rivals import RivalIK
+from ..learning.ik_rivals import RIVALS, rival_ik
 from ..learning.learned import LearnedIK, ik_errors
 from ..learning.learned_id import LearnedID
 from ..learning.model_cache import fit_cached, n_parameters
@@ -406,11 +404,11 @@ def _fit_contestant(p: dict):
                                  "parameters (encoding, max_out_of_plane_deg, seed)")
             model = LearnedIK(p["encoding"], **plane, **options, random_state=p["seed"])
             model._options(robot.n)
-        elif p["learner"] in RIVAL_KINDS:
+        elif p["learner"] in RIVALS:
             structure = options.pop("structure", "whole")     # the rival's structure (nfarm.learning.ik_rivals)
-            model = RivalIK(p["learner"], p["encoding"], options, **plane, random_state=p["seed"], structure=structure)
+            model = rival_ik(p["learner"], p["encoding"], options, **plane, random_state=p["seed"], structure=structure)
         else:
-            raise ValueError(f"learner must be anfis or one of {', '.join(RIVAL_KINDS)}, got {p['learner']!r}")
+            raise ValueError(f"learner must be anfis or one of {', '.join(RIVALS)}, got {p['learner']!r}")
     except (ValueError, TypeError) as exc:
         raise ParamsError(f"ik_contest: {exc}") from None
     where = _options_dir(models, "ik_contest", {"class": type(model).__name__, **json.loads(
@@ -564,13 +562,14 @@ def _fit_baseline(p: dict):
                    None, p["stride"])
     val = _id_split(p, study, directory, "val")
     learner = p["learner"]
-    if learner not in BASELINE_OPTIONS:
-        raise ParamsError(f"learner must be one of {', '.join(BASELINE_OPTIONS)}, got {learner!r}")
-    options = {k: p[k] for k in BASELINE_OPTIONS[learner] if p[k] is not None}
+    if learner not in BASELINES:
+        raise ParamsError(f"learner must be one of {', '.join(BASELINES)}, got {learner!r}")
+    options = {k: p[k] for k in BASELINES[learner].hyper_params() if p[k] is not None}
     # The validation trajectories stop the MLP early, as they stop the ANFIS (the other learners ignore them).
     # Trained once for its options and data (fit_cached): chapter 7's test cell reads the model its validation cell made.
-    model = BaselineID(learner, options, residual=p["residual"], random_state=p["seed"])
-    where = _options_dir(models, "id_baselines", {**json.loads(json.dumps(model.get_params(), default=str)),
+    model = baseline_id(learner, options, residual=p["residual"], random_state=p["seed"])
+    where = _options_dir(models, "id_baselines", {"class": type(model).__name__,
+                                                  **json.loads(json.dumps(model.get_params(), default=str)),
                                                   "torques": p["torques"], "fraction": p["fraction"], "stride": p["stride"]})
     return fit_cached(model, robot, train, val, where)[0], train, val
 
@@ -624,14 +623,14 @@ def _fit_id_contestant(p: dict):
             raise ValueError("options: random_state is the cell's own parameter (seed)")
         if p["learner"] == "anfis":
             model = LearnedID(**options, random_state=p["seed"])     # its options are checked by fit
-        elif p["learner"] in BASELINE_OPTIONS:
+        elif p["learner"] in BASELINES:
             residual = options.pop("residual", False)
             if not isinstance(residual, bool):
                 raise ValueError(f"options: residual must be true or false, got {residual!r}")
-            model = BaselineID(p["learner"], options, residual=residual, random_state=p["seed"])
+            model = baseline_id(p["learner"], options, residual=residual, random_state=p["seed"])
             model._options()
         else:
-            raise ValueError(f"learner must be anfis or one of {', '.join(BASELINE_OPTIONS)}, got {p['learner']!r}")
+            raise ValueError(f"learner must be anfis or one of {', '.join(BASELINES)}, got {p['learner']!r}")
     except (ValueError, TypeError) as exc:
         raise ParamsError(f"id_contest: {exc}") from None
     where = _options_dir(models, "id_contest", {"class": type(model).__name__, **json.loads(
@@ -728,7 +727,7 @@ JOBS: dict[str, Job] = {
     "id_baseline": Job(
         id_baseline,
         {**_STUDY, "stride": 1, "torques": "rigid", "residual": False, "split": "val", "learner": "linear",
-         **{k: None for k in sorted({k for o in BASELINE_OPTIONS.values() for k in o})}},
+         **{k: None for k in sorted(option_names())}},
         ("rmse", "nrmse", "worst_nrmse", "fit_seconds", "predict_us", "features", "train_samples", "epochs",
          "trajectory_sums", "trajectory_maxima", "payload_trajectory_sums", "payload_trajectory_maxima"),
         paths=("study_file", "data_dir", "models_dir"),
