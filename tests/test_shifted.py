@@ -105,8 +105,10 @@ def test_the_shifted_trajectories_are_drawn_apart_from_the_test_split():
     """Their own seed: no trajectory of the shifted population is one of the test split's sped up."""
     study = load_study(PARAMS / "studies" / "intelbot5.yaml")
     from nfarm.study.id_trajectories import random_trajectories
+    from nfarm.study.regions import STREAMS
+    # the test split's own draws (its seed and stream, nfarm.study.datasets), sped up as the shifted population is
     test = random_trajectories(study.robot, faster(study.id, study.shifted.id_speed), study.shifted.id_trajectories,
-                               np.random.SeedSequence([datasets.split_seed(study, "test"), 1]))
+                               np.random.SeedSequence([datasets.split_seed(study, "test"), STREAMS["id"], 2]))
     assert not np.allclose(test["q"][:50], shifted_id(study)["q"][:50])
 
 
