@@ -44,8 +44,12 @@ def labelled_quantities(figures: Path, arms_present=None) -> dict[tuple[str, str
     return found
 
 
-def _summary_task(verdict_task: str) -> str:
-    """A verdict's task (chapter 7's ``07_verdict``) as the summary tables name it."""
+def _summary_task(verdict_task: str) -> str | None:
+    """A verdict's task (chapter 7's ``07_verdict``) as the summary tables name it; ``None`` for a
+    verdict on a group of joints (``"measured arm, every tier, rigid-dominated joints"``), whose worst
+    NRMSE is over those joints only: no summary row states it, the verdict table is its one source."""
+    if verdict_task.endswith(" joints"):
+        return None
     if verdict_task.startswith("measured arm"):
         return "ID, measured arm"
     return "inverse dynamics" if verdict_task == "rigid-body inverse dynamics" else verdict_task
@@ -75,6 +79,8 @@ def results_disagreeing(summaries: dict[str, Path], learned: Path | None = None,
             found.setdefault(key, {"summary": "(none)"} if key not in summary else {})[learned.name] = r["value"]
     for arm, path in (verdicts or {}).items():
         for v in read_verdicts(path):
+            if _summary_task(v["task"]) is None:
+                continue
             for method, value in ((v["anfis"], v["anfis_value"]), (v["rival"], v["rival_value"])):
                 key = (arm, _summary_task(v["task"]), method, v["metric"])
                 written = summary.get(key)
@@ -111,6 +117,12 @@ def test_the_check_finds_a_result_that_two_chapters_state_differently(tmp_path):
     assert stated["summary, to three digits"] == "0.935" and stated["07_verdict.csv"] == "0.936"
     assert stated["08_learned.csv"] == "0.9001", "every source that disagrees is named"
     assert ("a", "inverse kinematics", "RBF", "position p95") in differing, "a verdict's number no summary holds"
+    # A verdict on a group of joints states a worst NRMSE over those joints only, which no summary row holds
+    group = values | {"task": "measured arm, every tier, rigid-dominated joints", "metric": "worst NRMSE"}
+    with (tmp_path / "07_verdict.csv").open("w", encoding="utf-8", newline="") as f:
+        csv.writer(f).writerows([VERDICT_COLUMNS, [group[c] for c in VERDICT_COLUMNS]])
+    assert not any(key[1] == "ID, measured arm" for key in results_disagreeing(
+        {"a": tmp_path / "07_summary.csv"}, verdicts={"a": tmp_path / "07_verdict.csv"}))
     rows_only = results_disagreeing({"a": tmp_path / "07_summary.csv"}, tmp_path / "08_learned.csv")
     assert rows_only == {("a", "inverse kinematics", "ANFIS", "position p95"): {"07_summary.csv": "0.9355",
                                                                               "08_learned.csv": "0.9001"}}
