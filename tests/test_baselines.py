@@ -90,6 +90,8 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
     ("friction", None, "learner 'friction' identifies the drives beside Newton–Euler: give residual=True"),
     ("ridge", {"degree": 2}, "unknown option 'degree' for learner 'ridge'; valid: basis, alpha"),
     ("ridge", {"alpha": -1}, "ridge: alpha must be a positive number, got -1"),
+    ("ridge", {"alpha": True}, "ridge: alpha must be a positive number, got True"),
+    ("kernel", {"gamma": float("nan")}, "kernel: gamma must be a positive number, got nan"),
     ("ridge", {"basis": "fourier"}, "ridge: basis must be one of"),
     ("kernel", {"n_components": 1.5}, "kernel: n_components must be an integer from 2 to 10,000, got 1.5"),
     ("kernel", {"n_components": 10**6}, "kernel: n_components must be an integer from 2 to 10,000, got 1000000"),

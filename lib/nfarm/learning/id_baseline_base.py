@@ -29,6 +29,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import __version__
+from ..infra.arguments import is_integer, is_number
 from ..infra.reading import Validator, json_ready, show
 from ..model.dynamics import rnea
 from ..model.robot import Robot, robot_hash
@@ -116,12 +117,11 @@ class BaselineID(SavedModel):
         """The options as saved, each checked by its name; one-line ``ValueError`` otherwise."""
         options = {name: getattr(self, name) for name in self.hyper_params()}
         for key in ("alpha", "gamma", "learning_rate"):
-            if key in options and not (isinstance(options[key], (int, float)) and options[key] > 0
+            if key in options and not (is_number(options[key], numpy=False) and options[key] > 0
                                        and np.isfinite(options[key])):
                 raise ValueError(f"{self.learner}: {key} must be a positive number, got {options[key]!r}")
         for key in ("n_components", "max_iter", "max_leaf_nodes", "patience"):
-            if key in options and not (isinstance(options[key], (int, np.integer))
-                                       and not isinstance(options[key], bool) and 2 <= options[key] <= MAXIMA[key]):
+            if key in options and not (is_integer(options[key]) and 2 <= options[key] <= MAXIMA[key]):
                 raise ValueError(f"{self.learner}: {key} must be an integer from 2 to {MAXIMA[key]:,}, "
                                  f"got {options[key]!r}")
         if "angles" in options and options["angles"] not in ANGLES:
@@ -130,8 +130,7 @@ class BaselineID(SavedModel):
             raise ValueError(f"{self.learner}: basis must be one of {', '.join(BASES)}, got {options['basis']!r}")
         if "hidden" in options:
             hidden = options["hidden"]
-            if isinstance(hidden, (int, str)) or not all(isinstance(h, (int, np.integer)) and not isinstance(h, bool)
-                                                         and 1 <= h <= MAXIMA["hidden"] for h in hidden) \
+            if isinstance(hidden, (int, str)) or not all(is_integer(h) and 1 <= h <= MAXIMA["hidden"] for h in hidden) \
                     or not hidden or len(hidden) > 16:
                 raise ValueError(f"{self.learner}: hidden must be a list of 1 to 16 layer widths from 1 to "
                                  f"{MAXIMA['hidden']:,}, got {hidden!r}")

@@ -35,6 +35,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import __version__
+from ..infra.arguments import is_integer, is_number
 from ..infra.reading import Validator, json_ready, show
 from ..model.robot import Robot, robot_hash
 from ..solvers.ik import check_targets
@@ -58,14 +59,13 @@ _ARM_FIELDS = ("closure_tolerance", "affine_ridge", "pitch_closure", "affine", "
 def whole_number(kind: str, name: str, x: Any, lo: int, hi: int) -> None:
     """Refuse, in one line naming the rival ``kind`` and the option ``name``, ``x`` that is not a
     whole number in ``[lo, hi]``."""
-    if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or not lo <= x <= hi:
+    if not is_integer(x) or not lo <= x <= hi:
         raise ValueError(f"{kind}: {name} must be a whole number in [{lo}, {hi}], got {show(x)}")
 
 
 def finite_number(kind: str, name: str, x: Any, zero: bool = False) -> None:
     """Refuse ``x`` that is not a finite number ``> 0`` (``>= 0`` with ``zero``), in one line."""
-    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) \
-            or not (x >= 0 if zero else x > 0):
+    if not is_number(x, numpy=False) or not math.isfinite(x) or not (x >= 0 if zero else x > 0):
         raise ValueError(f"{kind}: {name} must be a finite number {'>= 0' if zero else '> 0'}, got {show(x)}")
 
 

@@ -47,6 +47,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..infra.arguments import is_integer
 from ..infra.reading import Validator, json_ready, show
 from .ik_rival_base import FILE_NAME, FORMAT, RIVALS, STRUCTURES, RivalIK, finite_number, rival_ik, whole_number
 
@@ -176,7 +177,7 @@ class MLPRival(RivalIK):
     def _checked(self) -> dict:
         hidden = self.hidden
         if isinstance(hidden, (str, bytes)) or not isinstance(hidden, (list, tuple)) or not 1 <= len(hidden) <= 8 \
-                or not all(isinstance(h, (int, np.integer)) and not isinstance(h, bool) and 1 <= h <= 4096
+                or not all(is_integer(h) and 1 <= h <= 4096
                            for h in hidden):
             raise ValueError(f"mlp: hidden must be 1 to 8 layer widths in [1, 4096], got {show(hidden)}")
         if self.activation not in _ACTIVATIONS:

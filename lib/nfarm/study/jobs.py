@@ -62,6 +62,7 @@ import numpy as np
 
 from . import datasets, id_trajectories, study_files
 
+from ..infra.arguments import check_bool, is_integer, is_number
 from ..infra.paths import BUILD, project_path, shown_path
 from ..infra.reading import ParamsError, Validator, show
 from ..infra.typed import COUNT, EPOCHS, ITERATIONS, N_MFS, N_RULES, Range
@@ -220,12 +221,12 @@ def _of_kind(name: str, value: Any, default: Any, path: bool) -> Any:
             refuse("true or false")
         return value
     if isinstance(default, int):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+        if not is_number(value, numpy=False) \
                 or isinstance(value, float) and not (value.is_integer() and abs(value) <= 2 ** 53):
             refuse("a whole number")
         return int(value)
     if isinstance(default, float):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if not is_number(value, numpy=False):
             refuse("a number")
         return float(value)
     if isinstance(default, str) and not isinstance(value, str):
@@ -502,11 +503,11 @@ def _seed_like_split(p: dict, study, states: int) -> dict:
     if not isinstance(given, Mapping) or set(given) != set(_SEED_LIKE):
         raise ParamsError(f"seed_like must be null or a mapping of {', '.join(_SEED_LIKE)}, got {given!r}")
     duration, dt, seed = (given[k] for k in _SEED_LIKE)
-    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (duration, dt)) \
+    if not all(is_number(x, numpy=False) and math.isfinite(x) for x in (duration, dt)) \
             or not 0 < dt <= duration <= 600 or duration / dt > 10_000:
         raise ParamsError(f"seed_like: duration_s and dt_s must be numbers with 0 < dt_s <= duration_s <= 600 "
                           f"and at most 10 000 samples per trajectory, got {duration!r} and {dt!r}")
-    if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < 2**32):
+    if not (is_integer(seed, numpy=False) and 0 <= seed < 2**32):
         raise ParamsError(f"seed_like: seed must be an integer in [0, 2^32), got {seed!r}")
     if p["torques"] != "rigid":
         raise ParamsError("seed_like: trajectories made the seed's way have rigid-body torques only "
@@ -625,8 +626,7 @@ def _fit_id_contestant(p: dict):
             model = LearnedID(**options, random_state=p["seed"])     # its options are checked by fit
         elif p["learner"] in BASELINES:
             residual = options.pop("residual", False)
-            if not isinstance(residual, bool):
-                raise ValueError(f"options: residual must be true or false, got {residual!r}")
+            check_bool("options: residual", residual, message=f"options: residual must be true or false, got {residual!r}")
             model = baseline_id(p["learner"], options, residual=residual, random_state=p["seed"])
             model._options()
         else:
