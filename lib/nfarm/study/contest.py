@@ -450,6 +450,12 @@ class IDContest:
         of a leader aside)."""
         return tuple(id_contending(self.chosen))
 
+    @property
+    def paired(self) -> tuple[str, ...]:
+        """The families of every tier's :meth:`pair` (the ANFIS and its best rival over the seeds),
+        tier by tier. The rival may be one within reach that overtook the seed-0 leader."""
+        return tuple(id_family(g.cell.params) for tier in self.tiers for g in self.pair(tier) if g is not None)
+
     def winner(self, tier: str) -> Replicates:
         """The tier's best finalist by the mean of :data:`ID_RANKED_BY` over the seeds."""
         return min((g for g in self.pair(tier) if g is not None), key=lambda g: _key(g, ID_RANKED_BY))

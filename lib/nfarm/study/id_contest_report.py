@@ -113,10 +113,11 @@ def joints_table(idc: contest.IDContest, id_val: Mapping[str, np.ndarray], ne_rm
 
 
 def size_curves(idc: contest.IDContest, size_runs: Sequence[CellResult]) -> dict[str, list[tuple[int, float]]]:
-    """Each tier leader's ``(training states, worst resolved joint NRMSE [%])`` on seed 0, at the
-    contest's size and at every other size it ran (``size_runs``), by the leader's words."""
+    """Each tier leader's and each tier's pair's (:attr:`nfarm.study.contest.IDContest.paired`)
+    ``(training states, worst resolved joint NRMSE [%])`` on seed 0, at the contest's size and at
+    every other size it ran (``size_runs``), by the contestant's words."""
     curves: dict[str, list[tuple[int, float]]] = {}
-    for r in [*size_runs, *(idc.chosen[name] for name in idc.leaders)]:
+    for r in [*size_runs, *(idc.chosen[name] for name in dict.fromkeys([*idc.leaders, *idc.paired]))]:
         curves.setdefault(contest.id_label(contest.id_family(r.cell.params)), []).append(
             (r.metrics["train_samples"], 100 * r.metrics["worst_nrmse"]))
     return curves

@@ -210,6 +210,14 @@ class TrainingSweeps:
                                             for name in first.leaders for s in strides])]
 
 
+    def paired_sizes(self, idc: contest.IDContest, strides: Sequence[int]) -> Sweep:
+        """The cells on every ``strides``-th training state (seed 0) of each tier's pair in ``idc``
+        (:attr:`nfarm.study.contest.IDContest.paired`) that :meth:`measured_finalists` did not run:
+        a rival within reach that overtook its tier's leader over the seeds."""
+        return self.id_contest.with_cells([{**idc.chosen[name].cell.params, "stride": s} for name in idc.paired
+                                           if name not in idc.leaders for s in strides])
+
+
 def training_sweeps(setup: TrainingSetup, *, study_file: str, data_dir=None, models_dir=None, smoke: bool = False,
                     seed: int = 0, contest_sweep_file: str, id_sweep_file: str, id_baselines_sweep_file: str,
                     id_sizes_sweep_file: str, id_contest_sweep_file: str, dissertation: Mapping[str, Any],
