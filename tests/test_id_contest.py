@@ -85,6 +85,12 @@ def test_a_rival_within_reach_of_its_leader_stays_in_the_contest_and_the_best_me
     anfis, rival = outcome.pair("generic")
     assert contest.id_family(rival.cell.params) == "generic:boosting" and rival.n == 3     # mean 0.0288 < 0.0303
     assert outcome.group("generic:kernel").n == 1                                          # out of reach: pruned
+    # the pair is what chapter 6.8's size curves and its prose read: the rival that overtook its leader among them
+    assert outcome.paired == ("generic:anfis", "generic:boosting")
+    from nfarm.study.id_contest_report import size_curves
+    for r in outcome.chosen.values():
+        r.metrics["train_samples"] = 100
+    assert set(size_curves(outcome, [])) == {contest.id_label(n) for n in ("generic:anfis", "generic:mlp", "generic:boosting")}
     # no spread yet: the leaders only; a rival just outside the leader's range stays out
     assert contest.id_contending(outcome.chosen) == ["generic:anfis", "generic:mlp"]
     narrow = [r for r in spread if r.cell.params["learner"] == "mlp" and r.cell.params["seed"] == 2]   # range to 0.0300
