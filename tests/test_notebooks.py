@@ -352,7 +352,8 @@ def test_the_key_results_checks_fail_on_planted_defects(tmp_path):
     shifted = (FIGURES / "tables" / "07_verdict_shifted.csv").read_text(encoding="utf-8")
     planted("shifted", shifted.splitlines()[1], shifted.splitlines()[1].replace("ANFIS better", "rival better"), "07")
     rows = (FIGURES / "tables" / "07_verdict.csv").read_text(encoding="utf-8").splitlines(keepends=True)
-    planted("task", rows[-1], "", "07")
+    # a task's row (a group of joints' rows depend on the arm's data: not every arm has them)
+    planted("task", [r for r in rows if "joints\"," not in r][-1], "", "07")
 
 
 def test_there_are_chapters():
