@@ -101,7 +101,7 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
     ("mlp", {"hidden": [10**6]}, "mlp: hidden must be a list of 1 to 16 layer widths from 1 to 4,096"),
     ("mlp", {"hidden": [True]}, "mlp: hidden must be a list of 1 to 16 layer widths"),
     ("linear", {"alpha": 1.0}, "unknown option 'alpha' for learner 'linear'; valid: none"),
-    ("mlp", {"angles": "sums"}, "mlp: angles must be one of joints, chain, got 'sums'"),
+    ("mlp", {"angles": "sums"}, "mlp: angles must be one of joints, chain, regressor, got 'sums'"),
 ])
 def test_bad_baseline_options_are_refused_before_any_work(learner, options, message, trajectories):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):

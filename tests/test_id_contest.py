@@ -26,23 +26,26 @@ def test_contestants_are_learners_within_their_tier_and_each_tier_keeps_its_best
     seed0 = [_result("anfis", 0, 0.30, inputs="affine_generic", n_mfs=1),
              _result("anfis", 0, 0.20, inputs="affine_generic", n_mfs=2),
              _result("mlp", 0, 0.10, hidden=[8]), _result("boosting", 0, 0.15, max_iter=5),
-             _result("ridge", 0, 0.40, basis="chain"), _result("anfis", 0, 0.50, inputs="affine"),
+             _result("ridge", 0, 0.40, basis="chain_linear"), _result("anfis", 0, 0.50, inputs="affine"),
+             _result("ridge", 0, 0.01, basis="chain_drives"),        # the rigid-body span: a tier of its own
              _result("friction", 0, 0.05, residual=True), _result("anfis", 0, 0.04, inputs="own", residual=True),
              _result("boosting", 0, 0.03, residual=True, max_iter=5)]
     chosen = contest.choose(seed0, family_of=contest.id_family, ranked_by=contest.ID_RANKED_BY)
     assert list(chosen) == ["generic:anfis", "generic:mlp", "generic:boosting", "structure-informed:ridge",
-                            "structure-informed:anfis", "nominal model + learned:friction",
+                            "structure-informed:anfis", "rigid-body span:ridge", "nominal model + learned:friction",
                             "nominal model + learned:anfis", "nominal model + learned:boosting"]
     assert chosen["generic:anfis"].cell.params["options"]["n_mfs"] == 2
     # Each tier's best ANFIS and best rival go on to the other draws; the others are pruned
     assert contest.id_contending(chosen) == ["generic:anfis", "generic:mlp", "structure-informed:ridge",
-                                             "structure-informed:anfis", "nominal model + learned:anfis",
-                                             "nominal model + learned:boosting"]
+                                             "structure-informed:anfis", "rigid-body span:ridge",
+                                             "nominal model + learned:anfis", "nominal model + learned:boosting"]
     spread = [_result(p["learner"], p["seed"], 0.2 + 0.01 * p["seed"] if p["learner"] == "anfis" else 0.1, **p["options"])
               for p in contest.id_spread_params(seed0, (1, 2))]
     outcome = contest.id_contest(seed0, spread)
     anfis, rival = outcome.pair("generic")
     assert (anfis.n, rival.n) == (3, 3) and contest.id_family(rival.cell.params) == "generic:mlp"
+    # The span's ridge, best of all on validation, has no ANFIS beside it: no pair, so no verdict of its own
+    assert outcome.pair("rigid-body span")[0] is None and outcome.winner("rigid-body span").n == 3
     assert contest.id_family(outcome.winner("generic").cell.params) == "generic:mlp"
     assert outcome.group("generic:boosting").n == 1                       # pruned after seed 0
     assert outcome.budgets["generic:anfis"][0] == 2 and outcome.budgets["generic:mlp"][0] == 1
@@ -120,9 +123,14 @@ def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
     untunable = {"identification", "friction"}
     assert {n for n, k in tried.items() if k != 2} == {n for n in tried if n.rsplit(":", 1)[1] in untunable}
     assert all(k == 1 for n, k in tried.items() if n.rsplit(":", 1)[1] in untunable)
-    assert {n.rsplit(":", 1)[0] for n in tried} == {"generic", "structure-informed", "identification",
+    assert {n.rsplit(":", 1)[0] for n in tried} == {"generic", "structure-informed", "rigid-body span", "identification",
                                                     "nominal model + learned"}
-    assert all(any(n == f"{tier}:anfis" for n in tried) for tier in {n.rsplit(":", 1)[0] for n in tried})
+    # Every tier but the rigid-body span (an identification in disguise: ridge alone) has its ANFIS
+    assert {tier for tier in {n.rsplit(":", 1)[0] for n in tried} if f"{tier}:anfis" not in tried} == {"rigid-body span"}
+    assert tried["rigid-body span:ridge"] == 2 and "structure-informed:ridge" in tried
+    # Issue 65: the identification tier is a contest — the learners given the regressor's columns beside its least squares
+    assert {n for n in tried if n.startswith("identification:")} == {f"identification:{k}" for k in (
+        "anfis", "identification", "kernel", "boosting", "mlp")}
 
 
 def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):

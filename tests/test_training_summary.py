@@ -40,7 +40,7 @@ def test_the_summary_judges_the_chosen_models_on_validation(anfis, baseline, say
     leader, plane = ik([1.0, 1.2], "quat_xyz"), ik([2.0, 2.4], "arm_plane")
     chosen = ChosenIK("anfis:arm_plane", None, {}, {}, plane)
     best = id_(anfis, inputs="affine", partition="grid", n_mfs=2)
-    base = {"mlp": id_(baseline, learner="mlp", hidden=[8])}
+    base = {("generic", "mlp"): id_(baseline, learner="mlp", hidden=[8])}
     lines = summary_prose(chosen, [leader, plane], READING, best, base).split("\n")
     assert len(lines) == 3 and lines[-1].startswith("* Every choice here was made on validation data")
     assert lines[0] == ("* **Inverse kinematics**: ANFIS in the arm's plane, chosen in the contest of section 6.1, reaches a "
@@ -61,7 +61,7 @@ def test_the_summary_names_each_tiers_best_on_the_measured_arm():
                                          ("anfis", {"inputs": "regressor_drives"}, 0.05)]]
     plane = ik([2.0], "arm_plane")
     text = summary_prose(ChosenIK("anfis:arm_plane", None, {}, {}, plane), [plane], READING, id_([0.02], inputs="affine"),
-                         {"mlp": id_([0.5], learner="mlp")}, contest.id_contest(seed0), np.array([0.005, 0.002]))
+                         {("generic", "mlp"): id_([0.5], learner="mlp")}, contest.id_contest(seed0), np.array([0.005, 0.002]))
     assert text.split("\n")[2] == ("* **The measured arm** (validation, worst resolved joint's NRMSE against the measured "
                                    "spread): generic, best ridge regression (30 %); identification, best ANFIS (5 %); "
                                    "the sensor noise is 0.005 N·m.")

@@ -15,7 +15,9 @@ name sweep files give it (what they share is :class:`~nfarm.learning.id_baseline
   angles, ``q̇, q̈``: with ``angles="joints"`` the joint angles (what every arm has: the *generic*
   tier), with ``angles="chain"`` the joint angles and the sums of every stretch of parallel joints
   (:func:`nfarm.learning.bases.angle_sums`: which axes are parallel, the *structure-informed*
-  tier's knowledge, the inputs its ANFIS and its ridge on the chain basis get);
+  tier's knowledge, the inputs its ANFIS and its ridge on the chain basis get), with
+  ``angles="regressor"`` every joint's row of the rigid-body regressor and its drive terms
+  (:func:`regressor_inputs`: the geometry known, the *identification* tier's knowledge);
 * ``"boosting"`` (:class:`BoostingID`) — gradient-boosted trees per joint
   (``HistGradientBoostingRegressor``: ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the
   same inputs (``angles`` too);
@@ -80,10 +82,11 @@ from .baseline_parts import (PerJointLeastSquares, StackedLeastSquares, forest_v
 from .bases import angle_sums, basis
 from .id_baseline_base import (ANGLES, BASELINES, FILE_NAME, FORMAT, MAXIMA, BaselineID, Standardised, baseline_id,
                                smooth_inputs)
-from .learned_id import ID_FILE_NAME, LearnedID
+from .learned_id import ID_FILE_NAME, LearnedID, id_features
 
 __all__ = ["BaselineID", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "option_names", "label",
-           "load_id_model", "LinearID", "RidgeID", "KernelID", "BoostingID", "MLPID", "FrictionID", "IdentificationID"]
+           "load_id_model", "regressor_inputs", "LinearID", "RidgeID", "KernelID", "BoostingID", "MLPID", "FrictionID",
+           "IdentificationID"]
 
 _timed_learners = timed_learners        # looked up here at each fit (a test swaps it for the plain estimators)
 
@@ -183,10 +186,32 @@ class RidgeID(Standardised):
 
 class _SmoothInputs:
     """The ``sin, cos`` of the joint angles (``angles="joints"``) or of them and their sums over
-    parallel joints (``"chain"``), then ``q̇, q̈`` (:func:`~nfarm.learning.id_baseline_base.smooth_inputs`)."""
+    parallel joints (``"chain"``), then ``q̇, q̈`` (:func:`~nfarm.learning.id_baseline_base.smooth_inputs`);
+    or (``"regressor"``, the identification tier's knowledge) every joint's row of the rigid-body
+    regressor and its drive terms, side by side (:func:`regressor_inputs`)."""
 
     def _features(self, q, qd, qdd):
+        if self.options_["angles"] == "regressor":
+            return regressor_inputs(self.robot_, q, qd, qdd)
         return smooth_inputs(q if self.options_["angles"] == "joints" else angle_sums(self.robot_, q), qd, qdd)
+
+
+def regressor_inputs(robot: Robot, q, qd, qdd) -> np.ndarray:
+    """``(N, F)``: what the identification of a built arm sees, as one learner's inputs — every joint
+    j's row of the rigid-body regressor ``Y(q, q̇, q̈)`` on the columns its torque depends on and its
+    drive terms ``q̈_j, q̇_j, sign q̇_j`` (:func:`nfarm.learning.learned_id.id_features`,
+    ``"regressor_drives"``), side by side: ``F = Σ_j (c_j + 3)``, 140 for intelbot5. A learner on these
+    knows the geometry, as the identification does, and may learn what is not linear in them.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> q = np.zeros((3, robot.n))
+        >>> regressor_inputs(robot, q, q, q).shape
+        (3, 140)
+    """
+    return np.concatenate(id_features(robot, q, qd, qdd, "regressor_drives"), axis=1)
 
 
 @BASELINES.register

@@ -43,9 +43,12 @@ rad/s²] → ``(N, F)``.
 the study is named by what it assumes of the arm — *generic* (what holds for every rigid arm:
 functions of ``q``, affine in ``q̈``, quadratic in ``q̇``; with ``_drives``, every driven joint's
 friction; nothing about this arm), *structure-informed* (which axes are parallel: the ``chain``
-bases, the ``affine`` input sets; no length or mass), *identification* (the geometry known, the inertial parameters fitted: the
-rigid-body regressor), or *nominal model + learned* (Newton–Euler with the nominal masses, and a
-learned or identified correction of what it misses).
+bases without their products, the ``affine`` input sets, the ``sin, cos`` of the parallel joints' angle sums; no length
+or mass), *rigid-body span* (a linear fit of the ``chain`` basis with its products, ``"chain"`` and ``"chain_drives"``:
+its span holds the rigid-body model of an arm of this kind exactly, so the fit is an identification in disguise — a
+tier of its own, not a rival of the structure-informed learners, issue 65), *identification* (the geometry known, the
+inertial parameters fitted: the rigid-body regressor, its columns as a learner's inputs too), or *nominal model +
+learned* (Newton–Euler with the nominal masses, and a learned or identified correction of what it misses).
 """
 
 from __future__ import annotations
@@ -67,17 +70,19 @@ BASES = _RIGID_BASES + tuple(f"{kind}_drives" for kind in _RIGID_BASES)
 DRIVES = "_drives"
 
 #: The tiers of prior knowledge, by key, as tables name them (module docstring).
-TIERS = {"generic": "generic", "structure": "structure-informed", "identification": "identification",
-         "nominal": "nominal model + learned"}
+TIERS = {"generic": "generic", "structure": "structure-informed", "span": "rigid-body span",
+         "identification": "identification", "nominal": "nominal model + learned"}
 _STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine", "affine_drives"), ("regressor", "regressor_drives")
-_STRUCTURE_BASES = ("chain", "chain_linear", "chain_drives", "chain_linear_drives")
+_STRUCTURE_BASES = ("chain_linear", "chain_linear_drives")
+_SPAN_BASES = ("chain", "chain_drives")
 
 
 def tier_of(params) -> str:
     """The tier (a :data:`TIERS` label) of a learned inverse dynamics described by ``params``, a
     sweep cell's flat parameters: ``residual`` (true: Newton–Euler's nominal model is used), the
     ANFIS's ``inputs`` (``learned_id`` cells) or a baseline's ``learner`` and ``basis`` or
-    ``angles`` (the ``identification`` learner fits the inertial parameters on the known geometry).
+    ``angles`` (the ``identification`` learner fits the inertial parameters on the known geometry;
+    ``angles="regressor"`` gives a learner the regressor's columns).
 
     Example:
         >>> tier_of({"inputs": "affine"}), tier_of({"learner": "ridge", "basis": "generic"})
@@ -86,8 +91,10 @@ def tier_of(params) -> str:
         ('structure-informed', 'generic')
         >>> tier_of({"inputs": "regressor"}), tier_of({"learner": "boosting", "residual": True})
         ('identification', 'nominal model + learned')
-        >>> tier_of({"learner": "mlp", "angles": "chain"})
-        'structure-informed'
+        >>> tier_of({"learner": "mlp", "angles": "chain"}), tier_of({"learner": "ridge", "basis": "chain_linear"})
+        ('structure-informed', 'structure-informed')
+        >>> tier_of({"learner": "ridge", "basis": "chain_drives"}), tier_of({"learner": "mlp", "angles": "regressor"})
+        ('rigid-body span', 'identification')
     """
     if params.get("residual"):
         return TIERS["nominal"]
@@ -97,8 +104,10 @@ def tier_of(params) -> str:
                      "identification" if inputs in _IDENTIFICATION_INPUTS else "generic"]
     if params.get("learner") is None:
         raise ValueError(f"a learned inverse dynamics needs inputs or a learner, got {dict(params)!r}")
-    if params["learner"] == "identification":
+    if params["learner"] == "identification" or params.get("angles") == "regressor":
         return TIERS["identification"]
+    if params.get("basis") in _SPAN_BASES:
+        return TIERS["span"]
     return TIERS["structure" if params.get("basis") in _STRUCTURE_BASES or params.get("angles") == "chain" else "generic"]
 
 

@@ -48,8 +48,9 @@ BASELINES = Registry("ID baseline", "learner")
 #: holds an ``(N, n_components)`` matrix and cannot be stopped once started; boosting's trees
 #: and the MLP's widths bound the work of one iteration, which the time limit cannot split.
 MAXIMA = {"n_components": 10_000, "max_iter": 100_000, "max_leaf_nodes": 4_096, "hidden": 4_096, "patience": 100_000}
-#: The angles whose ``sin, cos`` the kernel, boosting and the MLP see (:mod:`nfarm.learning.baselines`).
-ANGLES = ("joints", "chain")
+#: The angles whose ``sin, cos`` the kernel, boosting and the MLP see (:mod:`nfarm.learning.baselines`), or
+#: ``"regressor"``: the rigid-body regressor's columns and the drive terms instead (the identification tier's inputs).
+ANGLES = ("joints", "chain", "regressor")
 
 
 def smooth_inputs(angles, qd, qdd) -> np.ndarray:

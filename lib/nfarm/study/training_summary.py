@@ -24,10 +24,10 @@ __all__ = ["summary_prose"]
 
 
 def summary_prose(chosen_ik: ChosenIK, ranked: Sequence[Replicates], reading: TorqueReading, id_best: Replicates,
-                  base_best: Mapping[str, Replicates], idc: contest.IDContest | None = None, noise=None) -> str:
+                  base_best: Mapping[tuple[str, str], Replicates], idc: contest.IDContest | None = None, noise=None) -> str:
     """The chapter's summary as Markdown bullets: the chosen learned IK (``chosen_ik``) and the
     contest's leader (``ranked``: the standings), the chosen ANFIS for the rigid-body ID
-    (``id_best``) and the best baseline (of ``base_best``, each learner's best), and, given the
+    (``id_best``) and the best baseline (of ``base_best``, each learner's best in each tier, the rigid-body span aside), and, given the
     measured arm's contest ``idc``, each tier's best with the sensor noise (``noise (n,)`` [N·m])."""
     row, leader = chosen_ik.standing, ranked[0]
     fmt, seeds_range = reading.fmt, reading.seeds_range
