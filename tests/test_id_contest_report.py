@@ -80,7 +80,7 @@ def test_the_finalists_error_against_the_training_states(idc):
                            "rival, ridge regression, at 21 % (20–22): paired seed by seed, the ANFIS is **worse than** it "
                            "(difference 10 to 18 percentage points).")
     assert "On 1,500 training states (seed 0) the ANFIS reaches 30 % and ridge regression 20 %: the same order" in text
-    assert "In the nominal model + learned tier only nominal model + learned: friction identification (least squares) " \
+    assert "In the nominal model + learned tier only friction identification (least squares) " \
            "competes, at 10 %." in text
     assert "Newton–Euler alone misses the validation torques by up to 0.3 N·m; best of all is nominal model + learned: " \
            "friction identification (least squares) at 10 % (1 N·m on the worst joint)" in text
