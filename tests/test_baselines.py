@@ -266,3 +266,30 @@ def test_the_identification_tier_anfis_sees_the_identifications_columns(trajecto
     assert np.abs(without.predict(*X) - val["tau"]).max() > 1e-3 * scale
     widths = [f.shape[1] for f in id_features(ROBOT, *X, "regressor_drives")]
     assert widths == [f.shape[1] + 3 for f in id_features(ROBOT, *X, "regressor")]
+
+
+@pytest.mark.parametrize("learner", ["kernel", "boosting", "mlp"])
+def test_the_identification_tiers_rivals_see_every_joints_regressor_row_and_drive_terms(learner, trajectories, tmp_path):
+    """``angles="regressor"`` (issue 65): the columns the identification and its ANFIS see of each joint, side by
+    side — the identification tier's knowledge given to the kernel, boosting and the MLP; saved, it predicts the
+    same bits. On a built arm whose torque is linear in those columns the boosted trees, which must learn that
+    map, do far better than on the angles alone."""
+    from nfarm.learning.bases import tier_of
+    from nfarm.learning.baselines import load_id_model, regressor_inputs
+    from nfarm.learning.learned_id import id_features
+
+    train, val = _built_arm_torques(trajectories)
+    X = (val["q"], val["qd"], val["qdd"])
+    model = baseline_id(learner, {**SMALL[learner], "angles": "regressor"}, random_state=1).fit(ROBOT, train, val)
+    rows = id_features(ROBOT, *X, "regressor_drives")
+    assert model.n_features_ == sum(r.shape[1] for r in rows) == 140            # intelbot5: 125 regressor columns + 15
+    np.testing.assert_array_equal(model._features(*X), np.concatenate(rows, axis=1))
+    np.testing.assert_array_equal(regressor_inputs(ROBOT, *X), np.concatenate(rows, axis=1))
+    assert tier_of({**model.options_, "learner": learner}) == "identification"
+    model.save(tmp_path)
+    np.testing.assert_array_equal(load_id_model(tmp_path, ROBOT).predict(*X), model.predict(*X))
+    if learner == "boosting":
+        options = {"max_iter": 200, "learning_rate": 0.1}
+        told = baseline_id(learner, {**options, "angles": "regressor"}, random_state=1).fit(ROBOT, train, val)
+        blind = baseline_id(learner, options, random_state=1).fit(ROBOT, train, val)
+        assert nrmse(told.predict(*X), val["tau"]).max() < nrmse(blind.predict(*X), val["tau"]).max()

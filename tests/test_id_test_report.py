@@ -143,6 +143,29 @@ def test_the_main_models_warnings_are_the_callers_and_the_dissertation_ways_are_
     assert r.extrapolation_prose(_held_out()) == ""
 
 
+def test_the_rigid_body_span_is_shown_beside_the_baselines_and_never_chosen_as_their_best():
+    """Issue 65: ridge on the chain basis, best on validation and on the test split, is an identification in
+    disguise — its role says so, and the verdict's rival is the best of the others."""
+    split = _split()
+    params = {"span": {"learner": "ridge", "basis": "chain", "alpha": 1e-6, "seed": 0},
+              "boosted": {"learner": "boosted", "seed": 0}, "linear": {"learner": "linear", "seed": 0}}
+    worst = {"span": 0.001, "boosted": 0.1, "linear": 0.5}
+    chosen = {("tier", k): _replicates(p_, worst[k]) for k, p_ in params.items()}
+    rng = np.random.default_rng(5)
+    runs = [CellResult(Cell({**p_, "split": "test"}, k), "ok", {
+        "trajectory_sums": trajectory_sums(pred, split["tau"], split["trajectory"]).ravel().tolist(),
+        "trajectory_maxima": trajectory_maxima(pred, split["tau"], split["trajectory"]).ravel().tolist()}, 0.0, "w")
+        for k, p_ in params.items()
+        for pred in [split["tau"] + rng.normal(0, {"span": 1e-9, "boosted": 0.2, "linear": 1.0}[k], split["tau"].shape)]]
+    bases = r.baseline_errors(chosen, runs, N)
+    assert bases.roles == {"ridge (basis=chain, alpha=1e-06)": r.ROLE_SPAN, "boosted": r.ROLE_BASELINE,
+                           "linear": r.ROLE_FLOOR}
+    t = r.held_out(split, RESOLVED, Model(split, scale=0.02), Model(split, scale=0.5), Model(split, scale=1e-10),
+                   {"model_free": Model(split, sd=3.0), "dissertation": Model(split, sd=3.0)}, bases, **BOOT)
+    assert t.best_base == "boosted"
+    assert t.intervals["ridge (basis=chain, alpha=1e-06)"].worst < t.intervals["boosted"].worst
+
+
 def test_bad_input_is_refused_in_one_line():
     split = _split()
     with pytest.raises(ValueError, match="resolved must mark at least one of the 3 joints"):

@@ -195,3 +195,39 @@ def test_a_measured_verdict_on_a_group_judges_only_its_joints():
     assert (on_rigid.verdict, on_friction.verdict, whole.verdict) == ("ANFIS better", "rival better", "rival better")
     assert on_rigid.anfis_value == pytest.approx(3.0, rel=0.05) and on_rigid.anfis_targets == "2 of 2"
     assert whole.anfis_targets == "0 of 2" and on_friction.rival_targets == "0 of 2"
+
+
+def test_the_every_tier_verdict_never_takes_the_rigid_body_span_for_the_anfiss_rival():
+    """Issue 65: ridge on the chain basis (the rigid-body span, an identification in disguise) is best on
+    validation, yet the verdict over every tier sets the ANFIS against the best of the other learners; the
+    tiers with an ANFIS and a rival get their own verdict, the span (no ANFIS) none."""
+    from nfarm.infra.paths import PARAMS
+    from nfarm.study import contest
+    from nfarm.study.sweep_files import load_sweep
+
+    def cell(learner, seed, worst, split="val", **options):
+        return CellResult(Cell({"learner": learner, "options": options, "seed": seed, "split": split,
+                                "study_file": "params/studies/intelbot5.yaml"}, f"{learner}{seed}{split}{options}"),
+                          "ok", {"worst_nrmse": worst, "worst_rmse": worst, "fit_seconds": 1.0}, 1.0, "w")
+
+    seed0 = [cell("anfis", 0, 0.20, inputs="affine_drives"), cell("mlp", 0, 0.10, angles="chain"),
+             cell("ridge", 0, 0.01, basis="chain_drives")]
+    spread = [cell(c.cell.params["learner"], s, c.metrics["worst_nrmse"], **c.cell.params["options"])
+              for c in seed0 for s in (1, 2)]
+    idc = contest.id_contest(seed0, spread)
+    rng = np.random.default_rng(3)
+    error = {"anfis": 1.0, "mlp": 2.0, "ridge": 0.01}          # on the test trajectories, relative
+
+    def run(sweep, *args, **kwargs):
+        return [CellResult(c, "ok", {"trajectory_sums": _sums(rng, error[c.params["learner"]]).ravel().tolist()}, 1.0, "w")
+                for c in sweep.cells]
+
+    sweep = load_sweep(PARAMS / "sweeps" / "id_contest.yaml", smoke=True)
+    names = [contest.id_label(f) for f in idc.chosen] + ["Newton–Euler"]
+    pairs = {"structure-informed": ("structure-informed: ANFIS", "structure-informed: multilayer perceptron")}
+    found, values = verdicts.measured_verdicts("arm", idc, sweep, names, pairs, resolved=np.ones(3, bool), n_joints=3,
+                                               reference="Newton–Euler", run=run, **BOOT)
+    every = next(v for v in found if v.task == "measured arm, every tier")
+    assert every.rival == "structure-informed: multilayer perceptron" and every.verdict == "ANFIS better"
+    assert "rigid-body span: ridge regression" in values          # tested, shown beside the verdict
+    assert [v.task for v in found] == ["measured arm, structure-informed", "measured arm, every tier"]
