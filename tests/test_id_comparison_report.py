@@ -101,6 +101,8 @@ def test_the_baselines_are_judged_against_the_anfis_seed_by_seed(sweep):
     assert "Ridge regression on the chain basis reaches 1.1 %" in text                  # not exact to rounding
     exact = report.baselines_prose(READING, base, best, report.best_model_free(sweep), exact=0.1)
     assert "exact to rounding" in exact and "a tier of its own, the rigid-body span" in exact
+    with pytest.raises(ValueError, match="no learner outside the rigid-body span tier"):
+        report.baseline_winner({k: g for k, g in best.items() if k[0] == "rigid-body span"})
 
 
 def test_more_data_and_more_rules_are_read_by_the_seeds_ranges(sweep):

@@ -38,8 +38,8 @@ from .verdict_rows import ID_TARGET_PCT
 from .sweep import CellResult, Replicates, best_by, by_configuration
 
 __all__ = ["ID_FLOOR", "MODEL_FREE", "TorqueReading", "torque_reading", "same", "comparison_table", "wall_time_table",
-           "best_model_free", "comparison_prose", "baselines_table", "by_tier_and_learner", "baselines_timing_table", "baseline_winner",
-           "baselines_prose", "size_configurations", "size_figure", "affine_by_rules", "rules_table", "sizes_prose"]
+           "best_model_free", "comparison_prose", "baselines_table", "by_tier_and_learner", "baselines_timing_table",
+           "baseline_winner", "baselines_prose", "size_configurations", "size_figure", "affine_by_rules", "rules_table", "sizes_prose"]
 
 #: An NRMSE at the level of rounding (shown as such, in %: ``"< 1e-6"``).
 ID_FLOOR = 1e-8
@@ -212,7 +212,8 @@ def by_tier_and_learner(groups, metric: str = "worst_nrmse", *, seed: int = 0) -
             for learner, g in best_by(members, "learner", metric, seed=seed).items()}
 
 
-def baselines_table(reading: TorqueReading, results: Sequence[Replicates], best: Mapping[tuple[str, str], Replicates]) -> Table:
+def baselines_table(reading: TorqueReading, results: Sequence[Replicates],
+                    best: Mapping[tuple[str, str], Replicates]) -> Table:
     """Section 6.5's scikit-learn baselines (``results``, their configurations; ``best``: each
     learner's best on seed 0 in each tier, :func:`by_tier_and_learner`, marked ◀): each one's tier,
     features, validation NRMSE per joint, worst joint and its range over the seeds."""
@@ -241,13 +242,22 @@ def baselines_timing_table(results: Sequence[Replicates]) -> Table:
 def _ranked(best: Mapping[tuple[str, str], Replicates]) -> list[Replicates]:
     """The learners' choices but the rigid-body span's (an identification in disguise, not a rival:
     :data:`nfarm.learning.bases.TIERS`), by the worst joint's NRMSE on seed 0, as chosen."""
-    return sorted((g for (tier, _), g in best.items() if tier != TIERS["span"]), key=lambda r: r.values("worst_nrmse")[0])
+    return sorted((g for (tier, _), g in best.items() if tier != TIERS["span"]),
+                  key=lambda r: r.values("worst_nrmse")[0])
 
 
 def baseline_winner(best: Mapping[tuple[str, str], Replicates]) -> Replicates:
     """The best baseline: of each learner's best in each tier (the rigid-body span aside), the least
-    worst-joint NRMSE on seed 0."""
-    return _ranked(best)[0]
+    worst-joint NRMSE on seed 0.
+
+    Raises:
+        ValueError: every baseline is of the rigid-body span (or there is none).
+    """
+    ranked = _ranked(best)
+    if not ranked:
+        raise ValueError(f"the baselines' sweep holds no learner outside the {TIERS['span']} tier "
+                         f"(an identification in disguise is no rival): add one to params/sweeps/id_baselines.yaml")
+    return ranked[0]
 
 
 def baselines_prose(reading: TorqueReading, results: Sequence[Replicates], best: Mapping[str, Replicates],
@@ -257,8 +267,8 @@ def baselines_prose(reading: TorqueReading, results: Sequence[Replicates], best:
     differ from it, and what ridge regression on the chain and generic bases reaches (exact to
     rounding when every seed's worst NRMSE is below ``exact``)."""
     fmt, seeds_range = reading.fmt, reading.seeds_range
+    winner = baseline_winner(best)
     ranked = _ranked(best)
-    winner = ranked[0]
     anfis_worst = anfis.metrics["worst_nrmse"]
     floor = next((g for (_, learner), g in best.items() if learner == "linear"), None)
     text = (f"Of the baselines (the rigid-body span aside), {base_name(winner.cell.params)} is best on the validation "
@@ -273,10 +283,10 @@ def baselines_prose(reading: TorqueReading, results: Sequence[Replicates], best:
         text += (f"{len(beaten)} of the {len(ranked)} learners {'does' if len(beaten) == 1 else 'do'} better than the best "
                  f"{tier} ANFIS ({fmt(anfis_worst)} %, {seeds_range(anfis)} %), every seed of "
                  f"{'it' if len(beaten) == 1 else 'each'} below every seed of the ANFIS: "
-                 + ", ".join(f"{r.cell.params['learner']} ({fmt(r.metrics['worst_nrmse'])} %)" for r in beaten) + ". ")
+                 + ", ".join(f"{base_name(r.cell.params)} ({fmt(r.metrics['worst_nrmse'])} %)" for r in beaten) + ". ")
     if tied:
         text += ("No different from the ANFIS by the seeds' ranges: " + ", ".join(
-            f"{r.cell.params['learner']} ({fmt(r.metrics['worst_nrmse'])} %, {seeds_range(r)} %)" for r in tied) + ". ")
+            f"{base_name(r.cell.params)} ({fmt(r.metrics['worst_nrmse'])} %, {seeds_range(r)} %)" for r in tied) + ". ")
     if not beaten and not tied:
         text += f"None does better than the best ANFIS, {tier} ({fmt(anfis_worst)} %). "
     chain = [r for r in results if r.cell.params.get("basis") == "chain"]

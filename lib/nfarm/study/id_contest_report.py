@@ -147,8 +147,8 @@ def contest_prose(idc: contest.IDContest, curves: Mapping[str, Sequence[tuple[in
         a, b = idc.pair(tier)
         winner = idc.winner(tier)
         if a is None or b is None:
-            sentences.append(f"In the {tier} tier only {contest.id_label(contest.id_family(winner.cell.params)).split(': ', 1)[1]} competes, "
-                             f"at {pct(winner.metrics['worst_nrmse'])} %.")
+            only = contest.id_label(contest.id_family(winner.cell.params)).split(": ", 1)[1]
+            sentences.append(f"In the {tier} tier only {only} competes, at {pct(winner.metrics['worst_nrmse'])} %.")
             continue
         rival = contest.id_label(contest.id_family(b.cell.params)).split(": ", 1)[1]
         mean, low, high = contest.paired_gap(a, b, "worst_nrmse")
