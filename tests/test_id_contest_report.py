@@ -83,8 +83,21 @@ def test_the_finalists_error_against_the_training_states(idc):
     assert "In the nominal model + learned tier only friction identification (least squares) " \
            "competes, at 10 %." in text
     assert "Newton–Euler alone misses the validation torques by up to 0.3 N·m; best of all is nominal model + learned: " \
-           "friction identification (least squares) at 10 % (1 N·m on the worst joint)" in text
+           "friction identification (least squares) at 10 % (1 N·m on the worst joint;" in text
     assert report.nominal_anfis(idc) is None
+
+
+def test_best_of_all_leaves_the_rigid_body_span_aside(idc):
+    """Issue 65: ridge on the chain basis, best of all on validation, is an identification in disguise — the
+    sentence names the best of the others and says the span is aside; the span's lone learner is named once."""
+    seed0 = [result("anfis", 0, 0.30, inputs="affine_generic"), result("ridge", 0, 0.20, basis="generic"),
+             result("ridge", 0, 0.01, basis="chain_drives"), result("friction", 0, 0.10, residual=True)]
+    with_span = contest.id_contest(seed0)
+    curves = {name: [(1500, 30.0)] for name in ("generic: ANFIS", "generic: ridge regression")}
+    text = report.contest_prose(with_span, curves, np.full(ROBOT.n, 0.3), NOISE)
+    assert "In the rigid-body span tier only ridge regression competes, at 1 %." in text
+    assert "best of all is nominal model + learned: friction identification (least squares) at 10 % (1 N·m on the " \
+           "worst joint; the rigid-body span, an identification in disguise, aside)" in text
 
 
 def test_the_residual_anfis_is_the_nominal_tiers_anfis_finalist():

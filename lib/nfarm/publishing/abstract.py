@@ -197,7 +197,7 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
     from ..study.paired import orientation_by_structure
     from ..study.rows import (ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_DESIGN, ROLE_EXACT, ROLE_FRICTION_ID,
                               ROLE_LEARNED_ALONE, ROLE_NUMERICAL, ROLE_PHYSICS, ROLE_RECIPE, ROLE_RESIDUAL_BASELINE,
-                              WORST_ID)
+                              ROLE_SPAN, WORST_ID)
 
     def _verdict(ours, theirs):
         return _VERDICT[_compare(ours, theirs)]
@@ -312,7 +312,7 @@ def _abstract(arm: str, rows: Sequence[Mapping[str, str]], _compare) -> list[str
             judged = [r for r in rows if r["task"] == task and r["metric"] == metric]
             if judged:
                 met = [reader_label(r["method"]) for r in judged if r.get("n") != "0" and table_number(r["ci_high"]) <= 5.0]
-                best = min(judged, key=lambda r: table_number(r["value"]))
+                best = min((r for r in judged if r["role"] != ROLE_SPAN), key=lambda r: table_number(r["value"]))
                 text += (f" The study's ≤ 5 % target on the measured spread, {over}: "
                          + (f"met by {', '.join(met)}." if met else
                             f"met by none (best {reader_label(best['method'])}, {_with_interval(best)})."))

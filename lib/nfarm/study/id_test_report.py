@@ -43,7 +43,7 @@ from . import contest
 from .id_comparison_report import ID_FLOOR, by_tier_and_learner
 from .id_contest_report import pct
 from .statistics import Interval, tail_ratio, trajectory_maxima, trajectory_sums, worst_difference
-from .rows import ROLE_CHOSEN, ROLE_DESIGN, ROLE_PHYSICS, bootstrap_resolved, resolved_sums, with_resolved_worst
+from .rows import ROLE_CHOSEN, ROLE_DESIGN, ROLE_PHYSICS, ROLE_SPAN, bootstrap_resolved, resolved_sums, with_resolved_worst
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Sweep
 from .verdict_rows import ID_TARGET_PCT
@@ -63,9 +63,6 @@ SEED_RECIPE = "ANFIS, dissertation's design (assumed), trained the dissertation'
 ROLE_SEED_LIKE = "ablation: the dissertation's data"
 ROLE_FLOOR = "floor (least squares on q, q̇, q̈)"
 ROLE_BASELINE = "baseline"
-#: A baseline of the rigid-body span tier (:data:`nfarm.learning.bases.TIERS`): ridge on the chain basis, whose span
-#: holds the rigid-body model — an identification in disguise, shown beside the verdict, never its rival (issue 65).
-ROLE_SPAN = "rigid-body span (an identification in disguise)"
 #: The Newton–Euler recursion in the timing table.
 RNEA = "Newton–Euler (rnea)"
 #: [N·m] an error at the level of rounding: :data:`~nfarm.study.id_comparison_report.ID_FLOOR` (an NRMSE) on a

@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 
 from ..infra.paths import shown_path
 from ..learning.baselines import load_id_model
-from ..learning.bases import tier_of
+from ..learning.bases import TIERS, tier_of
 from ..model.dynamics import rnea, stribeck_drive_torques
 from ..presentation.plotting import plot_per_joint
 from ..presentation.tables import Table
@@ -39,7 +39,7 @@ from .id_test_report import per_sample
 from .statistics import (Interval, bootstrap_nrmse, resolved_joints, trajectory_maxima, trajectory_sums,
                          worst_difference)
 from .rows import (ROLE_CHOSEN, ROLE_FRICTION_ID, ROLE_LEARNED_ALONE, ROLE_NUMERICAL, ROLE_PHYSICS,
-                   ROLE_RESIDUAL_BASELINE, ROLE_TIER_ANFIS, ROLE_TIER_RIVAL, Row, bootstrap_resolved)
+                   ROLE_RESIDUAL_BASELINE, ROLE_SPAN, ROLE_TIER_ANFIS, ROLE_TIER_RIVAL, Row, bootstrap_resolved)
 from .verdict_rows import ID_TARGET_PCT, target_verdict
 from .sweep import sweep_results
 from .sweep_files import Sweep
@@ -118,7 +118,9 @@ class MeasuredTest:
     @property
     def roles(self) -> dict[str, str]:
         """The roles the study's summary and abstract read, for the methods tested."""
-        roles = {name: ROLE_TIER_ANFIS if name.endswith(": ANFIS") else ROLE_TIER_RIVAL for name in self.order}
+        span = f"{TIERS['span']}: "        # ridge on the chain basis: an identification in disguise, never a rival
+        roles = {name: ROLE_TIER_ANFIS if name.endswith(": ANFIS") else ROLE_SPAN if name.startswith(span) else
+                 ROLE_TIER_RIVAL for name in self.order}
         roles |= {NE: ROLE_NUMERICAL, self.friction_id: ROLE_FRICTION_ID, self.built_identification: ROLE_PHYSICS,
                   self.residual: ROLE_CHOSEN}
         if self.residual_rival not in (None, self.friction_id):

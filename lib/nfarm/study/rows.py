@@ -41,7 +41,7 @@ from .sweep import Replicates
 
 __all__ = ["WORST_ID", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_DESIGN",
            "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE", "ROLE_LEARNED_ALONE",
-           "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "IK_METRICS", "Row", "ik_rows", "ik_seed_values", "seed_estimates",
+           "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "ROLE_SPAN", "IK_METRICS", "Row", "ik_rows", "ik_seed_values", "seed_estimates",
            "pooled_rows", "resolved_sums", "bootstrap_resolved", "id_rows", "with_resolved_worst",
            "resolved_on_validation", "published", "rows_from_table", "long_table", "interval_text", "wide_table"]
 
@@ -76,9 +76,12 @@ ROLE_LEARNED_ALONE = "learned alone (no rigid-body model)"
 ROLE_TIER_ANFIS = "ANFIS of its tier (on validation)"
 #: The best rival of a tier of prior knowledge on the measured arm (chapter 6.8's contest).
 ROLE_TIER_RIVAL = "best rival of its tier (on validation)"
+#: A model of the rigid-body span tier (:data:`nfarm.learning.bases.TIERS`): ridge on the chain basis, whose span holds
+#: (or nearly holds) the rigid-body model — an identification in disguise, shown beside the verdicts, never a rival.
+ROLE_SPAN = "rigid-body span (an identification in disguise)"
 #: Every role :func:`nfarm.publishing.abstract.abstract_lines` reads.
 ROLES = (ROLE_CHOSEN, ROLE_RECIPE, ROLE_BEST_BASELINE, ROLE_EXACT, ROLE_DESIGN, ROLE_PHYSICS, ROLE_NUMERICAL,
-         ROLE_FRICTION_ID, ROLE_RESIDUAL_BASELINE, ROLE_LEARNED_ALONE, ROLE_TIER_ANFIS, ROLE_TIER_RIVAL)
+         ROLE_FRICTION_ID, ROLE_RESIDUAL_BASELINE, ROLE_LEARNED_ALONE, ROLE_TIER_ANFIS, ROLE_TIER_RIVAL, ROLE_SPAN)
 
 
 # (metric, unit) of the IK rows, in order; the first is left out for a method whose joint angles
