@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..infra.arguments import is_number
-from ..learning.bases import tier_of
+from ..learning.bases import TIERS, tier_of
 from ..learning.baselines import BASELINES
 from ..learning.ik_rivals import RIVALS, RivalIK
 from ..learning.learned import ik_errors
@@ -58,7 +58,7 @@ from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Cell, Sweep
 
-__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
+__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -127,6 +127,18 @@ def id_label(name: str) -> str:
     """
     tier, learner = name.rsplit(":", 1)
     return f"{tier}: {ID_LABELS.get(learner) or BASELINES.label(learner)}"
+
+
+def in_span(label: str) -> bool:
+    """Whether a learned-ID contestant's label (:func:`id_label`) is of the rigid-body span tier
+    (:data:`nfarm.learning.bases.TIERS`): ridge on the chain basis, an identification in disguise,
+    shown beside the verdicts and never an ANFIS's rival.
+
+    Example:
+        >>> in_span(id_label("rigid-body span:ridge")), in_span(id_label("structure-informed:ridge"))
+        (True, False)
+    """
+    return label.startswith(f"{TIERS['span']}: ")
 
 
 def id_configuration(params: Mapping[str, Any]) -> str:

@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 
 from ..infra.paths import shown_path
 from ..learning.baselines import load_id_model
-from ..learning.bases import TIERS, tier_of
+from ..learning.bases import tier_of
 from ..model.dynamics import rnea, stribeck_drive_torques
 from ..presentation.plotting import plot_per_joint
 from ..presentation.tables import Table
@@ -118,8 +118,7 @@ class MeasuredTest:
     @property
     def roles(self) -> dict[str, str]:
         """The roles the study's summary and abstract read, for the methods tested."""
-        span = f"{TIERS['span']}: "        # ridge on the chain basis: an identification in disguise, never a rival
-        roles = {name: ROLE_TIER_ANFIS if name.endswith(": ANFIS") else ROLE_SPAN if name.startswith(span) else
+        roles = {name: ROLE_TIER_ANFIS if name.endswith(": ANFIS") else ROLE_SPAN if contest.in_span(name) else
                  ROLE_TIER_RIVAL for name in self.order}
         roles |= {NE: ROLE_NUMERICAL, self.friction_id: ROLE_FRICTION_ID, self.built_identification: ROLE_PHYSICS,
                   self.residual: ROLE_CHOSEN}

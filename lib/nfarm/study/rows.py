@@ -41,8 +41,8 @@ from .sweep import Replicates
 
 __all__ = ["WORST_ID", "ROLES", "ROLE_CHOSEN", "ROLE_RECIPE", "ROLE_BEST_BASELINE", "ROLE_EXACT", "ROLE_DESIGN",
            "ROLE_PHYSICS", "ROLE_NUMERICAL", "ROLE_FRICTION_ID", "ROLE_RESIDUAL_BASELINE", "ROLE_LEARNED_ALONE",
-           "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "ROLE_SPAN", "IK_METRICS", "Row", "ik_rows", "ik_seed_values", "seed_estimates",
-           "pooled_rows", "resolved_sums", "bootstrap_resolved", "id_rows", "with_resolved_worst",
+           "ROLE_TIER_ANFIS", "ROLE_TIER_RIVAL", "ROLE_SPAN", "IK_METRICS", "Row", "ik_rows", "ik_seed_values",
+           "seed_estimates", "pooled_rows", "resolved_sums", "bootstrap_resolved", "id_rows", "with_resolved_worst",
            "resolved_on_validation", "published", "rows_from_table", "long_table", "interval_text", "wide_table"]
 
 #: The ID rows' worst-joint metric: over the joints a sensor resolves (:func:`id_rows`).

@@ -35,7 +35,6 @@ from typing import Any
 
 import numpy as np
 
-from ..learning.bases import TIERS
 from ..learning.baselines import load_id_model
 from ..learning.learned import ik_errors
 from .statistics import distinct_resamples, trajectory_sums
@@ -173,8 +172,7 @@ def measured_verdicts(arm: str, idc, idc_sweep, names: Sequence[str], pairs: Map
                               seed=seed) for name in tested}
     on_val = {contest.id_label(contest.id_family(g.cell.params)): g.metrics["worst_nrmse"] for g in idc.standings}
     best_anfis = min((n for n in names if n.endswith(": ANFIS") and n in on_val), key=on_val.get)
-    span = f"{TIERS['span']}: "        # an identification in disguise, shown beside the verdict, not its rival (issue 65)
-    best_other = min((n for n in names if n != reference and not n.endswith(": ANFIS") and not n.startswith(span)
+    best_other = min((n for n in names if n != reference and not n.endswith(": ANFIS") and not contest.in_span(n)
                       and n in on_val), key=on_val.get)
     # Ranked by what chapter 6.8's contest ranked by and the ≤ 5 % target judges: the worst resolved joint's NRMSE
     # [%] against the measured torques' spread (the summary's "worst NRMSE"); the target also over every joint
