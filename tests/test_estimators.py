@@ -278,7 +278,7 @@ def test_a_new_learner_is_one_registered_class(scratch, poses, states, tmp_path)
         assert type(loaded) is _Constant and loaded.options_ == {"shrink": 0.5}
         np.testing.assert_array_equal(loaded.predict(T), model.predict(T))
     assert contest.label("constant") == "the training mean"
-    assert contest.label("constant:arm") == "the training mean, the ANFIS's structure"
+    assert contest.label("constant:arm") == "the training mean in the ANFIS's structure"
     model.save(tmp_path / "models" / "ik_contest" / "constant_arm")
     assert list(contest.saved_rivals(ROBOT, tmp_path / "models")) == ["constant:arm"]
     cached = [fit_cached(_Constant(shrink=0.25), ROBOT, poses["train"], None, tmp_path / "cache") for _ in range(2)]

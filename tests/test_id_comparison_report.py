@@ -94,10 +94,10 @@ def test_the_baselines_are_judged_against_the_anfis_seed_by_seed(sweep):
     assert [row[1] for row in table.rows] == ["generic", "rigid-body span", "structure-informed", "generic"]
     assert report.baselines_timing_table(base).rows[1][1:] == [0.5, 3.0]
     text = report.baselines_prose(READING, base, best, report.best_model_free(sweep))
-    assert "Of the baselines (the rigid-body span aside), ridge (basis=chain_linear) is best" in text
+    assert "Of the baselines (the rigid-body span aside), ridge regression (basis=chain_linear) is best" in text
     assert "the least-squares floor on `[q, q̇, q̈]` is at 55 %." in text
     assert "1 of the 3 learners does better than the best structure-informed ANFIS (3.5 %, 3–4 %)" in text
-    assert "No different from the ANFIS by the seeds' ranges: mlp (4 %, 3.5–4.5 %)." in text
+    assert "No different from the ANFIS by the seeds' ranges: multilayer perceptron (4 %, 3.5–4.5 %)." in text
     assert "Ridge regression on the chain basis reaches 1.1 %" in text                  # not exact to rounding
     exact = report.baselines_prose(READING, base, best, report.best_model_free(sweep), exact=0.1)
     assert "exact to rounding" in exact and "a tier of its own, the rigid-body span" in exact

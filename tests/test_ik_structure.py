@@ -120,7 +120,7 @@ def test_an_edited_structured_file_is_refused_naming_the_field(field, value, rul
 def test_the_contest_names_each_learner_in_each_structure():
     assert contest.family({"learner": "mlp", "options": {"structure": "arm", "hidden": [8]}}) == "mlp:arm"
     assert contest.family({"learner": "mlp", "options": {"hidden": [8]}}) == "mlp"
-    assert contest.label("mlp:arm") == "multilayer perceptron, the ANFIS's structure"
+    assert contest.label("mlp:arm") == "multilayer perceptron in the ANFIS's structure"
     assert [contest.structure_of(n) for n in ("anfis:arm_plane", "anfis:quat_xyz", "rbf", "rbf:arm")] == \
         ["arm", "recipe", "whole", "arm"]
     assert STRUCTURES == ("whole", "arm")

@@ -29,11 +29,11 @@ def id_(worsts, **params):
 
 
 @pytest.mark.parametrize("anfis, baseline, says", [
-    ([0.02, 0.04], [0.5, 0.6], "met in every seed. The best scikit-learn baseline, mlp (hidden=[8]), reaches 55 % (50–60 %): "
+    ([0.02, 0.04], [0.5, 0.6], "met in every seed. The best scikit-learn baseline, multilayer perceptron (hidden=[8]), reaches 55 % (50–60 %): "
                                "the ANFIS is better."),
-    ([0.03, 0.06], [0.06, 0.07], "met on average. The best scikit-learn baseline, mlp (hidden=[8]), reaches 6.5 % (6–7 %): "
+    ([0.03, 0.06], [0.06, 0.07], "met on average. The best scikit-learn baseline, multilayer perceptron (hidden=[8]), reaches 6.5 % (6–7 %): "
                                  "no difference shown by the seeds' ranges."),
-    ([0.3, 0.4], [0.01, 0.02], "not met. The best scikit-learn baseline, mlp (hidden=[8]), reaches 1.5 % (1–2 %): "
+    ([0.3, 0.4], [0.01, 0.02], "not met. The best scikit-learn baseline, multilayer perceptron (hidden=[8]), reaches 1.5 % (1–2 %): "
                                "**the baseline is better**."),
 ])
 def test_the_summary_judges_the_chosen_models_on_validation(anfis, baseline, says):

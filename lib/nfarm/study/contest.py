@@ -225,18 +225,19 @@ def family(params: Mapping[str, Any]) -> str:
 
 def label(name: str) -> str:
     """A contestant's name in words: an ANFIS's from :data:`LABELS`, a rival's from its class
-    (:data:`nfarm.learning.ik_rivals.RIVALS`, ``"<kind>:arm"`` in the ANFIS's structure), else its key.
+    (:data:`nfarm.learning.ik_rivals.RIVALS`, ``"<kind>:arm"`` in the ANFIS's structure), else its key: one
+    phrase, so that a list of contestants reads as one item each.
 
     Example:
         >>> label("anfis:arm_plane"), label("knn"), label("mlp:arm"), label("svm")
-        ("ANFIS in the arm's plane", 'k nearest neighbours', "multilayer perceptron, the ANFIS's structure", 'svm')
+        ("ANFIS in the arm's plane", 'k nearest neighbours', "multilayer perceptron in the ANFIS's structure", 'svm')
     """
     if name in LABELS:
         return LABELS[name]
     kind, _, structure = name.partition(":")
     if kind not in RIVALS or structure not in ("", "arm"):
         return name
-    return RIVALS.label(kind) + (", the ANFIS's structure" if structure == "arm" else "")
+    return RIVALS.label(kind) + (" in the ANFIS's structure" if structure == "arm" else "")
 
 
 def _key(r: CellResult | Replicates, ranked_by: Sequence[str] = RANKED_BY) -> tuple[float, ...]:

@@ -27,7 +27,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..learning.bases import TIERS, tier_of
-from ..learning.baselines import label as base_name
+from ..learning.baselines import BASELINES, label as base_name
 from ..presentation.plotting import plot_size_curve
 from ..presentation.tables import Table, shown
 from ..presentation.wording import listed, torque_columns, worst_of
@@ -37,7 +37,8 @@ from .rows import with_resolved_worst
 from .verdict_rows import ID_TARGET_PCT
 from .sweep import CellResult, Replicates, best_by, by_configuration
 
-__all__ = ["ID_FLOOR", "MODEL_FREE", "TorqueReading", "torque_reading", "same", "comparison_table", "wall_time_table",
+__all__ = ["ID_FLOOR", "MODEL_FREE", "baseline_words", "TorqueReading", "torque_reading", "same", "comparison_table",
+           "wall_time_table",
            "best_model_free", "comparison_prose", "baselines_table", "by_tier_and_learner", "baselines_timing_table",
            "baseline_winner", "baselines_prose", "size_configurations", "size_figure", "affine_by_rules", "rules_table", "sizes_prose"]
 
@@ -45,6 +46,18 @@ __all__ = ["ID_FLOOR", "MODEL_FREE", "TorqueReading", "torque_reading", "same", 
 ID_FLOOR = 1e-8
 #: The input sets that need none of the arm's lengths, masses or inertias (section 6.4).
 MODEL_FREE = ("own", "all", "trig", "affine_generic", "affine")
+
+
+def baseline_words(params: Mapping[str, Any]) -> str:
+    """A baseline's name for prose: its learner in words and the options its cell gives it (the
+    tables keep the learner's key, :func:`nfarm.learning.baselines.label`).
+
+    Example:
+        >>> baseline_words({"learner": "mlp", "hidden": [64, 64], "angles": "chain"})
+        'multilayer perceptron (angles=chain, hidden=[64, 64])'
+    """
+    name, learner = base_name(params), params["learner"]
+    return (BASELINES[learner].label if learner in BASELINES else learner) + name[len(learner):]
 
 
 @dataclass(frozen=True)
@@ -271,11 +284,11 @@ def baselines_prose(reading: TorqueReading, results: Sequence[Replicates], best:
     ranked = _ranked(best)
     anfis_worst = anfis.metrics["worst_nrmse"]
     floor = next((g for (_, learner), g in best.items() if learner == "linear"), None)
-    text = (f"Of the baselines (the rigid-body span aside), {base_name(winner.cell.params)} is best on the validation "
+    text = (f"Of the baselines (the rigid-body span aside), {baseline_words(winner.cell.params)} is best on the validation "
             f"trajectories, at **{fmt(winner.metrics['worst_nrmse'])} %** on its worst joint ({seeds_range(winner)} % over "
             f"the seeds); the least-squares floor on `[q, q̇, q̈]` is at {fmt(floor.metrics['worst_nrmse'])} %. "
             if floor is not None else
-            f"Of the baselines, {base_name(winner.cell.params)} is best, at {fmt(winner.metrics['worst_nrmse'])} %. ")
+            f"Of the baselines, {baseline_words(winner.cell.params)} is best, at {fmt(winner.metrics['worst_nrmse'])} %. ")
     beaten = [r for r in ranked if r.metrics["worst_nrmse"] < anfis_worst and not same(r, anfis)]
     tied = [r for r in ranked if same(r, anfis)]
     tier = tier_of(anfis.cell.params)
@@ -283,10 +296,10 @@ def baselines_prose(reading: TorqueReading, results: Sequence[Replicates], best:
         text += (f"{len(beaten)} of the {len(ranked)} learners {'does' if len(beaten) == 1 else 'do'} better than the best "
                  f"{tier} ANFIS ({fmt(anfis_worst)} %, {seeds_range(anfis)} %), every seed of "
                  f"{'it' if len(beaten) == 1 else 'each'} below every seed of the ANFIS: "
-                 + ", ".join(f"{base_name(r.cell.params)} ({fmt(r.metrics['worst_nrmse'])} %)" for r in beaten) + ". ")
+                 + ", ".join(f"{baseline_words(r.cell.params)} ({fmt(r.metrics['worst_nrmse'])} %)" for r in beaten) + ". ")
     if tied:
         text += ("No different from the ANFIS by the seeds' ranges: " + ", ".join(
-            f"{base_name(r.cell.params)} ({fmt(r.metrics['worst_nrmse'])} %, {seeds_range(r)} %)" for r in tied) + ". ")
+            f"{baseline_words(r.cell.params)} ({fmt(r.metrics['worst_nrmse'])} %, {seeds_range(r)} %)" for r in tied) + ". ")
     if not beaten and not tied:
         text += f"None does better than the best ANFIS, {tier} ({fmt(anfis_worst)} %). "
     chain = [r for r in results if r.cell.params.get("basis") == "chain"]

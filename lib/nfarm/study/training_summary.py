@@ -11,10 +11,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..learning.baselines import label as base_name
 from . import contest
 from .chosen_models import ChosenIK
-from .id_comparison_report import TorqueReading, baseline_winner, same
+from .id_comparison_report import TorqueReading, baseline_winner, baseline_words, same
 from .id_contest_report import pct
 from .ik_contest_report import mm_text, seeds_text
 from .verdict_rows import ID_TARGET_PCT
@@ -46,7 +45,7 @@ def summary_prose(chosen_ik: ChosenIK, ranked: Sequence[Replicates], reading: To
              f"{ID_TARGET_PCT:g} % "
              + ("met in every seed" if id_best.high("worst_nrmse") <= ID_TARGET_PCT / 100 else
                 "met on average" if worst <= ID_TARGET_PCT / 100 else "not met")
-             + f". The best scikit-learn baseline, {base_name(winner.cell.params)}, reaches "
+             + f". The best scikit-learn baseline, {baseline_words(winner.cell.params)}, reaches "
                f"{fmt(winner.metrics['worst_nrmse'])} % ({seeds_range(winner)} %): "
              + ("no difference shown by the seeds' ranges." if same(winner, id_best) else
                 "**the baseline is better**." if winner.metrics["worst_nrmse"] < worst else "the ANFIS is better.")]
