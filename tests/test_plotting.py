@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from nfarm.presentation.plotting import plot_joint_paths, plot_size_curve  # noqa: E402
+from nfarm.presentation.plotting import plot_joint_paths, plot_size_curve, plot_spread  # noqa: E402
 
 
 def labelled_ticks(axis):
@@ -127,3 +127,16 @@ def test_the_workspace_outline_drops_specks_but_keeps_real_holes():
     clean = _without_specks(reached)
     assert clean[8, 8] and not clean[1, 38] and not clean[20, 20]
     assert (clean != reached).sum() == 2
+
+
+def test_the_spread_plot_names_each_row_once_with_its_count_and_a_legend_only_for_the_reference():
+    groups = {"ANFIS in the arm's plane": [0.5, 0.6, 0.7], "k nearest neighbours in the ANFIS's structure": [30.0]}
+    fig = plot_spread(groups, ylabel="p95 [mm]")
+    ax = fig.axes[0]
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["ANFIS in the arm's plane (3)",
+                                                            "k nearest neighbours in the ANFIS's structure (1)"]
+    assert ax.get_legend() is None                       # the row labels say what a legend would repeat
+    plt.close(fig)
+    fig = plot_spread(groups, reference=1.0, reference_label="Jang (1993)", ylabel="p95 [mm]")
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["Jang (1993)"]
+    plt.close(fig)

@@ -357,22 +357,22 @@ def plot_spread(groups: Mapping[str, Sequence[float]], *, reference: float | Non
                 reference_label: str = "", ylabel: str = "", title: str = "") -> Figure:
     """Each group's values as points on one row (a strip plot: every value shown, its mean as a
     bar), with a ``reference`` value as a vertical line; ``ylabel`` names the quantity and unit
-    (on the x axis)."""
-    fig, ax = plt.subplots(figsize=(7, 0.6 + 0.55 * len(groups)), layout="constrained")
-    for k, (name, values) in enumerate(groups.items()):
+    (on the x axis). Each row's label names its group and how many values it holds; a legend
+    names only the reference line (the rows need none: their labels are beside them)."""
+    fig, ax = plt.subplots(figsize=(9, 0.8 + 0.5 * len(groups)), layout="constrained")
+    for k, values in enumerate(groups.values()):
         values = np.asarray(values, float)
-        ax.plot(values, np.full(len(values), k), "o", color=f"C{k}", alpha=0.8,
-                label=f"{name} ({len(values)})")
+        ax.plot(values, np.full(len(values), k), "o", color=f"C{k}", alpha=0.8)
         ax.plot([values.mean()] * 2, [k - 0.3, k + 0.3], "-", color=f"C{k}", lw=2)
     if reference is not None:
         ax.axvline(reference, color="k", ls="--", lw=1, label=reference_label)
-    ax.set_yticks(range(len(groups)), list(groups), fontsize=8)
+        ax.legend(fontsize=8, loc="best")
+    ax.set_yticks(range(len(groups)), [f"{name} ({len(values)})" for name, values in groups.items()], fontsize=8)
     ax.set_ylim(-0.6, len(groups) - 0.4)
     ax.invert_yaxis()
     ax.set_xlabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, axis="x")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return fig
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, LogLocator
 
 from ..presentation.plotting import plot_spread
 from ..presentation.tables import Table, shown
@@ -148,9 +149,12 @@ def spread_figure(ranked: Sequence[Replicates], robot_name: str) -> tuple[Figure
     fig = plot_spread({contest.label(_name(g)): g.values("position_p95_mm") for g in ranked},
                       ylabel="95th percentile of the tool position error on validation [mm]",
                       title=f"{robot_name}: each contestant's chosen configuration over its seeds")
-    fig.axes[0].set_xscale("log")
-    return fig, ("The contest's spread: each contestant's chosen configuration on every draw of the data (points) and "
-                 "their mean (bar), 95th percentile of the tool position error on validation")
+    ax = fig.axes[0]
+    ax.set_xscale("log")
+    ax.xaxis.set_major_locator(LogLocator(subs=(1, 2, 5)))        # 0.5, 1, 2, 5, 10 …: readable millimetres
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    return fig, ("The contest's spread: each contestant's chosen configuration on every draw of the data (points; their "
+                 "number after its name) and their mean (bar), 95th percentile of the tool position error on validation")
 
 
 def contest_prose(ranked: Sequence[Replicates], spent: Mapping[str, tuple], rung_runs: Sequence[CellResult],
