@@ -366,7 +366,7 @@ def plot_spread(groups: Mapping[str, Sequence[float]], *, reference: float | Non
         ax.plot([values.mean()] * 2, [k - 0.3, k + 0.3], "-", color=f"C{k}", lw=2)
     if reference is not None:
         ax.axvline(reference, color="k", ls="--", lw=1, label=reference_label)
-        ax.legend(fontsize=8, loc="best")
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))      # beside the axes: on no point
     ax.set_yticks(range(len(groups)), [f"{name} ({len(values)})" for name, values in groups.items()], fontsize=8)
     ax.set_ylim(-0.6, len(groups) - 0.4)
     ax.invert_yaxis()
