@@ -140,3 +140,9 @@ def test_the_spread_plot_names_each_row_once_with_its_count_and_a_legend_only_fo
     fig = plot_spread(groups, reference=1.0, reference_label="Jang (1993)", ylabel="p95 [mm]")
     assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["Jang (1993)"]
     plt.close(fig)
+    fig = plot_spread(groups, ylabel="p95 [mm]", log=True)          # half a millimetre to 30: plain numbers
+    fig.canvas.draw()
+    lo, hi = fig.axes[0].get_xlim()
+    ticks = [t.get_text() for t in fig.axes[0].xaxis.get_ticklabels() if t.get_text() and lo <= t.get_position()[0] <= hi]
+    assert {"1", "2", "5", "10"} <= set(ticks), ticks
+    plt.close(fig)

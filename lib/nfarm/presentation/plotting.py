@@ -354,11 +354,12 @@ def plot_motion(robot: Robot, q: np.ndarray, *, frames: int = 5, t: np.ndarray |
 
 
 def plot_spread(groups: Mapping[str, Sequence[float]], *, reference: float | None = None,
-                reference_label: str = "", ylabel: str = "", title: str = "") -> Figure:
+                reference_label: str = "", ylabel: str = "", title: str = "", log: bool = False) -> Figure:
     """Each group's values as points on one row (a strip plot: every value shown, its mean as a
     bar), with a ``reference`` value as a vertical line; ``ylabel`` names the quantity and unit
-    (on the x axis). Each row's label names its group and how many values it holds; a legend
-    names only the reference line (the rows need none: their labels are beside them)."""
+    (on the x axis), logarithmic with ``log`` (plain-number ticks). Each row's label names its group
+    and how many values it holds; a legend names only the reference line (the rows need none:
+    their labels are beside them)."""
     fig, ax = plt.subplots(figsize=(9, 0.8 + 0.5 * len(groups)), layout="constrained")
     for k, values in enumerate(groups.values()):
         values = np.asarray(values, float)
@@ -373,6 +374,9 @@ def plot_spread(groups: Mapping[str, Sequence[float]], *, reference: float | Non
     ax.set_xlabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, axis="x")
+    if log:
+        ax.set_xscale("log")
+        _readable_log_axis(ax.xaxis)
     return fig
 
 

@@ -38,8 +38,7 @@ from .verdict_rows import ID_TARGET_PCT
 from .sweep import CellResult, Replicates, best_by, by_configuration
 
 __all__ = ["ID_FLOOR", "MODEL_FREE", "baseline_words", "TorqueReading", "torque_reading", "same", "comparison_table",
-           "wall_time_table",
-           "best_model_free", "comparison_prose", "baselines_table", "by_tier_and_learner", "baselines_timing_table",
+           "wall_time_table", "best_model_free", "comparison_prose", "baselines_table", "by_tier_and_learner", "baselines_timing_table",
            "baseline_winner", "baselines_prose", "size_configurations", "size_figure", "affine_by_rules", "rules_table", "sizes_prose"]
 
 #: An NRMSE at the level of rounding (shown as such, in %: ``"< 1e-6"``).

@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter, LogLocator
 
 from ..presentation.plotting import plot_spread
 from ..presentation.tables import Table, shown
@@ -148,11 +147,7 @@ def spread_figure(ranked: Sequence[Replicates], robot_name: str) -> tuple[Figure
     caption."""
     fig = plot_spread({contest.label(_name(g)): g.values("position_p95_mm") for g in ranked},
                       ylabel="95th percentile of the tool position error on validation [mm]",
-                      title=f"{robot_name}: each contestant's chosen configuration over its seeds")
-    ax = fig.axes[0]
-    ax.set_xscale("log")
-    ax.xaxis.set_major_locator(LogLocator(subs=(1, 2, 5)))        # 0.5, 1, 2, 5, 10 …: readable millimetres
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+                      title=f"{robot_name}: each contestant's chosen configuration over its seeds", log=True)
     return fig, ("The contest's spread: each contestant's chosen configuration on every draw of the data (points; their "
                  "number after its name) and their mean (bar), 95th percentile of the tool position error on validation")
 
