@@ -544,6 +544,11 @@ def json_ready(value: Any) -> Any:
     :func:`load_json` refuses them)."""
     if isinstance(value, Mapping):
         return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray) and value.ndim and value.dtype.kind in "biuf":
+        # numbers at C speed (a saved kernel model holds millions): the same lists element by element
+        if value.dtype.kind == "f" and not np.isfinite(value).all():
+            raise ValueError(f"value {float(value[~np.isfinite(value)].flat[0])!r} cannot be saved as JSON")
+        return value.tolist()
     if isinstance(value, (list, tuple, np.ndarray)):
         return [json_ready(v) for v in value]
     if isinstance(value, np.generic):

@@ -1,7 +1,8 @@
 """Model-free baselines for learned inverse dynamics, from scikit-learn (chapters 06 and 07).
 
-What an engineer would try before a fuzzy system, each fed states ``q, q̇, q̈`` and nothing of
-the arm's masses or lengths; one class per learner, registered in :data:`BASELINES` under the
+What an engineer would try before a fuzzy system, each fed states ``q, q̇, q̈`` and what its tier
+knows — nothing of the arm, which of its axes are parallel, or (``angles="regressor"``) its geometry
+through the rigid-body regressor, never its masses; one class per learner, registered in :data:`BASELINES` under the
 name sweep files give it (what they share is :class:`~nfarm.learning.id_baseline_base.BaselineID`'s,
 :mod:`nfarm.learning.id_baseline_base`):
 
@@ -15,7 +16,7 @@ name sweep files give it (what they share is :class:`~nfarm.learning.id_baseline
   angles, ``q̇, q̈``: with ``angles="joints"`` the joint angles (what every arm has: the *generic*
   tier), with ``angles="chain"`` the joint angles and the sums of every stretch of parallel joints
   (:func:`nfarm.learning.bases.angle_sums`: which axes are parallel, the *structure-informed*
-  tier's knowledge, the inputs its ANFIS and its ridge on the chain basis get), with
+  tier's knowledge, the inputs its ANFIS and its ridge on the ANFIS's columns, ``chain_linear``, get), with
   ``angles="regressor"`` every joint's row of the rigid-body regressor and its drive terms
   (:func:`regressor_inputs`: the geometry known, the *identification* tier's knowledge);
 * ``"boosting"`` (:class:`BoostingID`) — gradient-boosted trees per joint
@@ -332,10 +333,13 @@ class MLPID(_SmoothInputs, Standardised):
         scaler = StandardScaler().fit(X)
         net = MLPRegressor(hidden_layer_sizes=tuple(options["hidden"]), alpha=options["alpha"],
                            random_state=self.random_state, shuffle=True)
-        Xs, Xv = scaler.transform(X), scaler.transform(X_val)
+        # Trained in single precision, as neural networks are (faster; the IK rivals' MLP says by how much);
+        # the kept weights then predict in double (_predict_scaled).
+        Xs, Xv = scaler.transform(X).astype(np.float32), scaler.transform(X_val).astype(np.float32)
+        Z32 = np.asarray(Z, dtype=np.float32)
         best, since, weights = np.inf, 0, None
         for epoch in range(options["max_iter"]):
-            net.partial_fit(Xs, Z)
+            net.partial_fit(Xs, Z32)
             self.epochs_ = epoch + 1
             error = float(np.sqrt(np.mean((net.predict(Xv).reshape(Z_val.shape) - Z_val) ** 2)))
             if error < best:

@@ -23,7 +23,8 @@ Bases (:func:`basis`; each is ``dynamic_terms ⊗ configuration terms``):
 * ``"chain"`` — the same over the joint angles *and* the sums of every stretch of parallel
   joints (intelbot5: ``q2+q3``, ``q3+q4``, ``q2+q3+q4``; 153 terms, 3 213 features). For arms
   like intelbot5 (a base yaw, a pitch chain, a roll) this span holds the rigid-body model
-  exactly, so a linear fit of it is an identification in disguise — chapter 06 says so;
+  exactly, and the SO-101's nearly (its fit leaves a fraction of a per cent of the torques' spread:
+  chapter 6.5's table), so a linear fit of it is an identification in disguise — chapter 06 says so;
 * ``"generic_linear"``, ``"chain_linear"`` — dynamic terms times ``1`` and the ``sin, cos`` of
   the angles (and sums), *without* their products (231 and 357 features for intelbot5): what
   one first-order rule of :class:`nfarm.learning.learned_id.LearnedID` with ``inputs="affine_generic"`` or
@@ -45,7 +46,7 @@ functions of ``q``, affine in ``q̈``, quadratic in ``q̇``; with ``_drives``, e
 friction; nothing about this arm), *structure-informed* (which axes are parallel: the ``chain``
 bases without their products, the ``affine`` input sets, the ``sin, cos`` of the parallel joints' angle sums; no length
 or mass), *rigid-body span* (a linear fit of the ``chain`` basis with its products, ``"chain"`` and ``"chain_drives"``:
-its span holds the rigid-body model of an arm of this kind exactly, so the fit is an identification in disguise — a
+its span holds the rigid-body model of an arm of this kind exactly, or nearly, so the fit is an identification in disguise — a
 tier of its own, not a rival of the structure-informed learners, issue 65), *identification* (the geometry known, the
 inertial parameters fitted: the rigid-body regressor, its columns as a learner's inputs too), or *nominal model +
 learned* (Newton–Euler with the nominal masses, and a learned or identified correction of what it misses).

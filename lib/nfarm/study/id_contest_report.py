@@ -78,7 +78,7 @@ def contest_table(idc: contest.IDContest) -> Table:
                   "worst resolved joint NRMSE [%]", "range over seeds [%]", "worst joint RMSE [N·m]", "seeds"], rows,
                  caption="The learned-ID contest on the measured arm (validation): each learner's configuration chosen on "
                          "seed 0 by the worst resolved joint's NRMSE against the measured torques' spread; each tier's best "
-                         "ANFIS and best rival also over four more draws of the data (mean and range over the seeds); "
+                         f"ANFIS and best rival also over {len(contest.SPREAD_SEEDS)} more draws of the data (mean and range over the seeds); "
                          "◀ the tier's best by the mean")
 
 

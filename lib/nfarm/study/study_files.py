@@ -38,7 +38,7 @@ from ..solvers.ik import in_class
 from .id_trajectories import IDSettings, TrueArm
 from .regions import IKRegion
 
-__all__ = ["Study", "StudyFile", "ShiftedSection", "SPLITS", "load_study", "study_from_dict", "smoke_study", "redrawn",
+__all__ = ["Study", "StudyFile", "ShiftedSection", "SPLITS", "load_study", "study_from_dict", "smoke_study", "SMOKE_IK_SIZES", "redrawn",
            "memory_budget", "work_estimates", "PER_JOINT_MAX"]
 
 Split = Literal["train", "val", "test"]
@@ -462,11 +462,17 @@ def _measured(v: Validator, section: MeasuredSection, robot: Robot) -> dict[str,
     return out
 
 
+#: A smoke study's IK splits at most (:func:`smoke_study`): enough training poses for the smoke runs' rule
+#: bases (16 rules of 7 consequents on the first rung's quarter), whatever the study's own sizes.
+SMOKE_IK_SIZES = {"train": 400, "val": 100, "test": 200}
+
+
 def smoke_study(study: Study, factor: int = 50) -> Study:
-    """The same study with every size divided by ``factor`` (at least a few samples each),
-    for quick runs; its data sets go to a directory of their own (``<robot>-smoke``)."""
+    """The same study, small for quick runs: its IK splits at most :data:`SMOKE_IK_SIZES`, every
+    other size divided by ``factor`` (at least a few samples each); its data sets go to a
+    directory of their own (``<robot>-smoke``)."""
     params = json.loads(json.dumps(study.params))
-    params["ik"]["sizes"] = {k: max(v // factor, 64) for k, v in params["ik"]["sizes"].items()}
+    params["ik"]["sizes"] = {k: min(v, SMOKE_IK_SIZES[k]) for k, v in params["ik"]["sizes"].items()}
     params["ik"]["check"]["targets"] = max(params["ik"]["check"]["targets"] // factor, 50)
     params["id"]["trajectories"] = {k: max(v // factor, 2)
                                     for k, v in params["id"]["trajectories"].items()}
