@@ -566,3 +566,21 @@ def test_ctrl_c_stops_a_sweep_on_a_cluster_in_one_line(tmp_path):
     os.killpg(run.pid, signal.SIGINT)
     _, err = run.communicate(timeout=90)
     assert run.returncode == 130 and err.strip() == "nfarm: interrupted", err
+
+
+@DASK
+def test_the_local_cluster_runs_its_workers_without_the_stack_profiler():
+    """The local cluster's workers get nfarm.study.sweep.QUIET_CLUSTER (issue 63: Dask's 10 ms stack
+    profiler and fast monitors cost a busy worker 3 % of its CPU): the settings reach the worker
+    processes, not only the process that starts them."""
+    import dask
+
+    from nfarm.study.sweep import QUIET_CLUSTER, _client
+    client = _client(None, 1)
+    try:
+        seen = next(iter(client.run(lambda: {k: dask.config.get(k) for k in QUIET_CLUSTER}).values()))
+    finally:
+        cluster = client.cluster
+        client.close()
+        cluster.close()
+    assert seen == QUIET_CLUSTER and seen["distributed.worker.profile.enabled"] is False
