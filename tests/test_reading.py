@@ -4,6 +4,7 @@ memory."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -177,6 +178,21 @@ def test_json_ready_converts_numpy_and_refuses_non_finite():
     from nfarm.infra.reading import json_ready
     value = {"a": (1, np.float64(2.5)), "b": np.arange(3), "c": [np.int64(4), None, "x"]}
     assert json_ready(value) == {"a": [1, 2.5], "b": [0, 1, 2], "c": [4, None, "x"]}
-    for bad in (float("nan"), [1.0, float("inf")], {"k": np.float32("nan")}):
+    for bad in (float("nan"), [1.0, float("inf")], {"k": np.float32("nan")}, np.array([[1.0, np.nan]])):
         with pytest.raises(ValueError, match="cannot be saved as JSON"):
             json_ready(bad)
+
+
+@pytest.mark.parametrize("array", [np.linspace(-1, 1, 12).reshape(3, 4), np.linspace(0, 1, 6, dtype=np.float32),
+                                   np.arange(6, dtype=np.uint8).reshape(2, 3), np.array([True, False]), np.zeros((2, 0))])
+def test_json_ready_writes_a_numeric_array_as_its_numbers_one_by_one_would(array):
+    """The whole-array path (tolist) gives the lists, Python types and values the element-by-element
+    conversion gives."""
+    from nfarm.infra.reading import json_ready
+
+    def one_by_one(value):
+        return [one_by_one(v) for v in value] if isinstance(value, np.ndarray) else value.item()
+    out = json_ready(array)
+    assert out == one_by_one(array) and json.dumps(out) == json.dumps(one_by_one(array))
+    flat = np.asarray(out, dtype=object).ravel().tolist() if array.size else []
+    assert all(type(x) in (int, float, bool) for x in flat)
