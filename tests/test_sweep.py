@@ -584,3 +584,51 @@ def test_the_local_cluster_runs_its_workers_without_the_stack_profiler():
         client.close()
         cluster.close()
     assert seen == QUIET_CLUSTER and seen["distributed.worker.profile.enabled"] is False
+
+
+@DASK
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's arenas")
+def test_the_local_cluster_runs_its_workers_with_one_allocator_arena():
+    """The local cluster's worker processes start with nfarm.study.sweep.WORKER_ENVIRON (issue 63:
+    glibc's one arena, so that a cell's large arrays stay in the heap rather than being mapped and
+    unmapped at each free), Dask's own settings kept, and the one arena is in force: a thread of the
+    worker gets its memory from the main heap, the same arena as the worker's main thread."""
+    from nfarm.study.sweep import WORKER_ENVIRON, _client
+
+    def environ():
+        return {k: os.environ.get(k) for k in WORKER_ENVIRON}, _thread_heap()
+
+    client = _client(None, 1)
+    try:
+        seen, heap = next(iter(client.run(environ).values()))
+    finally:
+        cluster = client.cluster
+        client.close()
+        cluster.close()
+    assert seen == {k: str(v) for k, v in WORKER_ENVIRON.items()} and seen["MALLOC_ARENA_MAX"] == "1"
+    assert seen["OPENBLAS_NUM_THREADS"] == "1", "Dask's own settings are kept"
+    assert heap == "main", "a new thread of the worker allocates from the main heap"
+    if "MALLOC_ARENA_MAX" not in os.environ:
+        assert _thread_heap() == "own", "the check can fail: this process's threads have arenas of their own"
+
+
+def _thread_heap() -> str:
+    """Where a new thread's small allocation comes from: ``"main"``, glibc's main heap (below the
+    program break), or ``"own"``, an arena of the thread's own (a heap mapped above it)."""
+    import ctypes
+    import threading
+
+    libc = ctypes.CDLL("libc.so.6")
+    libc.malloc.restype = libc.sbrk.restype = ctypes.c_void_p
+    libc.malloc.argtypes, libc.sbrk.argtypes, libc.free.argtypes = [ctypes.c_size_t], [ctypes.c_ssize_t], [ctypes.c_void_p]
+    out = {}
+
+    def allocate():
+        address = libc.malloc(4096)
+        out["heap"] = "main" if address < libc.sbrk(0) else "own"
+        libc.free(address)
+
+    thread = threading.Thread(target=allocate)
+    thread.start()
+    thread.join()
+    return out["heap"]
