@@ -311,6 +311,30 @@ def test_the_saved_rivals_are_ranked_as_the_contest_ranks(data, tmp_path):
     assert contest.saved_rivals(ROBOT, tmp_path / "none") == {}
 
 
+def test_the_saved_rivals_ranked_from_the_contests_records_as_by_predicting_them(data, tmp_path):
+    """Chapter 7 ranks the frozen rivals by the validation metrics chapter 6 recorded beside each
+    (contest.save_validation, saved_ranking), not by predicting the validation poses again: the same
+    order as rival_ranking's for the same models, the orientation deciding a tie in position, and
+    ``None`` (rank them again) where a record is missing or damaged."""
+    from nfarm.study import contest
+
+    rivals = {}
+    for kind, options in (("knn", {"neighbors": 3}), ("rbf", {"neighbors": 16}), ("knn:arm", {"neighbors": 1})):
+        rivals[kind] = rival_ik(kind.split(":")[0], "arm_plane", options).fit(ROBOT, data["train"])
+        e = ik_errors(ROBOT, rivals[kind].predict(data["val"]["T"]), data["val"]["q"], data["val"]["T"])
+        contest.save_validation(tmp_path / "ik_contest" / kind.replace(":", "_"),
+                                _result(kind, "arm_plane", 0, float(np.percentile(e["position"], 95) * 1e3),
+                                        float(np.degrees(np.percentile(e["orientation"], 95)))))
+    assert contest.saved_ranking(tmp_path, rivals) == contest.rival_ranking(ROBOT, rivals, data["val"])
+    assert len(set(contest.saved_ranking(tmp_path, rivals))) == 3
+    contest.save_validation(tmp_path / "ik_contest" / "a", _result("rbf", "arm_plane", 0, 1.0, orientation=0.2))
+    contest.save_validation(tmp_path / "ik_contest" / "b", _result("rbf", "arm_plane", 0, 1.0, orientation=0.1))
+    assert contest.saved_ranking(tmp_path, ["a", "b"]) == ["b", "a"]
+    assert contest.saved_ranking(tmp_path, ["a", "missing"]) is None
+    (tmp_path / "ik_contest" / "a" / contest.VALIDATION_FILE).write_text('{"position_p95_mm": 1.0}')
+    assert contest.saved_ranking(tmp_path, ["a", "b"]) is None
+
+
 def test_a_choice_at_the_edge_of_its_search_is_named():
     """A chosen value that is the least or the greatest of three or more tried is at the search's edge; an option
     with two values, a list or a flag is not judged."""

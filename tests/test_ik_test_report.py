@@ -131,6 +131,17 @@ def test_a_test_without_lm_targets_or_rivals_is_refused_in_one_line(change, mess
     assert "\n" not in str(caught.value)
 
 
+def test_a_recorded_ranking_is_taken_as_it_is_and_one_of_other_rivals_refused(data, models):
+    """Given chapter 6's ranking (contest.saved_ranking), its first is the best rival, even where
+    predicting the validation poses would rank otherwise; a ranking of other names is refused."""
+    args = (ROBOT, REGION, models["learned"], models["recipe"], models["rivals"], data)
+    recorded = report.evaluate_ik(*args, lm_targets=10, ranking=["knn", "rbf"])
+    assert recorded.ranking == ("knn", "rbf") and recorded.rbf_kind == "knn"
+    assert report.evaluate_ik(*args, lm_targets=10).rbf_kind == "rbf"        # ranked here: the closer
+    with pytest.raises(ValueError, match=r"ranking names \['knn'\], not the rivals \['knn', 'rbf'\]"):
+        report.evaluate_ik(*args, lm_targets=10, ranking=["knn"])
+
+
 class Counted(Offset):
     """An :class:`Offset` that counts its predictions."""
 

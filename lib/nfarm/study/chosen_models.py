@@ -204,6 +204,8 @@ def publish_chosen_ik(store: ChosenModels, chosen: Mapping[str, CellResult], ran
     groups = {contest.family(g.cell.params): g for g in ranked}
     saved = {name: publish(contest_model({**r.cell.params, "seed": seed}), store.ik_contestant(name), "ik_contest",
                            groups[name]) for name, r in chosen.items()}
+    for name, r in chosen.items():      # its validation metrics, by which chapters 7-8 rank the frozen rivals
+        contest.save_validation(store.ik_contestant(name), r)
     name = PLANE if PLANE in saved else RECIPE
     model = publish(saved[name], store.ik, "ik_contest", groups[name])
     recipe = {}

@@ -58,7 +58,7 @@ from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Cell, Sweep
 
-__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
+__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "VALIDATION_FILE", "save_validation", "saved_ranking", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -410,6 +410,44 @@ def saved_rivals(robot: Robot, models_dir: str | os.PathLike) -> dict[str, Rival
     names = [name for kind in RIVALS for name in (kind, f"{kind}:arm")]
     return {name: RivalIK.load(where / name.replace(":", "_"), robot) for name in names
             if (where / name.replace(":", "_")).is_dir()}
+
+
+#: The file beside a saved contestant (``ik_contest/<contestant>/``) that holds its chosen cell's
+#: validation metrics (:data:`RANKED_BY`) as the contest recorded them (:func:`save_validation`).
+VALIDATION_FILE = "validation.json"
+
+
+def save_validation(where: str | os.PathLike, cell: CellResult, ranked_by: Sequence[str] = RANKED_BY) -> Path:
+    """Write ``where/validation.json``: the metrics ``ranked_by`` of ``cell`` (the contestant's chosen
+    configuration at the chapter's seed, whose model is saved in ``where``), atomically, so that a
+    later chapter ranks the frozen contestants as the contest did without predicting the validation
+    poses again (:func:`saved_ranking`)."""
+    from ..infra.paths import atomic_path
+
+    path = Path(where) / VALIDATION_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps({m: float(cell.metrics[m]) for m in ranked_by}, indent=1) + "\n", encoding="utf-8")
+    return path
+
+
+def saved_ranking(models_dir: str | os.PathLike, contestants: Iterable[str],
+                  ranked_by: Sequence[str] = RANKED_BY) -> list[str] | None:
+    """``contestants`` (``"rbf"``, ``"rbf:arm"``, … saved under ``models_dir/ik_contest/``) best first
+    by the validation metrics the contest recorded for them (:func:`save_validation`; ties in the
+    order given), or ``None`` if one has no such record or a damaged one (then rank them again:
+    :func:`rival_ranking`)."""
+    keys = {}
+    for name in contestants:
+        path = Path(models_dir) / "ik_contest" / name.replace(":", "_") / VALIDATION_FILE
+        try:
+            record = json.loads(path.read_text(encoding="utf-8"))
+            keys[name] = tuple(float(record[m]) for m in ranked_by)
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        if not all(np.isfinite(keys[name])):
+            return None
+    return sorted(keys, key=keys.get)
 
 
 def rival_ranking(robot: Robot, rivals: Mapping[str, RivalIK], val: Mapping) -> list[str]:

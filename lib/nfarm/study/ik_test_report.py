@@ -23,7 +23,7 @@ Example:
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -100,14 +100,17 @@ def _timed(predict: Callable, T: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def evaluate_ik(robot: Robot, region, learned, recipe: Mapping[str, Any], rivals: Mapping[str, Any],
-            data: Mapping[str, Mapping], *, lm_targets: int = 2000, seed: int = 0) -> IKTest:
+            data: Mapping[str, Mapping], *, lm_targets: int = 2000, seed: int = 0,
+            ranking: Sequence[str] | None = None) -> IKTest:
     """Predict (and time, batched) every IK method on the test poses ``data["ik_test"]``:
     the chosen learned IK ``learned``, the recipe on the region's data (``recipe["ik"]``), every
     rival of the contest (``rivals``, :func:`nfarm.study.contest.saved_rivals`), LM (on the first
     ``lm_targets``, seeded by ``seed``), the closed form's solution in ``region`` (the first valid
     branch where none lies in it; an arm in its class only) and the recipe on its own full-range
     test poses (``recipe["ik_full"]``, ``data["ik_full_test"]``, where the study has them). The
-    best rival is chosen as the contest ranks, on the validation poses ``data["ik_val"]``.
+    best rival is chosen as the contest ranks, on the validation poses ``data["ik_val"]``: by
+    ``ranking`` (the rivals best first as chapter 6 recorded them, :func:`nfarm.study.contest.saved_ranking`),
+    or, given none, by predicting those poses here (:func:`nfarm.study.contest.rival_ranking`).
 
     Raises:
         ValueError: ``lm_targets`` below 1, or no rival to compare.
@@ -145,7 +148,9 @@ def evaluate_ik(robot: Robot, region, learned, recipe: Mapping[str, Any], rivals
         methods[FULL] = (q, full["T"], full["q"], s)
     errors = {name: ik_errors(robot, q, q_true, T) for name, (q, T, q_true, _) in methods.items()}
     # the best rival as the contest ranks: by the 95th-percentile tool position error on the validation poses
-    ranking = tuple(contest.rival_ranking(robot, rivals, data["ik_val"]))
+    if ranking is not None and sorted(ranking) != sorted(rivals):
+        raise ValueError(f"ranking names {sorted(ranking)}, not the rivals {sorted(rivals)}")
+    ranking = tuple(contest.rival_ranking(robot, rivals, data["ik_val"]) if ranking is None else ranking)
     rbf_kind = ranking[0]
     return IKTest(methods, errors, next(iter(errors)), f"{contest.label(rbf_kind)} (contest)", rbf_kind, rival_of, k,
                   lm, closed_share, ranking)
