@@ -144,3 +144,26 @@ def test_the_built_arm_is_a_robot_file_with_the_same_dynamics(tmp_path):
     written = yaml.safe_load(store.built_arm_offsets.read_text())
     assert written["zero_offset_nm"] == offsets.tolist() and written["joints"] == list(study.robot.joint_names)
     assert "params/studies/intelbot5.yaml's seed" in yaml.safe_load(store.built_arm.read_text())["description"]
+
+
+def test_every_draws_built_arm_is_saved_as_a_robot_file_beside_the_finalists(tmp_path):
+    """Issue 65: the finalists of draw k were trained on the k-th arm built; each is saved (draw 0's
+    as before), and each file is the arm datasets.built_arm draws for that draw, with its offsets."""
+    import yaml
+    from nfarm.study.study_files import redrawn
+
+    study = study_files.smoke_study(study_files.load_study("params/studies/intelbot5.yaml"))
+    store = ChosenModels(tmp_path)
+    written = save_built_arm(store, study, "params/studies/intelbot5.yaml", draws=[0, 1, 2, 1])
+    assert written == (store.built_arm, store.built_arm_offsets, store.built_arm_of(1), store.built_arm_offsets_of(1),
+                       store.built_arm_of(2), store.built_arm_offsets_of(2))
+    assert store.built_arm_of(2).name == "built_arm_draw2.yaml" and store.built_arm_of(0) == store.built_arm
+    q, qd, qdd = np.random.default_rng(0).normal(size=(3, 10, study.robot.n))
+    torques = {}
+    for draw in (0, 1, 2):
+        expected, offsets = built_arm(redrawn(study, draw))
+        torques[draw] = rnea(load_robot(store.built_arm_of(draw)), q, qd, qdd, drive=True)
+        np.testing.assert_array_equal(torques[draw], rnea(expected, q, qd, qdd, drive=True))
+        assert yaml.safe_load(store.built_arm_offsets_of(draw).read_text())["zero_offset_nm"] == offsets.tolist()
+        assert f"(+{draw}: {study.seed + draw})" in yaml.safe_load(store.built_arm_of(draw).read_text())["description"]
+    assert not np.allclose(torques[1], torques[0]) and not np.allclose(torques[2], torques[1])

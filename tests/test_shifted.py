@@ -14,7 +14,8 @@ from nfarm.model.kinematics import fk
 from nfarm.study import datasets
 from nfarm.study.regions import IKRegion
 from nfarm.model.dynamics import rnea
-from nfarm.study.shifted import beyond_box, boundary_distance, describe, describe_id, faster, shifted_id, shifted_ik
+from nfarm.study.shifted import (beyond_box, boundary_distance, describe, describe_id, faster, shifted_id, shifted_ik,
+                                 shifted_readings)
 from nfarm.study.study_files import load_study, study_from_dict
 
 STUDIES = ("intelbot5", "so101")
@@ -99,6 +100,31 @@ def test_the_shifted_trajectories_run_faster_than_any_the_models_met(arm):
     for k in data:
         np.testing.assert_array_equal(again[k], data[k])
     assert f"{s.id_trajectories} trajectories" in describe_id(study) and f"{s.id_speed:g} times as fast" in describe_id(study)
+
+
+def test_a_draws_models_meet_the_shifted_trajectories_as_the_arm_built_for_that_draw_reads_them():
+    """Issue 65: draw 0's readings are the population's own; draw 1's are the arm built for draw 1 on
+    the same states (its rigid body and drives, within its sensor's noise), not chapter 5's arm."""
+    from nfarm.model.dynamics import stribeck_drive_torques
+    from nfarm.study.study_files import redrawn
+
+    study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    data = shifted_id(study)
+    np.testing.assert_array_equal(shifted_readings(study, data, 0)["tau_measured"], data["tau_measured"])
+    other = shifted_readings(study, data, 1)["tau_measured"]
+    noise_sd = np.sqrt(study.id.noise ** 2 + study.id.torque_per_count ** 2 / 12)
+
+    def error(draw):
+        arm, offset = datasets.built_arm(redrawn(study, draw))
+        rigid = rnea(arm, data["q"], data["qd"], data["qdd"])
+        return other - rigid - offset - stribeck_drive_torques(arm, data["qd"], data["qdd"], rigid, **study.id.friction)
+
+    np.testing.assert_allclose(error(1).std(axis=0), noise_sd, rtol=0.25)
+    assert (np.sqrt(np.mean(error(0) ** 2, axis=0)) > 2 * noise_sd).any()
+    params = json.loads(json.dumps(study.params))
+    del params["id"]["measured"]
+    with pytest.raises(ValueError, match="no shifted ID population of a measured arm"):
+        shifted_readings(study_from_dict(params, source="rigid.yaml"), data, 1)
 
 
 def test_the_shifted_trajectories_are_drawn_apart_from_the_test_split():

@@ -13,7 +13,8 @@ chapter's ``models_dir``)::
     id/identified/            the identification on the regressor's inputs (a reference)
     id_seed_like/<name>/      the chosen ANFIS and the design trained on the dissertation's cubics
     id_measured/<tier>/<slot> each tier's two finalists on the measured arm, with the built arm
-                              (built_arm.yaml) and its torque readings' offsets beside them
+                              (built_arm.yaml; built_arm_draw<k>.yaml, the arm built for the
+                              finalists' draw k) and its torque readings' offsets beside them
     results/                  chapter 7's verdict and summary tables (chapter 8 reads them)
 
 Each published model is a copy of a sweep cell's (:func:`publish`) and keeps beside it the cells
@@ -39,6 +40,7 @@ from ..infra.paths import BUILD, atomic_path, project_path, shown_path
 from ..model.robot import robot_to_dict
 from . import contest, replicates
 from .datasets import built_arm
+from .study_files import redrawn
 from .jobs import contest_model, id_contest_model, id_model, ik_model
 from .sweep import CellResult, Replicates
 
@@ -125,6 +127,14 @@ class ChosenModels:
         """The measured arm as built, a robot file (:func:`nfarm.model.robot.load_robot` reads it)."""
         return self.id_measured / "built_arm.yaml"
 
+    def built_arm_of(self, draw: int) -> Path:
+        """The arm built for data draw ``draw`` (a finalist's seed), a robot file; draw 0's is :attr:`built_arm`."""
+        return self.built_arm if draw == 0 else self.id_measured / f"built_arm_draw{int(draw)}.yaml"
+
+    def built_arm_offsets_of(self, draw: int) -> Path:
+        """Its torque readings' zero offsets [N·m] (draw 0's: :attr:`built_arm_offsets`)."""
+        return self.built_arm_offsets if draw == 0 else self.id_measured / f"built_arm_draw{int(draw)}_offsets.yaml"
+
     @property
     def built_arm_offsets(self) -> Path:
         """The built arm's torque readings' zero offsets [N·m], by joint."""
@@ -146,24 +156,33 @@ def publish(model, where: str | os.PathLike, job: str | None = None, group=None)
     return model
 
 
-def save_built_arm(store: ChosenModels, study, study_file: str | os.PathLike) -> tuple[Path, Path]:
-    """Write the study's measured arm as built (:func:`nfarm.study.datasets.built_arm`) beside its
+def save_built_arm(store: ChosenModels, study, study_file: str | os.PathLike,
+                   draws: Sequence[int] = (0,)) -> tuple[Path, ...]:
+    """Write the study's measured arm as built for each of ``draws`` (:func:`nfarm.study.datasets.built_arm`
+    of the redrawn study: draw k's data and its models' test judge the k-th arm built) beside its
     finalists: a robot file any dynamics engine can take (its DH table and links), its
-    ``description`` naming the study file whose seed drew the links, and its torque readings'
+    ``description`` naming the study file and the seed that drew the links, and its torque readings'
     zero offsets; its friction's breakaway and load terms and its sensor's counts and noise are
-    the study file's (``id.measured``). Returns the two paths."""
-    built, zero_offset = built_arm(study)
-    built_dict = robot_to_dict(built)
-    built_dict["description"] = (f"{study.robot.name} as built: chapter 5's measured arm, its links drawn from "
-                                 f"{shown_path(project_path(study_file))}'s seed")
-    texts = ((store.built_arm, yaml.safe_dump(built_dict, sort_keys=False)),
-             (store.built_arm_offsets, yaml.safe_dump(
-                 {"joints": list(study.robot.joint_names), "zero_offset_nm": [float(x) for x in zero_offset]},
-                 sort_keys=False)))
-    for path, text in texts:
-        with atomic_path(path) as tmp:
-            tmp.write_text(text, encoding="utf-8")
-    return store.built_arm, store.built_arm_offsets
+    the study file's (``id.measured``). Returns the paths, two a draw (:meth:`ChosenModels.built_arm_of`,
+    :meth:`ChosenModels.built_arm_offsets_of`), draw 0's ``built_arm.yaml`` first."""
+    written = []
+    for draw in dict.fromkeys([0, *(int(d) for d in draws)]):
+        drawn = redrawn(study, draw)
+        built, zero_offset = built_arm(drawn)
+        built_dict = robot_to_dict(built)
+        which = "chapter 5's measured arm" if draw == 0 else f"the arm built for draw {draw}"
+        built_dict["description"] = (f"{study.robot.name} as built: {which}, its links drawn from "
+                                     f"{shown_path(project_path(study_file))}'s seed (+{draw}: {drawn.seed})")
+        texts = ((store.built_arm_of(draw), yaml.safe_dump(built_dict, sort_keys=False)),
+                 (store.built_arm_offsets_of(draw), yaml.safe_dump(
+                     {"joints": list(study.robot.joint_names), "zero_offset_nm": [float(x) for x in zero_offset]},
+                     sort_keys=False)))
+        for path, text in texts:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_path(path) as tmp:
+                tmp.write_text(text, encoding="utf-8")
+            written.append(path)
+    return tuple(written)
 
 
 # --------------------------------------------------------------------------------------------

@@ -419,15 +419,17 @@ VALIDATION_FILE = "validation.json"
 
 def save_validation(where: str | os.PathLike, cell: CellResult, ranked_by: Sequence[str] = RANKED_BY) -> Path:
     """Write ``where/validation.json``: the metrics ``ranked_by`` of ``cell`` (the contestant's chosen
-    configuration at the chapter's seed, whose model is saved in ``where``), atomically, so that a
-    later chapter ranks the frozen contestants as the contest did without predicting the validation
-    poses again (:func:`saved_ranking`)."""
+    configuration at the chapter's seed, whose model is saved in ``where``; those it recorded),
+    atomically, so that a later chapter ranks the frozen contestants as the contest did without
+    predicting the validation poses again (:func:`saved_ranking`, which ranks none with a metric
+    missing)."""
     from ..infra.paths import atomic_path
 
     path = Path(where) / VALIDATION_FILE
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps({m: float(cell.metrics[m]) for m in ranked_by}, indent=1) + "\n", encoding="utf-8")
+        tmp.write_text(json.dumps({m: float(cell.metrics[m]) for m in ranked_by if m in cell.metrics}, indent=1) + "\n",
+                       encoding="utf-8")
     return path
 
 

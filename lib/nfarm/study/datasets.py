@@ -45,13 +45,13 @@ from ..model.dynamics import rnea, stribeck_drive_torques
 from ..model.robot import Robot, robot_hash, robot_name
 from .id_trajectories import current_sensed, measured_states, random_trajectories, true_arm, with_payload
 from .regions import STREAMS, IKRegion, ik_samples
-from .study_files import SPLITS, Study
+from .study_files import SPLITS, Study, redrawn
 
-__all__ = ["Dataset", "build_datasets", "built_arm", "measured_readings", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
+__all__ = ["Dataset", "build_datasets", "built_arm", "measured_readings", "test_readings", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
            "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
-DATA_VERSION = 3
+DATA_VERSION = 4
 _SPLIT_STREAM = {"train": 0, "val": 1, "test": 2}
 
 
@@ -206,10 +206,12 @@ def _up_to_date(path: Path, digest: str) -> bool:
 
 def built_arm(study: Study) -> tuple[Robot, np.ndarray]:
     """The arm a study's ``id.measured`` section describes, as built: the robot with its
-    drives and, with a ``true_arm``, its links drawn once (:func:`nfarm.study.id_trajectories.true_arm`)
-    from the study's own seed — the same arm for every redrawn data set (``draw``) — and the
-    ``(n,)`` zero offsets of its torque readings [N·m] (zero without a ``sensor``), drawn after
-    the links from the same stream.
+    drives and, with a ``true_arm``, its links drawn (:func:`nfarm.study.id_trajectories.true_arm`)
+    from the study's seed — each redrawn study (``draw`` k, seed + k:
+    :func:`nfarm.study.study_files.redrawn`) **another arm built** to the same declared
+    tolerances, so that a spread over draws covers the built arm as well as the data (issue 65);
+    draw 0, the study's own, is chapter 5's — and the ``(n,)`` zero offsets of its torque
+    readings [N·m] (zero without a ``sensor``), drawn after the links from the same stream.
 
     Raises:
         ValueError: the study has no measured arm.
@@ -217,7 +219,7 @@ def built_arm(study: Study) -> tuple[Robot, np.ndarray]:
     settings = study.id
     if settings.measured is None:
         raise ValueError(f"{study.source}: id.measured: the study declares no measured arm")
-    rng = np.random.default_rng(np.random.SeedSequence([study.seed - study.draw, STREAMS["true_arm"]]))
+    rng = np.random.default_rng(np.random.SeedSequence([study.seed, STREAMS["true_arm"]]))
     arm = settings.measured if settings.true_arm is None else true_arm(settings.measured, settings.true_arm, rng)
     offset = np.zeros(arm.n) if settings.offset_sd is None else \
         settings.offset_sd * np.clip(rng.standard_normal(arm.n), -3.0, 3.0)
@@ -254,6 +256,25 @@ def measured_readings(study: Study, data: Mapping[str, np.ndarray], stream: list
         out[key] = current_sensed(rigid + drive, np.random.default_rng(np.random.SeedSequence(draws)),
                                   noise=settings.noise, torque_per_count=settings.torque_per_count, offset=offset)
     return out
+
+
+def test_readings(study: Study, draw: int, test: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """What the arm built for ``draw`` (:func:`built_arm` of the redrawn study) reads on the
+    test split's exact states ``test`` (the study's own ``id_test``, never redrawn:
+    ``q, qd, qdd, tau``): ``tau_measured`` and, where the built arm declares a payload,
+    ``tau_payload`` — so that a draw's models are judged against the arm they were trained on.
+    Draw 0's are the split's own readings; another draw's noise comes from the split's stream
+    extended by the draw.
+
+    Raises:
+        ValueError: the study has no measured arm, or ``draw`` is not a whole number >= 0.
+    """
+    if study.id.measured is None:
+        raise ValueError(f"{study.source}: id.measured: the study declares no measured arm")
+    if draw == 0:
+        return {k: test[k] for k in ("tau_measured", "tau_payload") if k in test}
+    return measured_readings(redrawn(study, draw), test, [split_seed(study, "test"), STREAMS["id_noise"],
+                                                          _SPLIT_STREAM["test"], int(draw)], payload=True)
 
 
 def build_datasets(study: Study, out: str | os.PathLike | None = None, *, force: bool = False,

@@ -21,7 +21,7 @@ are by whole trajectories.
 
 **The measured arm is not the model.** With a ``true_arm`` in the measured arm, its links differ
 from the nominal model as a built arm's do (:func:`true_arm`: each link's mass, centre of mass
-and rotational inertia drawn once from the study's seed), and ``tau_measured`` is that arm's
+and rotational inertia drawn from the study's seed, another arm for each draw of the data), and ``tau_measured`` is that arm's
 torque; the test split also holds ``tau_payload``, the same trajectories with a payload at the
 tool (:func:`with_payload`). With a ``sensor``, the torque is read as a servo reads it, from its
 motor current (:func:`current_sensed`: a zero offset per joint, noise, and the current's counts).

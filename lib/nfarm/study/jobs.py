@@ -37,7 +37,10 @@ A study job's ``seed`` is the **data draw and the initialisation**: seed 0 train
 study's own data sets, seed ``k`` on its training and validation data drawn again with the
 study's seed plus ``k`` (:func:`nfarm.study.study_files.redrawn`), and seeds the learner; a test split is
 always the study's own. A sweep's ``seeds: [0, 1, 2, 3, 4]`` thus gives each configuration's
-spread over data and initialisation (:func:`nfarm.study.sweep.by_configuration`).
+spread over data and initialisation (:func:`nfarm.study.sweep.by_configuration`). For a measured arm
+the draw is also **the arm as built** (:func:`nfarm.study.datasets.built_arm`): seed ``k``'s data are
+the readings of the ``k``-th arm built to the study's tolerances, and its test cells judge it on the
+same test trajectories as that arm reads them.
 
 The learned jobs reuse data sets and models (:func:`nfarm.study.datasets.build_datasets`,
 :func:`nfarm.learning.model_cache.fit_cached`, models under ``<models_dir>/ik/sweep/<options hash>/``): a
@@ -294,10 +297,20 @@ def _study_data(p: dict) -> tuple[study_files.Study, Path, Path]:
 
 
 def _test_split(p: dict, split_of) -> dict:
-    """The study's own held-out split, the same for every draw."""
+    """The study's own held-out split, the same for every draw; with measured torques
+    (``p["torques"]``) those that the arm built for the cell's draw (its ``seed``) reads on its
+    states (:func:`nfarm.study.datasets.test_readings`), so that a draw's models are judged against
+    the arm they were trained on."""
     own = _own_study(p)
     datasets.build_datasets(own, p["data_dir"])
-    return split_of(p, own, datasets.dataset_dir(own, p["data_dir"]), "test")
+    directory = datasets.dataset_dir(own, p["data_dir"])
+    judged = split_of(p, own, directory, "test")
+    if p.get("torques") == "measured" and p["seed"]:
+        readings = datasets.test_readings(own, p["seed"], datasets.load(directory / "id_test.npz", own.robot, own))
+        judged["tau"] = readings["tau_measured"]
+        if "tau_payload" in judged:
+            judged["tau_payload"] = readings["tau_payload"]
+    return judged
 
 
 def _options_dir(models: Path, kind: str, options: Mapping) -> Path:

@@ -38,9 +38,9 @@ from ..model.kinematics import fk
 from .datasets import measured_readings
 from .id_trajectories import measured_states, random_trajectories
 from .regions import STREAMS, IKRegion
-from .study_files import Study
+from .study_files import Study, redrawn
 
-__all__ = ["boundary_distance", "beyond_box", "shifted_ik", "shifted_id", "faster", "describe", "describe_id"]
+__all__ = ["boundary_distance", "beyond_box", "shifted_ik", "shifted_id", "shifted_readings", "faster", "describe", "describe_id"]
 
 #: The shifted ID population's stream below the section's seed (the IK one draws from the seed itself).
 _ID_STREAM = 1
@@ -151,6 +151,25 @@ def shifted_id(study: Study) -> dict[str, np.ndarray]:
             data["q_measured"], data["qd_measured"], data["qdd_measured"] = measured_states(
                 data["q"], data["trajectory"], settings.dt, settings.encoder_counts, settings.filter_window)
     return data
+
+
+def shifted_readings(study: Study, data, draw: int) -> dict[str, np.ndarray]:
+    """What the arm built for ``draw`` (:func:`nfarm.study.datasets.built_arm` of the redrawn study)
+    reads on the shifted trajectories ``data`` (:func:`shifted_id`): ``tau_measured`` and, where the
+    built arm declares a payload, ``tau_payload`` — draw 0's are ``data``'s own; another draw's noise
+    comes from the population's stream extended by the draw. A draw's models are judged against
+    the arm they were trained on.
+
+    Raises:
+        ValueError: a study that declares no shifted ID population or no measured arm.
+    """
+    s = study.shifted
+    if s is None or s.id_trajectories is None or study.id.measured is None:
+        raise ValueError(f"{study.source}: shifted: the study declares no shifted ID population of a measured arm")
+    if draw == 0:
+        return {k: data[k] for k in ("tau_measured", "tau_payload") if k in data}
+    return measured_readings(redrawn(study, draw), data, [s.seed, _ID_STREAM, STREAMS["id_noise"], int(draw)],
+                             payload=True)
 
 
 def describe_id(study: Study) -> str:

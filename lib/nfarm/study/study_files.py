@@ -169,7 +169,7 @@ class TrueArmSection:
 @dataclass(frozen=True, kw_only=True)
 class SensorSection:
     """``id.measured.sensor``: the torque read from the motor current — its count, the torque
-    per ampere at the joint, each joint's zero offset (drawn once from the study's seed)."""
+    per ampere at the joint, each joint's zero offset (drawn from the study's seed, with the links)."""
 
     current_per_count_a: Annotated[PerJoint, CURRENT_PER_COUNT]             # A per count of the reading
     torque_constant_nm_a: Annotated[PerJoint, TORQUE_CONSTANT]            # N·m at the joint per A

@@ -39,7 +39,7 @@ from ..learning.baselines import load_id_model
 from ..learning.learned import ik_errors
 from .statistics import distinct_resamples, trajectory_sums
 from . import contest, replicates
-from .shifted import describe as describe_shifted, describe_id as describe_shifted_id, shifted_id, shifted_ik
+from .shifted import describe as describe_shifted, describe_id as describe_shifted_id, shifted_id, shifted_ik, shifted_readings
 from .paired import seed_comparison
 from .rows import WORST_ID, Row, ik_seed_values, seed_estimates
 from .verdict_rows import ID_TARGET_PCT, IK_TARGETS, Verdict, targets_met, task_verdict, with_holm
@@ -222,8 +222,10 @@ def measured_verdict(arm: str, values: Mapping[str, np.ndarray], anfis: str, riv
     boot = {"draws": draws, "level": level, "seed": seed}
     pair = {n: values[n] for n in (anfis, rival)}
     n_joints = (next(iter(pair.values())).shape[-1] - 1) // 3
-    verdict = judge_task(arm, f"measured arm, {tier}", "worst NRMSE", "%", pair, anfis, rival, units=units,
-                         scale=100.0, resolved=resolved, **boot)
+    # each seed a draw of the data on an arm built for it (nfarm.study.datasets.built_arm): the seeds' level covers both
+    verdict = judge_task(arm, f"measured arm, {tier}", "worst NRMSE", "%", pair, anfis, rival,
+                         units=f"{units} (each seed an arm built and its data drawn)", scale=100.0, resolved=resolved,
+                         **boot)
     rows: dict[str, list[Row]] = {n: [] for n in (anfis, rival)}
     for mask in (resolved, np.ones(n_joints, bool) if every is None else np.asarray(every, bool)):
         est, _ = seed_comparison(pair, anfis, rival, WORST_ID, resolved=mask, **boot)
@@ -300,15 +302,19 @@ def finalist_models(idc, label: str, where_of: Callable[[str, str], Path], robot
 
 def shifted_id_verdicts(study, rigid: Mapping[str, Sequence[Any]], rigid_pair: tuple[str, str], *, resolved,
                         measured: Mapping[str, Sequence[Any]] | None = None, measured_pair: tuple[str, str] | None = None,
-                        measured_resolved=None, draws: int = 2000, level: float = 0.95, seed: int = 0) -> list[Verdict]:
+                        measured_resolved=None, measured_seeds: Sequence[int] | None = None, draws: int = 2000,
+                        level: float = 0.95, seed: int = 0) -> list[Verdict]:
     """The ID verdicts on the shifted trajectories ``study`` declares (:func:`nfarm.study.shifted.shifted_id`;
     ``[]`` where it declares none), read once by the frozen models of the main verdict, each over its
     seeds (``rigid``, ``measured``: method → its models, the chapter's seed first): the rigid-body
     task's ``rigid_pair`` (ANFIS, best other) by the worst ``resolved`` joint's NRMSE on the model's
     torques, and, for a measured arm, the measured arm's headline pair ``measured_pair`` over every
-    tier on the built arm's readings and the states its encoders give (``measured_resolved``: the
-    joints its sensors resolve, fixed on validation). The NRMSE divides by the shifted torques'
-    own spread. Holm's correction over the shifted family is the caller's."""
+    tier on the readings of the arm built for each model's draw (``measured_seeds``: the seed of the
+    cell that trained each of a method's models, in their order; ``None``: all the study's own, draw 0;
+    :func:`nfarm.study.shifted.shifted_readings`) and the states its
+    encoders give (``measured_resolved``: the joints its sensors resolve, fixed on validation). The
+    NRMSE divides by the shifted torques' own spread. Holm's correction over the shifted family is
+    the caller's."""
     if study.shifted is None or study.shifted.id_trajectories is None:
         return []
     data = shifted_id(study)
@@ -325,7 +331,15 @@ def shifted_id_verdicts(study, rigid: Mapping[str, Sequence[Any]], rigid_pair: t
                                 task="rigid-body inverse dynamics, shifted population", **boot)]
         if measured is not None and measured_pair is not None and "tau_measured" in data:
             known = tuple(data.get(f"{k}_measured", data[k]) for k in ("q", "qd", "qdd"))
-            values = {name: sums(measured[name], known, data["tau_measured"]) for name in measured_pair}
+            # each model against the arm built for its draw, as on the test split
+            seeds = [0] * max(len(measured[name]) for name in measured_pair) if measured_seeds is None else \
+                [int(s) for s in measured_seeds]
+            if any(len(measured[name]) > len(seeds) for name in measured_pair):     # fewer: trained once, the first
+                raise ValueError(f"measured_seeds names {len(seeds)} draws, fewer than the pair's models "
+                                 f"({[len(measured[name]) for name in measured_pair]})")
+            readings = {s: shifted_readings(study, data, s)["tau_measured"] for s in dict.fromkeys(seeds)}
+            values = {name: np.stack([trajectory_sums(m.predict(*known), readings[s], data["trajectory"])
+                                      for m, s in zip(measured[name], seeds)]) for name in measured_pair}
             out.append(measured_verdict(study.robot.name, values, *measured_pair, resolved=measured_resolved,
                                         tier="every tier, shifted population", units="shifted trajectories", **boot))
     for w in caught:
