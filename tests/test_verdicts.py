@@ -170,6 +170,30 @@ def test_the_shifted_id_verdicts_judge_the_main_pairs_on_the_faster_trajectories
                                         resolved=resolved) == []
 
 
+def test_each_measured_model_meets_the_shifted_trajectories_as_the_arm_built_for_its_draw_reads_them():
+    """Issue 65: the second seed's model was trained on another built arm; a model that predicts exactly
+    what its draw's arm reads scores 0 when judged on its own draw (measured_seeds) and not when every
+    model is judged on chapter 5's arm; more models than draws named is refused."""
+    from nfarm.infra.paths import PARAMS
+    from nfarm.study.shifted import shifted_id, shifted_readings
+    from nfarm.study.study_files import load_study
+
+    study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    data = shifted_id(study)
+    reads = {draw: shifted_readings(study, data, draw)["tau_measured"] for draw in (0, 1)}
+    models = {name: [_Scaled(lambda q, qd, qdd, d=draw: reads[d], factor) for draw in (0, 1)]
+              for name, factor in (("ANFIS: m", 1.2), ("MLP: m", 1.0))}
+    rigid = {"ANFIS": models["MLP: m"], "ridge": models["MLP: m"]}
+    resolved = np.ones(study.robot.n, bool)
+    kwargs = dict(resolved=resolved, measured=models, measured_pair=("ANFIS: m", "MLP: m"), measured_resolved=resolved,
+                  draws=200)
+    own = verdicts.shifted_id_verdicts(study, rigid, ("ANFIS", "ridge"), measured_seeds=[0, 1], **kwargs)[1]
+    first = verdicts.shifted_id_verdicts(study, rigid, ("ANFIS", "ridge"), **kwargs)[1]
+    assert own.rival_value == 0 and first.rival_value > 0
+    with pytest.raises(ValueError, match=r"measured_seeds names 1 draws, fewer than the pair's models \(\[2, 2\]\)"):
+        verdicts.shifted_id_verdicts(study, rigid, ("ANFIS", "ridge"), measured_seeds=[0], **kwargs)
+
+
 def _joint_sums(rng, nrmse, trajectories=12):
     """Trajectory sums ``(T, 1 + 3n)`` whose joints' NRMSE are about ``nrmse (n,)``."""
     nrmse = np.asarray(nrmse, float)
