@@ -100,7 +100,6 @@ def test_each_draw_of_the_data_is_another_arm_built_and_a_reader_rebuilds_it_fro
     arm, offset = datasets.built_arm(study)
     assert not np.allclose(arm.mass, study.robot.mass)
     assert np.abs(offset).max() > 0 and np.abs(offset).max() <= 3 * study.id.offset_sd.max()
-    np.testing.assert_array_equal(datasets.built_arm(redrawn(study, 0))[0].mass, arm.mass)      # draw 0: the study's own
     again, offset_again = datasets.built_arm(redrawn(study, 3))
     assert not np.allclose(again.mass, arm.mass) and not np.allclose(again.inertia, arm.inertia)
     assert not np.allclose(offset_again, offset)

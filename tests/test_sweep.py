@@ -589,14 +589,18 @@ def test_the_local_cluster_runs_its_workers_without_the_stack_profiler():
 @DASK
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's arenas")
 def test_the_local_cluster_runs_its_workers_with_one_allocator_arena():
-    """The local cluster's worker processes start with nfarm.study.sweep.WORKER_ENVIRON (issue 63:
-    glibc's one arena, so that a cell's large arrays stay in the heap rather than being mapped and
-    unmapped at each free), Dask's own settings kept, and the one arena is in force: a thread of the
-    worker gets its memory from the main heap, the same arena as the worker's main thread."""
+    """The local cluster's worker processes start with Dask's own environment and
+    nfarm.study.sweep.WORKER_ENVIRON (issue 63: glibc's one arena, so that a cell's large arrays stay
+    in the heap rather than being mapped and unmapped at each free), and the one arena is in force: a
+    thread of the worker gets its memory from the main heap, the same arena as the worker's main thread."""
+    import dask
+
     from nfarm.study.sweep import WORKER_ENVIRON, _client
+    dasks = dask.config.get("distributed.nanny.pre-spawn-environ")
+    expected = {k: str(v) for k, v in {**dasks, **WORKER_ENVIRON}.items()}
 
     def environ():
-        return {k: os.environ.get(k) for k in WORKER_ENVIRON}, _thread_heap()
+        return {k: os.environ.get(k) for k in expected}, _thread_heap()
 
     client = _client(None, 1)
     try:
@@ -605,7 +609,7 @@ def test_the_local_cluster_runs_its_workers_with_one_allocator_arena():
         cluster = client.cluster
         client.close()
         cluster.close()
-    assert seen == {k: str(v) for k, v in WORKER_ENVIRON.items()} and seen["MALLOC_ARENA_MAX"] == "1"
+    assert seen == expected and seen["MALLOC_ARENA_MAX"] == "1"
     assert seen["OPENBLAS_NUM_THREADS"] == "1", "Dask's own settings are kept"
     assert heap == "main", "a new thread of the worker allocates from the main heap"
     if "MALLOC_ARENA_MAX" not in os.environ:

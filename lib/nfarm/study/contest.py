@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..infra.arguments import is_number
+from ..infra.paths import atomic_path
 from ..learning.bases import TIERS, tier_of
 from ..learning.baselines import BASELINES
 from ..learning.ik_rivals import RIVALS, RivalIK
@@ -423,8 +424,6 @@ def save_validation(where: str | os.PathLike, cell: CellResult, ranked_by: Seque
     atomically, so that a later chapter ranks the frozen contestants as the contest did without
     predicting the validation poses again (:func:`saved_ranking`, which ranks none with a metric
     missing)."""
-    from ..infra.paths import atomic_path
-
     path = Path(where) / VALIDATION_FILE
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:

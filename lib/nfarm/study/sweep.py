@@ -435,17 +435,16 @@ QUIET_CLUSTER = {"distributed.worker.profile.enabled": False,
                  "distributed.worker.memory.monitor-interval": "1s",
                  "distributed.admin.system-monitor.interval": "5s"}
 
-#: The local cluster's workers' environment: Dask's own (``distributed.nanny.pre-spawn-environ``:
+#: What the local cluster's workers' environment adds to Dask's own (``distributed.nanny.pre-spawn-environ``:
 #: one BLAS and OpenMP thread, its trim threshold, which :func:`nfarm.infra._allocator.tune` then
-#: replaces) and glibc's allocator with one arena (``MALLOC_ARENA_MAX=1``). A Dask worker runs each
+#: replaces): glibc's allocator with one arena (``MALLOC_ARENA_MAX=1``). A Dask worker runs each
 #: cell in a thread of its pool, and a thread's arena is a heap of at most 64 MB, so every larger
 #: array (the ridge cells' 3 213-column designs, the kernels' feature maps) was mapped and
 #: unmapped again at each free whatever the thresholds, and faulted in afresh by the next (36 µs a
 #: page fault on this project's 2-core VMs): on 12 of the measured arm's cells the workers' system
 #: time fell from 9.9 to 5.8 s with one arena (2026-12-03). A worker runs one cell at a time, so the
 #: one arena is not contended. Nothing a cell computes depends on it.
-WORKER_ENVIRON = {"MALLOC_TRIM_THRESHOLD_": 65536, "OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1,
-                  "OPENBLAS_NUM_THREADS": 1, "MALLOC_ARENA_MAX": 1}
+WORKER_ENVIRON = {"MALLOC_ARENA_MAX": 1}
 
 
 def _client(scheduler: str | None, workers: int | None):
@@ -462,7 +461,8 @@ def _client(scheduler: str | None, workers: int | None):
     # output with the machine's paths); a cell's own failure is in its cell.json, not the log.
     import dask
 
-    with dask.config.set({**QUIET_CLUSTER, "distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
+    environ = {**dask.config.get("distributed.nanny.pre-spawn-environ", default={}), **WORKER_ENVIRON}
+    with dask.config.set({**QUIET_CLUSTER, "distributed.nanny.pre-spawn-environ": environ}):
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                                processes=True, silence_logs=50,
                                # no fixed port (its HTTP server starts anyway; clusters side by side)
