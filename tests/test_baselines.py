@@ -165,8 +165,11 @@ def test_the_mlp_stops_early_on_the_validation_states_and_keeps_its_best_epoch(p
 # -- saving: JSON, the same bits as scikit-learn's predict ---------------------------------------
 
 
-@pytest.mark.parametrize("learner, residual", [(learner, residual) for learner in BASELINES for residual in (False, True)
-                                               if (learner, residual) not in (("friction", False), ("identification", True))])
+@pytest.mark.parametrize("learner, residual", [(learner, residual) for learner in BASELINES
+                                               for residual in (False, True, "identification")
+                                               if (learner, residual) not in (("friction", False), ("friction", "identification"),
+                                                                              ("identification", True),
+                                                                              ("identification", "identification"))])
 def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, residual, trajectories, tmp_path):
     """The arrays read out of the fitted estimator predict what the estimator itself predicts, bit
     for bit, and the saved JSON loads back to the same bits (no pickle). (Friction is a residual
@@ -178,7 +181,12 @@ def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, resid
     X = (val["q"], val["qd"], val["qdd"])
     features = model._features(*X)
     scaled = model.model_.predict(features).reshape(len(val["q"]), -1)           # scikit-learn's own arithmetic
-    expected = scaled * model.y_scale_ + model.y_mean_ + (rnea(ROBOT, *X) if residual else 0.0)
+    prior = {False: 0.0, True: rnea(ROBOT, *X)}.get(residual)
+    if residual == "identification":            # the identification's own least squares, fitted on the training states
+        identified = baseline_id("identification").fit(ROBOT, train)
+        np.testing.assert_array_equal(model.prior_, identified.state_["coef"])
+        prior = identified.predict(*X)
+    expected = scaled * model.y_scale_ + model.y_mean_ + prior
     np.testing.assert_array_equal(model.predict(*X), expected)
     model.save(tmp_path)
     loaded = load_id_model(tmp_path, ROBOT)
@@ -186,6 +194,63 @@ def test_a_saved_baseline_predicts_the_bits_scikit_learn_predicts(learner, resid
         (model.learner, model.residual, model.random_state, model.options_)
     np.testing.assert_array_equal(loaded.predict(*X), model.predict(*X))
     assert (tmp_path / "baseline_id.json").read_bytes().startswith(b"{")
+
+
+def test_a_learner_on_the_identifications_residual_learns_only_what_the_identification_misses(trajectories):
+    """Torques of a built arm plus its drive law (the identified form) and a term the identification cannot hold,
+    linear in the angles (``0.2 q1 − 0.1 q2`` N·m on the first two joints): the identification alone misses it on the
+    base joint (NRMSE 0.84 here); least squares on ``[q, q̇, q̈]`` fitted to what the identification leaves — the
+    prior refitted on the training states, the learner on the rest — brings that joint below a tenth of it (0.07) and
+    the worst joint below both the identification alone and the same learner on Newton–Euler's nominal residual, which
+    misses the built arm's masses; the tier says which prior each has."""
+    from nfarm.learning.bases import tier_of
+
+    train, val = _built_arm_torques(trajectories)
+    extra = lambda d: d["q"] @ np.diag([0.2, -0.1, 0.0, 0.0, 0.0])                  # noqa: E731
+    train, val = {**train, "tau": train["tau"] + extra(train)}, {**val, "tau": val["tau"] + extra(val)}
+    X = (val["q"], val["qd"], val["qdd"])
+    alone = baseline_id("identification").fit(ROBOT, train)
+    identified = baseline_id("linear", residual="identification").fit(ROBOT, train)
+    nominal = baseline_id("linear", residual=True).fit(ROBOT, train)
+    err = {name: nrmse(m.predict(*X), val["tau"]) for name, m in (("alone", alone), ("identified", identified),
+                                                                   ("nominal", nominal))}
+    assert err["identified"][0] < 0.1 * err["alone"][0]
+    assert err["identified"].max() < min(err["alone"].max(), err["nominal"].max())
+    np.testing.assert_array_equal(identified.prior_, alone.state_["coef"])      # the prior: that identification
+    assert (tier_of({"learner": "linear", "residual": "identification"}), tier_of({"learner": "linear", "residual": True})) \
+        == ("identification + learned", "nominal model + learned")
+
+
+@pytest.mark.parametrize("learner, residual, message", [
+    ("ridge", "identified", "residual must be false, true (Newton–Euler's nominal model), 'nominal' or 'identification', "
+                            "got 'identified'"),
+    ("ridge", 1, "residual must be false, true"),
+    ("friction", "identification", "learner 'friction' identifies the drives beside Newton–Euler: give residual=True"),
+    ("identification", "identification", "learner 'identification' fits the whole torque, the masses included: give "
+                                          "residual=False"),
+])
+def test_a_residual_no_prior_names_is_refused_before_any_work(learner, residual, message, trajectories):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        baseline_id(learner, residual=residual).fit(ROBOT, trajectories["train"])
+
+
+def test_a_saved_identification_residual_is_read_with_its_prior_checked(trajectories, tmp_path):
+    """The identification's θ is saved beside the learner's arrays: a file without it, or with it where the residual
+    is Newton–Euler's, or with an unknown residual, is refused in one line naming the field."""
+    import json
+
+    from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
+    from nfarm.learning.baselines import load_id_model
+
+    model = baseline_id("ridge", {"basis": "generic"}, residual="identification").fit(ROBOT, trajectories["train"])
+    model.save(tmp_path)
+    path = tmp_path / "baseline_id.json"
+    data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
+    for edit, field in (({"prior": None}, "prior"), ({"prior": data["prior"][:-1]}, "prior"), ({"prior": "θ"}, "prior"),
+                        ({"residual": True}, "prior"), ({"residual": "learned"}, "residual")):
+        path.write_text(json.dumps(with_content_digest({**data, **edit})))       # edited, as if saved so
+        with pytest.raises(ParamsError, match=rf"baseline_id.json: {field}\b"):
+            load_id_model(tmp_path, ROBOT)
 
 
 @pytest.mark.parametrize("learner", ["kernel", "boosting", "mlp"])

@@ -135,27 +135,27 @@ def _sensor_error(study, draw, data, tau_measured):
 
 def test_a_draws_models_are_judged_on_the_test_states_as_the_arm_built_for_it_reads_them(built):
     """Issue 65: the test split is never redrawn, but a draw's models were trained on another built
-    arm, so its readings of the same states are that arm's (datasets.test_readings): draw 0's are
+    arm, so its readings of the same states are that arm's (datasets.held_out_readings): draw 0's are
     the split's own; draw 2's differ from them by the arms' difference, within the sensor's noise of
     the arm built for draw 2 and not of chapter 5's, and draw 2's payload case is its own too."""
-    from nfarm.study.datasets import test_readings
+    from nfarm.study.datasets import held_out_readings
     study, out, _ = built
     test = load(out / "id_test.npz", study.robot, study)
-    own = test_readings(study, 0, test)
+    own = held_out_readings(study, 0, test)
     np.testing.assert_array_equal(own["tau_measured"], test["tau_measured"])
     np.testing.assert_array_equal(own["tau_payload"], test["tau_payload"])
-    other = test_readings(study, 2, test)
+    other = held_out_readings(study, 2, test)
     assert set(other) == {"tau_measured", "tau_payload"}
     noise_sd = np.sqrt(study.id.noise ** 2 + study.id.torque_per_count ** 2 / 12)
     np.testing.assert_allclose(_sensor_error(study, 2, test, other["tau_measured"]).std(axis=0), noise_sd, rtol=0.25)
     wrong = np.sqrt(np.mean(_sensor_error(study, 0, test, other["tau_measured"]) ** 2, axis=0))
     assert (wrong > 2 * noise_sd).any(), "draw 2's readings are not chapter 5's arm's"
     assert not np.allclose(other["tau_payload"] - other["tau_measured"], own["tau_payload"] - own["tau_measured"])
-    np.testing.assert_array_equal(test_readings(study, 2, test)["tau_measured"], other["tau_measured"])   # seeded
+    np.testing.assert_array_equal(held_out_readings(study, 2, test)["tau_measured"], other["tau_measured"])   # seeded
     with pytest.raises(ValueError, match="declares no measured arm"):
         unmeasured = copy.deepcopy(small_study())
         del unmeasured["id"]["measured"]
-        test_readings(study_from_dict(unmeasured), 1, test)
+        held_out_readings(study_from_dict(unmeasured), 1, test)
 
 
 def test_splits_are_disjoint(built):

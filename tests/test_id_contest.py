@@ -5,6 +5,7 @@ fitting a frozen model that the test split reuses."""
 from __future__ import annotations
 
 import collections
+import json
 
 import numpy as np
 import pytest
@@ -124,13 +125,21 @@ def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
     assert {n for n, k in tried.items() if k != 2} == {n for n in tried if n.rsplit(":", 1)[1] in untunable}
     assert all(k == 1 for n, k in tried.items() if n.rsplit(":", 1)[1] in untunable)
     assert {n.rsplit(":", 1)[0] for n in tried} == {"generic", "structure-informed", "rigid-body span", "identification",
-                                                    "nominal model + learned"}
+                                                    "identification + learned", "nominal model + learned"}
     # Every tier but the rigid-body span (an identification in disguise: ridge alone) has its ANFIS
     assert {tier for tier in {n.rsplit(":", 1)[0] for n in tried} if f"{tier}:anfis" not in tried} == {"rigid-body span"}
     assert tried["rigid-body span:ridge"] == 2 and "structure-informed:ridge" in tried
     # Issue 65: the identification tier is a contest — the learners given the regressor's columns beside its least squares
     assert {n for n in tried if n.startswith("identification:")} == {f"identification:{k}" for k in (
         "anfis", "identification", "kernel", "boosting", "mlp")}
+    # ... and identification plus a learned residual, each learner (issue 65), with the configurations of the nominal tier's
+    assert {n for n in tried if n.startswith("identification + learned:")} == {f"identification + learned:{k}" for k in (
+        "anfis", "ridge", "kernel", "boosting", "mlp")}
+    residual_options = lambda prior: sorted(json.dumps({k: v for k, v in c.params["options"].items() if k != "residual"},  # noqa: E731
+                                                       sort_keys=True) for c in sweep.cells
+                                            if (c.params.get("options") or {}).get("residual") == prior
+                                            and c.params["learner"] != "friction" and c.params["study_file"].endswith("intelbot5.yaml"))
+    assert residual_options("identification") == residual_options(True)
 
 
 def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
@@ -151,7 +160,7 @@ def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "learner": "forest"}))
     with pytest.raises(ParamsError, match="id_contest: options: random_state is the cell's own parameter"):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"random_state": 3}}))
-    with pytest.raises(ParamsError, match="id_contest: options: residual must be true or false, got 'no'"):
+    with pytest.raises(ParamsError, match="id_contest: options: residual must be false, true .*'nominal' or 'identification', got 'no'"):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"residual": "no"}}))
     # An ANFIS cell without options: the tier of LearnedID's defaults (its own joint's state: generic)
     anfis = JOBS["id_contest"].function(JOBS["id_contest"].complete(
@@ -161,9 +170,9 @@ def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
 
 def test_a_draws_test_cell_judges_its_model_against_the_arm_built_for_that_draw(tmp_path):
     """Issue 65: draw 1's data are the readings of another built arm, and its test cell judges its
-    model on the study's own test trajectories as that arm reads them (datasets.test_readings), not
+    model on the study's own test trajectories as that arm reads them (datasets.held_out_readings), not
     as chapter 5's arm does: the identification fitted on draw 1 is judged against draw 1's arm
-    exactly, and misses chapter 5's arm by more on every joint (by a quarter on one, on smoke data)."""
+    exactly, and misses chapter 5's arm by more on every joint (by more than a tenth on one, on smoke data)."""
     from nfarm.study import datasets
     from nfarm.study.jobs import JOBS, id_contest_model
     from nfarm.study.study_files import load_study, smoke_study
@@ -175,10 +184,10 @@ def test_a_draws_test_cell_judges_its_model_against_the_arm_built_for_that_draw(
     exact = datasets.load(datasets.dataset_dir(study) / "id_test.npz", study.robot, study)
     states = [exact[f"{k}_measured"] for k in ("q", "qd", "qdd")]
     predicted = id_contest_model(cell).predict(*states)
-    own_arm = datasets.test_readings(study, 1, exact)["tau_measured"]
+    own_arm = datasets.held_out_readings(study, 1, exact)["tau_measured"]
     np.testing.assert_allclose(test["rmse"], np.sqrt(((predicted - own_arm) ** 2).mean(axis=0)), rtol=1e-12)
     chapter_5s = np.sqrt(((predicted - exact["tau_measured"]) ** 2).mean(axis=0))
-    assert (chapter_5s > np.array(test["rmse"])).all() and (chapter_5s / np.array(test["rmse"])).max() > 1.25
+    assert (chapter_5s > np.array(test["rmse"])).all() and (chapter_5s / np.array(test["rmse"])).max() > 1.1
 
 
 def test_a_finalist_is_saved_where_chapters_7_and_8_read_it(tmp_path):

@@ -109,6 +109,13 @@ def test_the_encoding_credit_finds_the_joints_the_arms_plane_gives(tmp_path, dat
     floor, anfis = credit.rows["arm_plane", report.LINEAR], credit.rows["arm_plane", "ANFIS"]
     assert f"the ANFIS brings the median to {interval_text(anfis['position median'])} mm" in text
     assert floor["position median"].value > anfis["position median"].value
+    # The fuzzy c-means ANFIS on the recipe's inputs (chapter 6's contestant, issue 64), where it was saved: its row beside
+    # the recipe's, its own errors
+    with_fcm = report.encoding_credit(ROBOT, tested, models["learned"], {**recipe, "ik_fcm": Offset(data, 0.02)},
+                                      models["rivals"], data, tmp_path, **BOOT)
+    assert list(with_fcm.errors) == [("arm_plane", report.LINEAR), ("arm_plane", "ANFIS"),
+                                     ("arm_plane", report.ANFIS_FCM), ("arm_plane", f"best rival: {tested.rbf}")]
+    np.testing.assert_allclose(with_fcm.errors["arm_plane", report.ANFIS_FCM]["joint"], 0.02, atol=1e-12)
 
 
 def test_the_structure_ablation_without_a_structured_model_says_so(tested, data, models):

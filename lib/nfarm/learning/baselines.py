@@ -76,7 +76,7 @@ from pathlib import Path
 import numpy as np
 
 from ..infra.reading import ParamsError, Validator
-from ..model.dynamics import regressor, rnea
+from ..model.dynamics import rnea
 from ..model.robot import Robot
 from .baseline_parts import (PerJointLeastSquares, StackedLeastSquares, forest_values, read_trees, timed_learners,
                              trees_state)
@@ -84,6 +84,7 @@ from .bases import angle_sums, basis
 from .id_baseline_base import (ANGLES, BASELINES, FILE_NAME, FORMAT, MAXIMA, BaselineID, Standardised, baseline_id,
                                smooth_inputs)
 from .learned_id import ID_FILE_NAME, LearnedID, id_features
+from .priors import drive_terms, identification_columns
 
 __all__ = ["BaselineID", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "option_names", "label",
            "load_id_model", "regressor_inputs", "LinearID", "RidgeID", "KernelID", "BoostingID", "MLPID", "FrictionID",
@@ -120,18 +121,13 @@ def load_id_model(directory: str | os.PathLike, robot: Robot) -> "BaselineID | L
     raise ParamsError(f"{path}: holds no saved learned-ID model ({FILE_NAME} or {ID_FILE_NAME})")
 
 
-def _drive_terms(qd, qdd) -> np.ndarray:
-    """``(N, n, 3)``: each joint's ``[q̈_j, q̇_j, sign q̇_j]``."""
-    return np.stack([qdd, qd, np.sign(qd)], axis=-1)
-
-
 @BASELINES.register
 class LinearID(BaselineID):
     """Least squares on ``[q, q̇, q̈]`` (module docstring)."""
 
     learner, label = "linear", "least squares on the states"
 
-    def __init__(self, *, residual: bool = False, random_state: int = 0):
+    def __init__(self, *, residual: bool | str = False, random_state: int = 0):
         super().__init__(residual=residual, random_state=random_state)
 
     def _features(self, q, qd, qdd):
@@ -160,7 +156,7 @@ class RidgeID(Standardised):
     learner, label = "ridge", "ridge regression"
     _state_keys = ("coef", "intercept")
 
-    def __init__(self, basis: str = "generic", alpha: float = 1e-6, *, residual: bool = False, random_state: int = 0):
+    def __init__(self, basis: str = "generic", alpha: float = 1e-6, *, residual: bool | str = False, random_state: int = 0):
         self.basis = basis
         self.alpha = alpha
         super().__init__(residual=residual, random_state=random_state)
@@ -223,7 +219,7 @@ class KernelID(_SmoothInputs, Standardised):
     _state_keys = ("landmarks", "normalization", "coef", "intercept", "gamma")
 
     def __init__(self, n_components: int = 1000, gamma: float = 0.1, alpha: float = 1e-6, angles: str = "joints", *,
-                 residual: bool = False, random_state: int = 0):
+                 residual: bool | str = False, random_state: int = 0):
         self.n_components = n_components
         self.gamma = gamma
         self.alpha = alpha
@@ -267,7 +263,7 @@ class BoostingID(_SmoothInputs, BaselineID):
     learner, label = "boosting", "gradient-boosted trees"
 
     def __init__(self, max_iter: int = 300, learning_rate: float = 0.1, max_leaf_nodes: int = 31,
-                 angles: str = "joints", *, residual: bool = False, random_state: int = 0):
+                 angles: str = "joints", *, residual: bool | str = False, random_state: int = 0):
         self.max_iter = max_iter
         self.learning_rate = learning_rate
         self.max_leaf_nodes = max_leaf_nodes
@@ -300,7 +296,7 @@ class MLPID(_SmoothInputs, Standardised):
     _state_keys = ("weights", "biases")
 
     def __init__(self, hidden: Sequence[int] = (128, 128), alpha: float = 1e-4, max_iter: int = 200,
-                 patience: int = 10, angles: str = "joints", *, residual: bool = False, random_state: int = 0):
+                 patience: int = 10, angles: str = "joints", *, residual: bool | str = False, random_state: int = 0):
         self.hidden = hidden
         self.alpha = alpha
         self.max_iter = max_iter
@@ -396,7 +392,7 @@ class FrictionID(_LeastSquaresLaw):
         super().__init__(residual=residual, random_state=random_state)
 
     def _features(self, q, qd, qdd):
-        return _drive_terms(qd, qdd)                                       # (N, n, 3)
+        return drive_terms(qd, qdd)                                       # (N, n, 3)
 
     def _estimator(self, options):
         return PerJointLeastSquares()
@@ -421,10 +417,7 @@ class IdentificationID(_LeastSquaresLaw):
         super().__init__(residual=residual, random_state=random_state)
 
     def _features(self, q, qd, qdd):                                      # (N, n, 10 n + 3 n)
-        n = q.shape[1]
-        own = _drive_terms(qd, qdd)                                        # (N, n, 3): joint j's drive terms
-        drives = (np.eye(n)[None, :, :, None] * own[:, :, None, :]).reshape(len(q), n, 3 * n)
-        return np.concatenate([regressor(self.robot_, q, qd, qdd), drives], axis=-1)
+        return identification_columns(self.robot_, q, qd, qdd)
 
     def _estimator(self, options):
         return StackedLeastSquares()

@@ -48,8 +48,11 @@ bases without their products, the ``affine`` input sets, the ``sin, cos`` of the
 or mass), *rigid-body span* (a linear fit of the ``chain`` basis with its products, ``"chain"`` and ``"chain_drives"``:
 its span holds the rigid-body model of an arm of this kind exactly, or nearly, so the fit is an identification in disguise — a
 tier of its own, not a rival of the structure-informed learners, issue 65), *identification* (the geometry known, the
-inertial parameters fitted: the rigid-body regressor, its columns as a learner's inputs too), or *nominal model +
-learned* (Newton–Euler with the nominal masses, and a learned or identified correction of what it misses).
+inertial parameters fitted: the rigid-body regressor, its columns as a learner's inputs too), *identification +
+learned* (the same knowledge: the identification of the arm as built, fitted first by least squares, and a learner of
+what it misses, ``residual="identification"``, :mod:`nfarm.learning.priors` — a tier of its own, so that each learner
+there has the same budget as in the others), or *nominal model + learned* (Newton–Euler with the nominal masses, and a
+learned or identified correction of what it misses).
 """
 
 from __future__ import annotations
@@ -72,7 +75,8 @@ DRIVES = "_drives"
 
 #: The tiers of prior knowledge, by key, as tables name them (module docstring).
 TIERS = {"generic": "generic", "structure": "structure-informed", "span": "rigid-body span",
-         "identification": "identification", "nominal": "nominal model + learned"}
+         "identification": "identification", "identified": "identification + learned",
+         "nominal": "nominal model + learned"}
 _STRUCTURE_INPUTS, _IDENTIFICATION_INPUTS = ("affine", "affine_drives"), ("regressor", "regressor_drives")
 _STRUCTURE_BASES = ("chain_linear", "chain_linear_drives")
 _SPAN_BASES = ("chain", "chain_drives")
@@ -80,7 +84,8 @@ _SPAN_BASES = ("chain", "chain_drives")
 
 def tier_of(params) -> str:
     """The tier (a :data:`TIERS` label) of a learned inverse dynamics described by ``params``, a
-    sweep cell's flat parameters: ``residual`` (true: Newton–Euler's nominal model is used), the
+    sweep cell's flat parameters: ``residual`` (true or ``"nominal"``: Newton–Euler's nominal model is
+    used; ``"identification"``: the identification of the arm as built), the
     ANFIS's ``inputs`` (``learned_id`` cells) or a baseline's ``learner`` and ``basis`` or
     ``angles`` (the ``identification`` learner fits the inertial parameters on the known geometry;
     ``angles="regressor"`` gives a learner the regressor's columns).
@@ -96,7 +101,11 @@ def tier_of(params) -> str:
         ('structure-informed', 'structure-informed')
         >>> tier_of({"learner": "ridge", "basis": "chain_drives"}), tier_of({"learner": "mlp", "angles": "regressor"})
         ('rigid-body span', 'identification')
+        >>> tier_of({"learner": "mlp", "residual": "identification"}), tier_of({"inputs": "own", "residual": "nominal"})
+        ('identification + learned', 'nominal model + learned')
     """
+    if params.get("residual") == "identification":
+        return TIERS["identified"]
     if params.get("residual"):
         return TIERS["nominal"]
     if params.get("inputs") is not None and params.get("learner") is None:

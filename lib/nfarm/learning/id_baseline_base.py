@@ -8,7 +8,9 @@ the baselines from there.
 Targets are standardised per joint (each joint's error then counts alike, as in the NRMSE the
 chapters report), unless the learner is a physical law (``scaled_targets = False``). Every random
 draw comes from ``random_state``; a fit is a function of its options, data (and the MLP's validation
-states) and seed. With ``residual=True`` a baseline learns ``τ − rnea`` and predicts ``rnea + learned``.
+states) and seed. With ``residual=True`` a baseline learns ``τ − rnea`` and predicts ``rnea + learned``; with
+``residual="identification"`` it learns what the identification of the arm as built, fitted first on the same
+training states, misses (:mod:`nfarm.learning.priors`).
 
 **A baseline's part** (the hooks a subclass writes): ``learner`` and ``label`` (class attributes:
 the registry's name, the words of tables and figures), ``__init__`` with its options (then
@@ -31,11 +33,11 @@ import numpy as np
 from .. import __version__
 from ..infra.arguments import is_integer, is_number
 from ..infra.reading import Validator, json_ready, show
-from ..model.dynamics import rnea
 from ..model.robot import Robot, robot_hash
 from .bases import BASES
 from .estimator import Registry, SavedModel, check_robot
 from .learned_id import id_states
+from .priors import check_residual, fit_identification, identification_width, prior_of, prior_torques
 
 __all__ = ["BaselineID", "Standardised", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "smooth_inputs"]
 
@@ -58,10 +60,10 @@ def smooth_inputs(angles, qd, qdd) -> np.ndarray:
     return np.concatenate([np.sin(angles), np.cos(angles), qd, qdd], axis=1)
 
 
-def baseline_id(learner: str = "ridge", options: Mapping | None = None, residual: bool = False,
+def baseline_id(learner: str = "ridge", options: Mapping | None = None, residual: bool | str = False,
                 random_state: int = 0) -> "BaselineID":
     """The baseline registered as ``learner`` (:data:`BASELINES`) with its ``options`` (a sweep
-    file's) and the common ``residual`` and ``random_state``.
+    file's) and the common ``residual`` (:data:`nfarm.learning.priors.RESIDUALS`) and ``random_state``.
 
     Raises:
         ValueError: an unknown learner or option, in one line naming the valid ones.
@@ -81,11 +83,14 @@ class BaselineID(SavedModel):
     ``fit`` checks them and returns the baseline).
 
     Args (common to every baseline, keyword-only in the subclasses):
-        residual: learn ``τ − rnea(q, q̇, q̈)`` instead of ``τ``.
+        residual: learn ``τ − rnea(q, q̇, q̈)`` instead of ``τ`` (``True`` or ``"nominal"``), or
+            ``τ`` minus the identification of the arm as built, fitted first on the same training
+            states (``"identification"``; :mod:`nfarm.learning.priors`).
         random_state: seed of every random draw.
 
     Learned attributes: ``state_`` (the fitted arithmetic as arrays, what :meth:`predict` uses
-    and :meth:`save` writes), ``model_`` (the scikit-learn estimator, after :meth:`fit` only),
+    and :meth:`save` writes), ``prior_`` (the identification's ``θ (13 n,)`` under
+    ``residual="identification"``, else ``None``), ``model_`` (the scikit-learn estimator, after :meth:`fit` only),
     ``options_`` (the options checked, as saved), ``robot_``, ``y_mean_``, ``y_scale_``,
     ``fit_seconds_``, ``n_features_`` (inputs the learner sees), ``epochs_`` and ``best_epoch_``
     (the MLP stopped early on validation states; ``None`` otherwise).
@@ -99,14 +104,22 @@ class BaselineID(SavedModel):
     label: ClassVar[str]
     #: ``False``: a physical law, fitted without an offset or a scaling of the targets.
     scaled_targets: ClassVar[bool] = True
-    #: ``True``: a residual of Newton–Euler only; ``False``: never one; ``None``: either. The
-    #: reason, in words, follows the learner's name in the error.
+    #: ``True``: a residual of Newton–Euler's nominal model only; ``False``: never a residual;
+    #: ``None``: any :data:`~nfarm.learning.priors.RESIDUALS`. The reason, in words, follows the
+    #: learner's name in the error.
     residual_only: ClassVar[bool | None] = None
     residual_reason: ClassVar[str] = ""
 
-    def __init__(self, *, residual: bool = False, random_state: int = 0):
+    def __init__(self, *, residual: bool | str = False, random_state: int = 0):
         self.residual = residual
         self.random_state = random_state
+
+    def _check_prior(self) -> None:
+        """Refuse a ``residual`` this learner cannot have, in one line."""
+        check_residual(self.residual)
+        wanted = {True: "nominal", False: None}.get(self.residual_only)
+        if self.residual_only is not None and prior_of(self.residual) != wanted:
+            raise ValueError(f"learner {self.learner!r} {self.residual_reason}: give residual={self.residual_only}")
 
     @classmethod
     def hyper_params(cls) -> list[str]:
@@ -176,13 +189,13 @@ class BaselineID(SavedModel):
             raise TypeError(f"{type(self).__name__} is not a baseline of its own: fit one of {', '.join(BASELINES)} "
                             f"(nfarm.learning.baselines.BASELINES)")
         options = self._options()
-        if not isinstance(self.residual, bool):
-            raise ValueError(f"residual must be True or False, got {self.residual!r}")
-        if self.residual_only is not None and self.residual != self.residual_only:
-            raise ValueError(f"learner {self.learner!r} {self.residual_reason}: give residual={self.residual_only}")
+        self._check_prior()
         q, qd, qdd, tau = id_states(train, robot, "train")
         self.robot_, self.options_ = robot, options
-        target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
+        start = time.perf_counter()
+        self.prior_ = fit_identification(robot, q, qd, qdd, tau) if prior_of(self.residual) == "identification" else None
+        target = tau - prior_torques(robot, self.residual, q, qd, qdd, self.prior_)
+        prior_seconds = time.perf_counter() - start
         if not self.scaled_targets:      # a physical law: no offset, no scaling
             self.y_mean_, self.y_scale_ = np.zeros(robot.n), np.ones(robot.n)
         else:
@@ -197,14 +210,14 @@ class BaselineID(SavedModel):
             # A budget of epochs is the design: reaching it is not a failure.
             warnings.simplefilter("ignore", ConvergenceWarning)
             self.model_ = self._train(options, X, Z, robot, val)
-        self.fit_seconds_ = time.perf_counter() - start
+        self.fit_seconds_ = time.perf_counter() - start + prior_seconds
         self.state_ = self._state_of(self.model_)
         return self
 
     def _validation(self, robot: Robot, val: Mapping) -> tuple[np.ndarray, np.ndarray]:
         """The validation states' features and scaled targets, as the training states'."""
         vq, vqd, vqdd, vtau = id_states(val, robot, "val")
-        v_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
+        v_target = vtau - prior_torques(robot, self.residual, vq, vqd, vqdd, self.prior_)
         return self._features(vq, vqd, vqdd), (v_target - self.y_mean_) / self.y_scale_
 
     def predict(self, q, qd, qdd) -> np.ndarray:
@@ -212,23 +225,22 @@ class BaselineID(SavedModel):
         self._check_fitted()
         q, qd, qdd = id_states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)
         y = self._predict_state(self.state_, self._features(q, qd, qdd)).reshape(len(q), -1)
-        tau = y * self.y_scale_ + self.y_mean_
-        if self.residual:
-            tau = tau + rnea(self.robot_, q, qd, qdd)
-        return tau
+        return y * self.y_scale_ + self.y_mean_ + prior_torques(self.robot_, self.residual, q, qd, qdd, self.prior_)
 
     # -- persistence --------------------------------------------------------------------------
 
     def to_dict(self) -> dict:
         """The model as JSON-ready fields: its learner and options, the robot's name and hash,
-        the targets' scaling and the learner's arrays (``state``)."""
+        the targets' scaling, the learner's arrays (``state``) and, for ``residual="identification"``,
+        the identification it adds to (``prior``: ``θ``; a file of another residual has no such field)."""
         self._check_fitted()
         return {"format": FORMAT, "nfarm_version": __version__, "learner": self.learner,
                 "options": json_ready(self.options_), "residual": self.residual, "random_state": self.random_state,
                 "robot": self.robot_.name, "robot_params_sha256": robot_hash(self.robot_), "n_joints": self.robot_.n,
                 "n_features": int(self.n_features_), "y_mean": json_ready(self.y_mean_),
                 "y_scale": json_ready(self.y_scale_), "fit_seconds": float(self.fit_seconds_),
-                "epochs": self.epochs_, "best_epoch": self.best_epoch_, "state": json_ready(self.state_)}
+                "epochs": self.epochs_, "best_epoch": self.best_epoch_, "state": json_ready(self.state_),
+                **({} if self.prior_ is None else {"prior": json_ready(self.prior_)})}
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "BaselineID":
@@ -243,22 +255,31 @@ class BaselineID(SavedModel):
         keys = ("format", "nfarm_version", "learner", "options", "residual", "random_state", "robot",
                 "robot_params_sha256", "n_joints", "n_features", "y_mean", "y_scale", "fit_seconds", "epochs",
                 "best_epoch", "state")
-        v.mapping(data, "", dict.fromkeys(keys, True))
+        v.mapping(data, "", {**dict.fromkeys(keys, True), "prior": False})
         learner = BASELINES[v.choice(data["learner"], "learner", tuple(BASELINES))]
         if not issubclass(learner, cls):
             v.fail("learner", f"must be {cls.learner!r} (a {cls.__name__}), got {show(data['learner'])}")
         check_robot(v, data, robot)
         n = v.integer(data["n_joints"], "n_joints", lo=robot.n, hi=robot.n)
         options = v.mapping(data["options"], "options", dict.fromkeys(learner.hyper_params(), True))
-        model = learner(**options, residual=v.boolean(data["residual"], "residual"),
-                        random_state=v.integer(data["random_state"], "random_state", lo=0))
+        residual = data["residual"]
+        if not (isinstance(residual, bool) or residual in ("nominal", "identification")):
+            v.fail("residual", f"must be true, false, 'nominal' or 'identification', got {show(residual)}")
+        model = learner(**options, residual=residual, random_state=v.integer(data["random_state"], "random_state", lo=0))
         try:
             options = model._options()
         except ValueError as exc:
             v.fail("options", str(exc))
-        if model.residual_only is not None and model.residual != model.residual_only:
-            v.fail("residual", f"learner {model.learner!r} {'needs' if model.residual_only else 'refuses'} residual=true")
+        try:
+            model._check_prior()
+        except ValueError as exc:
+            v.fail("residual", str(exc))
         model.robot_, model.options_ = robot, options
+        model.prior_ = None
+        if prior_of(residual) == "identification":
+            model.prior_ = v.array(data.get("prior"), "prior", (identification_width(robot),))
+        elif data.get("prior") is not None:
+            v.fail("prior", f"must be absent for residual={show(residual)} (only an identification residual has one)")
         model.n_features_ = v.integer(data["n_features"], "n_features", lo=1, hi=10_000_000)
         model.y_mean_ = v.array(data["y_mean"], "y_mean", (n,))
         model.y_scale_ = v.array(data["y_scale"], "y_scale", (n,))

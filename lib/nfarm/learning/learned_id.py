@@ -37,6 +37,7 @@ from ..model.robot import Robot, joint_array, robot_hash
 from .anfis import ANFIS, fit_shared
 from .bases import basis, basis_width
 from .encoding import check_scaling, input_scaling
+from .priors import check_residual, fit_identification, identification_width, prior_of, prior_torques
 from .per_joint import (PerJointModel, CHUNK, FAR, beyond_range, check_far, check_joint_array, joint_anfis_options,
                         model_lines, read_joint_models, warn_far)
 
@@ -156,7 +157,9 @@ class LearnedID(PerJointModel):
         inputs: what each joint's model sees (:data:`INPUT_SETS`, :func:`id_features`).
         residual: learn ``τ − rnea(q, q̇, q̈)`` (what the rigid-body model misses: friction,
             armature) and predict ``rnea + ANFIS`` (semi-parametric, Nguyen-Tuong & Peters
-            2010); ``False`` learns the torques themselves.
+            2010; ``True`` or ``"nominal"``), or learn what the identification of the arm as built,
+            fitted first on the same training states, misses (``"identification"``,
+            :mod:`nfarm.learning.priors`); ``False`` learns the torques themselves.
         joint_options: ``None`` or one mapping per joint of ANFIS options overriding the shared.
         shared_premises: train the joints' models together, their rules sharing their
             membership functions (:func:`nfarm.learning.anfis.fit_shared`): one least-squares
@@ -166,7 +169,8 @@ class LearnedID(PerJointModel):
             its own consequents and best epoch; the saved models are ordinary per-joint ones.
         **anfis_options: passed to every joint's :class:`nfarm.learning.anfis.ANFIS`.
 
-    Learned attributes: ``models_``, ``robot_`` (the robot it was fitted or loaded with),
+    Learned attributes: ``models_``, ``prior_`` (the identification's ``θ (13 n,)`` under
+    ``residual="identification"``, else ``None``), ``robot_`` (the robot it was fitted or loaded with),
     ``robot_hash_``, ``robot_name_``, ``n_joints_``, ``input_lo_``, ``input_span_`` (per joint, the inputs' scaling to ``[0, 1]``),
     ``fit_seconds_`` (with shared premises, the joint training's time split evenly).
 
@@ -194,7 +198,7 @@ class LearnedID(PerJointModel):
     _passed_to = ANFIS
     file_name, file_format, what = ID_FILE_NAME, ID_FORMAT, "learned ID"
 
-    def __init__(self, inputs: str = "own", residual: bool = False,
+    def __init__(self, inputs: str = "own", residual: bool | str = False,
                  joint_options: Sequence[Mapping] | None = None, shared_premises: bool = False,
                  **anfis_options):
         self.inputs = inputs
@@ -227,7 +231,7 @@ class LearnedID(PerJointModel):
             ValueError: bad options or data (shapes, NaN, lengths), before any training.
         """
         check_choice("inputs", self.inputs, INPUT_SETS)
-        check_bool("residual", self.residual)
+        check_residual(self.residual)
         check_bool("shared_premises", self.shared_premises)
         if self.shared_premises and self.inputs not in SHARED_INPUT_SETS:
             raise ValueError(f"shared_premises needs inputs every joint sees alike "
@@ -242,11 +246,14 @@ class LearnedID(PerJointModel):
                              "joint_options must not differ between joints")
         q, qd, qdd, tau = id_states(train, robot, "train")
         val_states = id_states(val, robot, "val") if val is not None else None
-        target = tau - rnea(robot, q, qd, qdd) if self.residual else tau
+        self.__dict__.pop("models_", None)       # a failed refit leaves no half-fitted model
+        start = time.perf_counter()
+        prior = fit_identification(robot, q, qd, qdd, tau) if prior_of(self.residual) == "identification" else None
+        target = tau - prior_torques(robot, self.residual, q, qd, qdd, prior)
+        prior_seconds = time.perf_counter() - start
         if val_states is not None:
             vq, vqd, vqdd, vtau = val_states
-            val_target = vtau - rnea(robot, vq, vqd, vqdd) if self.residual else vtau
-        self.__dict__.pop("models_", None)       # a failed refit leaves no half-fitted model
+            val_target = vtau - prior_torques(robot, self.residual, vq, vqd, vqdd, prior)
         self.robot_ = robot
         features = id_features(robot, q, qd, qdd, self.inputs)
         scaling = {id(F): input_scaling(F) for F in features}           # once per distinct array
@@ -268,13 +275,14 @@ class LearnedID(PerJointModel):
                                                       None if val_states is None else val_target[:, j]))
                 seconds.append(time.perf_counter() - start)
         self.robot_hash_, self.robot_name_, self.n_joints_ = robot_hash(robot), robot.name, n
-        self.models_, self.fit_seconds_ = models, seconds
+        self.prior_ = prior
+        self.models_, self.fit_seconds_ = models, [s + prior_seconds / n for s in seconds]
         return self
 
     def predict(self, q, qd, qdd, *, far: float = FAR) -> np.ndarray:
         """Joint torques ``(..., n)`` [N·m] for states ``q, qd, qdd (..., n)`` (batch shapes
         broadcast; one state is the ``()`` batch). A residual model adds ``rnea`` of the robot
-        it was fitted or loaded with. States whose inputs lie more than ``far`` of their
+        it was fitted or loaded with, or its identification of the arm as built. States whose inputs lie more than ``far`` of their
         training range beyond it are predicted with an :class:`OutsideTrainingWarning`.
 
         Raises:
@@ -303,8 +311,8 @@ class LearnedID(PerJointModel):
                 beyond[start:start + CHUNK] = np.max([beyond_range(x) for x in X], axis=0)
                 for j, model in enumerate(self.models_):
                     tau[start:start + CHUNK, j] = model._predict_fast(X[j])[0]
-            if self.residual:
-                tau += rnea(robot, *flat)
+                if self.residual is not False:
+                    tau[start:start + CHUNK] += prior_torques(robot, self.residual, *part, self.prior_)
         bad = ~np.isfinite(tau).all(axis=1)
         if bad.any():
             i = int(np.argmax(bad))
@@ -316,7 +324,8 @@ class LearnedID(PerJointModel):
 
     def describe(self) -> str:
         self._check_fitted()
-        what = "τ − rnea (residual)" if self.residual else "τ"
+        what = {None: "τ", "nominal": "τ − rnea (residual)",
+                "identification": "τ − the identification (residual)"}[prior_of(self.residual)]
         head = (f"LearnedID for {self.robot_name_} ({self.n_joints_} joints), inputs "
                 f"{self.inputs!r} ({', '.join(str(len(lo)) for lo in self.input_lo_)} per joint), "
                 f"learning {what}")
@@ -331,16 +340,19 @@ class LearnedID(PerJointModel):
                 "robot_params_sha256": self.robot_hash_, "n_joints": self.n_joints_,
                 "input_lo": json_ready(self.input_lo_), "input_span": json_ready(self.input_span_),
                 "fit_seconds": list(self.fit_seconds_),
-                "models": [m.to_dict() for m in self.models_]}
+                "models": [m.to_dict() for m in self.models_],
+                **({} if self.prior_ is None else {"prior": json_ready(self.prior_)})}
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedID":
         v = Validator(source)
-        v.mapping(data, "", {**dict.fromkeys(_ID_KEYS, True), "shared_premises": False})
+        v.mapping(data, "", {**dict.fromkeys(_ID_KEYS, True), "shared_premises": False, "prior": False})
         if data["format"] != ID_FORMAT:
             v.fail("format", f"must be {ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
         inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
-        residual = v.boolean(data["residual"], "residual")
+        residual = data["residual"]
+        if not (isinstance(residual, bool) or residual in ("nominal", "identification")):
+            v.fail("residual", f"must be true, false, 'nominal' or 'identification', got {show(residual)}")
         shared_premises = v.boolean(data.get("shared_premises", False), "shared_premises")
         widths = _id_widths(inputs, robot)
         n, options, joint_options, fitted, seconds = read_joint_models(
@@ -355,6 +367,11 @@ class LearnedID(PerJointModel):
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options,
                     shared_premises=shared_premises, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
+        model.prior_ = None
+        if prior_of(residual) == "identification":
+            model.prior_ = v.array(data.get("prior"), "prior", (identification_width(robot),))
+        elif data.get("prior") is not None:
+            v.fail("prior", f"must be absent for residual={show(residual)} (only an identification residual has one)")
         model.input_lo_, model.input_span_ = list(lo), list(span)
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n

@@ -59,7 +59,7 @@ from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Cell, Sweep
 
-__all__ = ["ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "VALIDATION_FILE", "save_validation", "saved_ranking", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
+__all__ = ["SEVEN_FCM", "ID_TIER_DIRS", "ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "VALIDATION_FILE", "save_validation", "saved_ranking", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -87,11 +87,16 @@ SMOKE_SPREAD_SEEDS = (1,)
 KEEP_WITHIN = 2.0
 #: The ANFIS contestants in words a reader knows (a rival's words are its class's ``label``: :func:`label`).
 LABELS = {"anfis:arm_plane": "ANFIS in the arm's plane", "anfis:quat_xyz": "ANFIS, the dissertation's 7 inputs",
+          "anfis:quat_xyz_fcm": "ANFIS, the dissertation's 7 inputs, fuzzy c-means rules",
           "anfis:axes_xyz": "ANFIS on position and two tool axes"}
+#: The ANFIS on the dissertation's seven inputs with fuzzy c-means rules shared by all the joints (issue 64: its best
+#: shot on that encoding, a contestant apart from the recipe's grid, so that what the seven inputs give is the learner's).
+SEVEN_FCM = "anfis:quat_xyz_fcm"
 #: The structure each contestant computes the joints with: ``"arm"`` (the first and last joints affine
 #: maps, the pitch joints learned, the last pitch joint closed from the target's pitch), ``"whole"``
 #: (one model learns all the joints) or ``"recipe"`` (the dissertation's: one ANFIS per joint on its 7 inputs).
-STRUCTURE_OF = {"anfis:arm_plane": "arm", "anfis:quat_xyz": "recipe", "anfis:axes_xyz": "whole"}
+STRUCTURE_OF = {"anfis:arm_plane": "arm", "anfis:quat_xyz": "recipe", "anfis:quat_xyz_fcm": "whole",
+                "anfis:axes_xyz": "whole"}
 
 
 def structure_of(name: str) -> str:
@@ -111,6 +116,10 @@ def learner_of(name: str) -> str:
     return name.split(":", 1)[0]
 
 
+#: The directory of each learned-ID tier's finalists under ``id_measured/`` (:func:`id_model_dir`).
+ID_TIER_DIRS = {TIERS["generic"]: "generic", TIERS["structure"]: "structure_informed", TIERS["span"]: "rigid_body",
+                TIERS["identification"]: "identification", TIERS["identified"]: "identified",
+                TIERS["nominal"]: "nominal"}
 #: The learned-ID contest's metrics, in order (validation, lower is better).
 ID_RANKED_BY = ("worst_nrmse", "worst_rmse")
 
@@ -209,18 +218,22 @@ def id_contending(chosen: Mapping[str, CellResult], ranked_by: Sequence[str] = I
 
 
 def family(params: Mapping[str, Any]) -> str:
-    """The contestant a cell's parameters belong to: ``"anfis:<encoding>"`` for an ANFIS, else
-    the rival's kind, ``"<kind>:arm"`` for a rival in the ANFIS's structure (its option
-    ``structure: arm``, :data:`nfarm.learning.ik_rivals.STRUCTURES`).
+    """The contestant a cell's parameters belong to: ``"anfis:<encoding>"`` for an ANFIS (on the
+    dissertation's seven inputs with fuzzy c-means rules, :data:`SEVEN_FCM`: the recipe's
+    ``"anfis:quat_xyz"`` is a grid), else the rival's kind, ``"<kind>:arm"`` for a rival in the
+    ANFIS's structure (its option ``structure: arm``, :data:`nfarm.learning.ik_rivals.STRUCTURES`).
 
     Example:
         >>> family({"learner": "rbf", "options": {"structure": "arm", "neighbors": 64}})
         'rbf:arm'
         >>> family({"learner": "anfis", "encoding": "arm_plane"})
         'anfis:arm_plane'
+        >>> family({"learner": "anfis", "encoding": "quat_xyz", "options": {"partition": "fcm", "n_rules": 8}})
+        'anfis:quat_xyz_fcm'
     """
     if params["learner"] == "anfis":
-        return f"anfis:{params['encoding']}"
+        fcm = dict(params.get("options") or {}).get("partition") == "fcm"
+        return SEVEN_FCM if params["encoding"] == "quat_xyz" and fcm else f"anfis:{params['encoding']}"
     structure = dict(params.get("options") or {}).get("structure", "whole")
     return params["learner"] if structure == "whole" else f"{params['learner']}:{structure}"
 
@@ -516,12 +529,17 @@ class IDContest:
 
 def id_model_dir(models_dir: str | os.PathLike, tier: str, slot: str) -> Path:
     """Where chapter 6.8 saves a tier's finalist for ``robot``'s models directory: ``slot``
-    ``"anfis"`` or ``"rival"`` under ``models_dir/id_measured/<tier's first word>/``
-    (``generic``, ``structure_informed``, ``identification``, ``nominal``); read it with
-    :func:`nfarm.learning.baselines.load_id_model`."""
+    ``"anfis"`` or ``"rival"`` under ``models_dir/id_measured/<tier>/`` (:data:`ID_TIER_DIRS`:
+    ``generic``, ``structure_informed``, ``rigid_body``, ``identification``, ``identified``,
+    ``nominal``; another tier's first word); read it with :func:`nfarm.learning.baselines.load_id_model`.
+
+    Example:
+        >>> id_model_dir("m", "identification + learned", "rival").as_posix()
+        'm/id_measured/identified/rival'
+    """
     if slot not in ("anfis", "rival"):
         raise ValueError(f"slot must be 'anfis' or 'rival', got {slot!r}")
-    return Path(models_dir) / "id_measured" / tier.split()[0].replace("-", "_") / slot
+    return Path(models_dir) / "id_measured" / ID_TIER_DIRS.get(tier, tier.split()[0].replace("-", "_")) / slot
 
 
 def id_contest(seed0: Iterable[CellResult], spread: Iterable[CellResult] = ()) -> IDContest:

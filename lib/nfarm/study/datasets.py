@@ -47,7 +47,7 @@ from .id_trajectories import current_sensed, measured_states, random_trajectorie
 from .regions import STREAMS, IKRegion, ik_samples
 from .study_files import SPLITS, Study, redrawn
 
-__all__ = ["Dataset", "build_datasets", "built_arm", "measured_readings", "test_readings", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
+__all__ = ["Dataset", "build_datasets", "built_arm", "measured_readings", "held_out_readings", "load", "dataset_dir", "inputs_hash", "split_seed", "DATA_VERSION",
            "SPLITS"]
 
 #: Version of the generating code: bump when the same inputs would give different data.
@@ -258,7 +258,7 @@ def measured_readings(study: Study, data: Mapping[str, np.ndarray], stream: list
     return out
 
 
-def test_readings(study: Study, draw: int, test: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+def held_out_readings(study: Study, draw: int, test: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     """What the arm built for ``draw`` (:func:`built_arm` of the redrawn study) reads on the
     test split's exact states ``test`` (the study's own ``id_test``, never redrawn:
     ``q, qd, qdd, tau``): ``tau_measured`` and, where the built arm declares a payload,

@@ -183,6 +183,10 @@ def contest_prose(ranked: Sequence[Replicates], spent: Mapping[str, tuple], rung
         g = by_name["anfis:quat_xyz"]
         text += (f"The dissertation's 7-input recipe ranks {ranked.index(g) + 1} of {len(ranked)} at "
                  f"{seeds_text(g, 'position_p95_mm', mm_text)} mm. ")
+    if contest.SEVEN_FCM in by_name:
+        g = by_name[contest.SEVEN_FCM]
+        text += (f"On the same seven inputs with fuzzy c-means rules, the ANFIS ranks {ranked.index(g) + 1} of "
+                 f"{len(ranked)} at {seeds_text(g, 'position_p95_mm', mm_text)} mm. ")
     tried = {v[0] for v in spent.values()}
     fewest = min(tried)
     text += (f"Every contestant tried {fewest} configuration{'s' if fewest != 1 else ''} on {contest.RUNG_FRACTION:.0%} "

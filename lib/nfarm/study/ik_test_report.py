@@ -44,7 +44,7 @@ from .rows import (IK_METRICS, ROLE_BEST_BASELINE, ROLE_CHOSEN, ROLE_EXACT, ROLE
                    interval_text)
 from .verdict_rows import IK_TARGETS, target_verdict
 
-__all__ = ["FLOOR", "DISS", "FULL", "LM_NAME", "CLOSED_NAME", "LINEAR", "ANFIS", "EXACT_JOINT_DEG", "IKTest",
+__all__ = ["FLOOR", "DISS", "FULL", "LM_NAME", "CLOSED_NAME", "LINEAR", "ANFIS", "ANFIS_FCM", "EXACT_JOINT_DEG", "IKTest",
            "evaluate_ik", "joint_errors_table", "tool_errors_table", "timing_table", "ik_summaries", "accuracy_prose", "closed_form_prose", "Credit",
            "encoding_credit", "credit_table", "credit_prose", "Structure", "structure_test", "structure_table",
            "structure_prose"]
@@ -57,8 +57,10 @@ DISS = "ANFIS, dissertation's recipe (assumed), region data"
 FULL = "ANFIS, dissertation's recipe (assumed), full-range data (its own test set)"
 LM_NAME = "Levenberg–Marquardt (chapter 2)"
 CLOSED_NAME = "closed form (chapter 2), the region's solution"
-#: The credit ablation's learners (:func:`encoding_credit`).
+#: The credit ablation's learners (:func:`encoding_credit`): the linear floor, the ANFIS (on the seven inputs, the
+#: dissertation's recipe), and on the seven inputs the ANFIS of fuzzy c-means rules (chapter 6's contestant).
 LINEAR, ANFIS = "a linear map of the inputs", "ANFIS"
+ANFIS_FCM = "ANFIS, fuzzy c-means rules (contest)"
 #: [deg] a linear map's joint RMSE below this gives that joint (:func:`credit_prose`).
 EXACT_JOINT_DEG = 0.05
 
@@ -285,7 +287,8 @@ def encoding_credit(robot: Robot, tested: IKTest, learned, recipe: Mapping[str, 
     """Each encoding's simplest learner — a least-squares linear map of its inputs
     (:func:`nfarm.study.ablation.linear_on_encoding`, fitted on ``data["ik_train"]``;
     ``max_out_of_plane`` [rad] as chapter 6's contest's) — beside the ANFIS and the best rival
-    that use it, on the test poses. The best rival's chosen configuration is trained once more on
+    that use it, on the test poses; on the seven inputs the recipe's ANFIS and, where chapter 6
+    saved it (``recipe["ik_fcm"]``), the ANFIS of fuzzy c-means rules (:data:`ANFIS_FCM`). The best rival's chosen configuration is trained once more on
     the encoding it was not chosen on, as one model of all the joints (seed 0; kept under
     ``cache_dir``, :func:`nfarm.learning.model_cache.fit_cached`). An arm the arm's plane cannot
     describe has one encoding: its rows once."""
@@ -300,6 +303,9 @@ def encoding_credit(robot: Robot, tested: IKTest, learned, recipe: Mapping[str, 
         floor_model = linear_on_encoding(robot, encoding, train, max_out_of_plane=max_out_of_plane)
         credit[encoding, LINEAR] = ik_errors(robot, floor_model.predict(test["T"]), test["q"], test["T"])
         credit[encoding, ANFIS] = tested.errors[anfis_name]
+        if encoding == recipe["ik"].encoding and "ik_fcm" in recipe:
+            fcm = recipe["ik_fcm"]
+            credit[encoding, ANFIS_FCM] = ik_errors(robot, fcm.predict(test["T"]), test["q"], test["T"])
         if encoding == best.encoding:
             credit[encoding, f"best rival: {rbf}"] = tested.errors[rbf]
         else:       # one model of all the joints: the ANFIS's structure needs the arm's plane
@@ -339,7 +345,8 @@ def credit_table(credit: Credit, *, level: float = 0.95, floor: float = FLOOR) -
 def credit_prose(credit: Credit, joint_names, *, floor: float = FLOOR, exact_joint: float = EXACT_JOINT_DEG) -> str | None:
     """The credit ablation in words: in the arm's plane, how close a linear map alone places the
     tool at the median, the joints it already gives (joint RMSE below ``exact_joint`` [deg]),
-    how much closer the ANFIS brings it; the same on the recipe's seven inputs and for the best
+    how much closer the ANFIS brings it; the same on the recipe's seven inputs (the recipe's and the
+    fuzzy c-means ANFIS's, with the 95th percentiles the study's targets read) and for the best
     rival. ``None`` without an ANFIS in the arm's plane."""
     rows, recipe_enc, rbf = credit.rows, credit.recipe_encoding, credit.rival
     plane_floor = rows.get(("arm_plane", LINEAR))
@@ -363,6 +370,13 @@ def credit_prose(credit: Credit, joint_names, *, floor: float = FLOOR, exact_joi
                f"{interval_text(rows[recipe_enc, LINEAR]['position median'])} mm away at the median, the ANFIS "
                f"{interval_text(rows[recipe_enc, ANFIS]['position median'])} mm."
                if (recipe_enc, ANFIS) in rows and recipe_enc != "arm_plane" else "")
+            + (f" Given fuzzy c-means rules on those inputs (chapter 6's contestant), the ANFIS lands "
+               f"{interval_text(rows[recipe_enc, ANFIS_FCM]['position median'])} mm away at the median and "
+               f"{interval_text(rows[recipe_enc, ANFIS_FCM]['position p95'])} mm at the 95th percentile, against the "
+               f"recipe's {interval_text(rows[recipe_enc, ANFIS]['position p95'])} mm"
+               + (f" and the best rival's configuration's {interval_text(rows[recipe_enc, credit.moved]['position p95'])} mm"
+                  if (recipe_enc, credit.moved) in rows else "") + "."
+               if (recipe_enc, ANFIS_FCM) in rows and recipe_enc != "arm_plane" else "")
             + (f" The best rival, {rbf}, lands {interval_text(rows['arm_plane', f'best rival: {rbf}']['position median'])} "
                f"mm away at the median in the arm's plane, and its configuration as one model of all the joints "
                f"{interval_text(rows[recipe_enc, credit.moved]['position median'])} mm on the seven inputs."

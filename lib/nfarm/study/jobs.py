@@ -65,7 +65,7 @@ import numpy as np
 
 from . import datasets, id_trajectories, study_files
 
-from ..infra.arguments import check_bool, is_integer, is_number
+from ..infra.arguments import is_integer, is_number
 from ..infra.paths import BUILD, project_path, shown_path
 from ..infra.reading import ParamsError, Validator, show
 from ..infra.typed import COUNT, EPOCHS, ITERATIONS, N_MFS, N_RULES, Range
@@ -77,6 +77,7 @@ from ..learning.ik_rivals import RIVALS, rival_ik
 from ..learning.learned import LearnedIK, ik_errors
 from ..learning.learned_id import LearnedID
 from ..learning.model_cache import fit_cached, n_parameters
+from ..learning.priors import check_residual
 from ..model.dynamics import rnea
 from .statistics import resolved_joints, trajectory_maxima, trajectory_sums
 
@@ -299,14 +300,14 @@ def _study_data(p: dict) -> tuple[study_files.Study, Path, Path]:
 def _test_split(p: dict, split_of) -> dict:
     """The study's own held-out split, the same for every draw; with measured torques
     (``p["torques"]``) those that the arm built for the cell's draw (its ``seed``) reads on its
-    states (:func:`nfarm.study.datasets.test_readings`), so that a draw's models are judged against
+    states (:func:`nfarm.study.datasets.held_out_readings`), so that a draw's models are judged against
     the arm they were trained on."""
     own = _own_study(p)
     datasets.build_datasets(own, p["data_dir"])
     directory = datasets.dataset_dir(own, p["data_dir"])
     judged = split_of(p, own, directory, "test")
     if p.get("torques") == "measured" and p["seed"]:
-        readings = datasets.test_readings(own, p["seed"], datasets.load(directory / "id_test.npz", own.robot, own))
+        readings = datasets.held_out_readings(own, p["seed"], datasets.load(directory / "id_test.npz", own.robot, own))
         judged["tau"] = readings["tau_measured"]
         if "tau_payload" in judged:
             judged["tau_payload"] = readings["tau_payload"]
@@ -639,7 +640,7 @@ def _fit_id_contestant(p: dict):
             model = LearnedID(**options, random_state=p["seed"])     # its options are checked by fit
         elif p["learner"] in BASELINES:
             residual = options.pop("residual", False)
-            check_bool("options: residual", residual, message=f"options: residual must be true or false, got {residual!r}")
+            check_residual(residual, "options: residual")
             model = baseline_id(p["learner"], options, residual=residual, random_state=p["seed"])
             model._options()
         else:

@@ -46,7 +46,8 @@ class TestedModels:
             ``"ik_full_train"``, ``"ik_full_test"`` for a study with full-range data).
         store: the chosen-model store chapter 6 wrote.
         learned, recipe: the chosen learned IK; the dissertation's recipe by data kind
-            (``"ik"``: the region's, ``"ik_full"``: the full range's, where the study has it).
+            (``"ik"``: the region's, ``"ik_full"``: the full range's, where the study has it), and ``"ik_fcm"``
+            the fuzzy c-means ANFIS on the same seven inputs (:data:`nfarm.study.contest.SEVEN_FCM`), where chapter 6 saved it.
         rivals: the learned-IK contest's chosen rivals by contestant (``"rbf"``, ``"rbf:arm"``, …).
         id_learned, id_recipe, id_identified: the chosen model-free ANFIS for the inverse
             dynamics, the dissertation's design (assumed) and the identification on the regressor.
@@ -131,6 +132,8 @@ def load_tested(study_file: str | os.PathLike, *, smoke: bool = False, data_dir=
         recipe = {"ik": LearnedIK.load(store.ik_dissertation, robot)}
         if study.ik_full_range:
             recipe["ik_full"] = LearnedIK.load(store.ik_dissertation_full, robot)
+        if store.ik_contestant(contest.SEVEN_FCM).is_dir():       # the seven inputs' fuzzy c-means ANFIS (issue 64)
+            recipe["ik_fcm"] = LearnedIK.load(store.ik_contestant(contest.SEVEN_FCM), robot)
         rivals = contest.saved_rivals(robot, store.root)
         id_models = (LearnedID.load(store.id_model_free, robot), LearnedID.load(store.id_dissertation, robot),
                      LearnedID.load(store.id_identified, robot))
