@@ -116,6 +116,17 @@ def test_the_encoding_credit_finds_the_joints_the_arms_plane_gives(tmp_path, dat
     assert list(with_fcm.errors) == [("arm_plane", report.LINEAR), ("arm_plane", "ANFIS"),
                                      ("arm_plane", report.ANFIS_FCM), ("arm_plane", f"best rival: {tested.rbf}")]
     np.testing.assert_allclose(with_fcm.errors["arm_plane", report.ANFIS_FCM]["joint"], 0.02, atol=1e-12)
+    # ... and said on the seven inputs: the fuzzy c-means ANFIS's median and 95th percentile beside the recipe's
+    rows = dict(with_fcm.rows)
+    for learner in (report.LINEAR, report.ANFIS, report.ANFIS_FCM):
+        rows["quat_xyz", learner] = rows["arm_plane", learner]
+    seven = report.Credit(with_fcm.errors, rows, "quat_xyz", with_fcm.rival, with_fcm.moved)
+    said = report.credit_prose(seven, ROBOT.joint_names)
+    fcm, recipe_rows = rows["quat_xyz", report.ANFIS_FCM], rows["quat_xyz", report.ANFIS]
+    assert (f"Given fuzzy c-means rules on those inputs (chapter 6's contestant), the ANFIS lands "
+            f"{interval_text(fcm['position median'])} mm away at the median and {interval_text(fcm['position p95'])} mm "
+            f"at the 95th percentile, against the recipe's {interval_text(recipe_rows['position p95'])} mm.") in said
+    assert "Given fuzzy c-means rules" not in report.credit_prose(credit, ROBOT.joint_names)      # not without it
 
 
 def test_the_structure_ablation_without_a_structured_model_says_so(tested, data, models):

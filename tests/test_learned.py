@@ -390,10 +390,10 @@ def test_residual_model_learns_what_rnea_misses(id_data):
 
 def test_an_identification_residual_anfis_adds_to_the_arm_identified_on_its_training_states(id_data, tmp_path):
     """``residual="identification"``: the identification of the arm as built (its masses refitted, its drives
-    identified) fitted first on the training states, the ANFIS on what it leaves; on a built arm with friction the
-    sum is closer than the identification alone on the base joint, whose Stribeck-free law the identification holds
-    only in part, and no worse elsewhere than rounding of the learned part; saved, it loads to the same bits, its θ
-    checked."""
+    identified) fitted first on the training states, the ANFIS on what it leaves; on a built arm whose Coulomb friction is
+    smoothed near rest (``coulomb_velocity``), which the identification's ``sign q̇`` term cannot hold, the sum's RMSE over the joints is below the
+    identification's alone; saved, it loads to the same bits, and a file whose θ is missing or whose residual has
+    none is refused, naming the field."""
     import dataclasses
 
     from nfarm.learning.baselines import baseline_id
@@ -414,8 +414,16 @@ def test_an_identification_residual_anfis_adds_to_the_arm_identified_on_its_trai
     learned, identified = rms(model.predict(*X)), rms(alone.predict(*X))
     assert learned.sum() < identified.sum(), (learned, identified)
     assert "τ − the identification (residual)" in model.describe()
-    model.save(tmp_path)
+    path = model.save(tmp_path)
     np.testing.assert_array_equal(LearnedID.load(tmp_path, ROBOT).predict(*X), model.predict(*X))
+    import json
+
+    from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
+    data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
+    for edit in ({"prior": None}, {"residual": True}):
+        path.write_text(json.dumps(with_content_digest({**data, **edit})))
+        with pytest.raises(ParamsError, match=r"learned_id.json: prior\b"):
+            LearnedID.load(tmp_path, ROBOT)
     with pytest.raises(ValueError, match="residual must be false, true"):
         LearnedID(inputs="own", residual="identified", n_mfs=1, epochs=1).fit(ROBOT, measured["train"])
 
