@@ -230,8 +230,10 @@ def test_a_learner_on_the_identifications_residual_learns_only_what_the_identifi
                                           "residual=False"),
 ])
 def test_a_residual_no_prior_names_is_refused_before_any_work(learner, residual, message, trajectories):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        baseline_id(learner, residual=residual).fit(ROBOT, trajectories["train"])
+    """Refused on its own words even with no data given (the data are checked, and the prior fitted, only after)."""
+    for train in (trajectories["train"], {}):
+        with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+            baseline_id(learner, residual=residual).fit(ROBOT, train)
 
 
 def test_a_saved_identification_residual_is_read_with_its_prior_checked(trajectories, tmp_path):
