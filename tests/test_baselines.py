@@ -49,23 +49,46 @@ def test_residual_baseline_adds_newton_euler(trajectories):
     v = trajectories["val"]
     np.testing.assert_allclose(model.predict(v["q"], v["qd"], v["qdd"]), v["tau"] + 0.05 * v["qd"], atol=1e-9)
     law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
-    train["tau"] = trajectories["train"]["tau"] + np.einsum(
-        "njk,jk->nj", np.stack([train["qdd"], train["qd"], np.sign(train["qd"])], axis=-1), law)
+    train["tau"] = trajectories["train"]["tau"] + _drive_law(law, train)
     friction = baseline_id("friction", residual=True).fit(ROBOT, train)
     np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
 
 
+def _drive_law(law, d):
+    """The drive torques ``(N, n)`` of the robot file's own law (``joint_drive_torques``, independent of the
+    identification's columns) with each joint's armature, viscous and Coulomb values a row of ``law (n, 3)``."""
+    import dataclasses
+
+    from nfarm.model.dynamics import joint_drive_torques
+
+    drives = dataclasses.replace(ROBOT, armature=law[:, 0], viscous=law[:, 1], coulomb=law[:, 2])
+    return joint_drive_torques(drives, d["qd"], d["qdd"])
+
+
+def test_the_identifications_drive_columns_are_the_robot_files_drive_law(trajectories):
+    """``drive_terms`` times each joint's ``[I_a, b, τ_c]`` is ``joint_drive_torques`` of the robot file, its
+    smoothing speed ε included (a Coulomb column of ``sign q̇`` is not: it differs near rest)."""
+    from nfarm.learning.priors import drive_terms
+
+    d = trajectories["val"]
+    law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
+    np.testing.assert_allclose(np.einsum("njk,jk->nj", drive_terms(ROBOT, d["qd"], d["qdd"]), law), _drive_law(law, d),
+                               rtol=1e-12, atol=1e-15)
+    slow = {"qd": np.full((1, ROBOT.n), 0.2 * ROBOT.coulomb_velocity), "qdd": np.zeros((1, ROBOT.n))}
+    assert not np.allclose(np.einsum("njk,jk->nj", np.stack([slow["qdd"], slow["qd"], np.sign(slow["qd"])], -1), law),
+                           _drive_law(law, slow))
+
+
 def _built_arm_torques(trajectories):
     """The training and validation trajectories with the torques of a built arm (masses, centres
-    and inertias off the model's) plus a drive law of the identified form ``[q̈_j, q̇_j, sign q̇_j]``."""
+    and inertias off the model's) plus a drive law of the identified form (the robot file's, :func:`_drive_law`)."""
     from nfarm.study.id_trajectories import TrueArm, true_arm
 
     built = true_arm(ROBOT, TrueArm(mass_sd=0.1, com_sd=0.005, inertia_sd=0.2), np.random.default_rng(5))
     law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
 
     def measured(d):
-        drive = np.einsum("njk,jk->nj", np.stack([d["qdd"], d["qd"], np.sign(d["qd"])], axis=-1), law)
-        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + drive}
+        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + _drive_law(law, d)}
 
     return measured(trajectories["train"]), measured(trajectories["val"])
 
@@ -222,9 +245,9 @@ def test_a_learner_on_the_identifications_residual_learns_only_what_the_identifi
 
 
 @pytest.mark.parametrize("learner, residual, message", [
-    ("ridge", "identified", "residual must be false, true (Newton–Euler's nominal model), 'nominal' or 'identification', "
-                            "got 'identified'"),
-    ("ridge", 1, "residual must be false, true"),
+    ("ridge", "identified", "residual must be false (no prior), true or 'nominal' (Newton–Euler's nominal model) or "
+                            "'identification' (the identification of the arm as built), got 'identified'"),
+    ("ridge", 1, "residual must be false (no prior), true"),
     ("friction", "identification", "learner 'friction' identifies the drives beside Newton–Euler: give residual=True"),
     ("identification", "identification", "learner 'identification' fits the whole torque, the masses included: give "
                                           "residual=False"),
@@ -360,3 +383,20 @@ def test_the_identification_tiers_rivals_see_every_joints_regressor_row_and_driv
         told = baseline_id(learner, {**options, "angles": "regressor"}, random_state=1).fit(ROBOT, train, val)
         blind = baseline_id(learner, options, random_state=1).fit(ROBOT, train, val)
         assert nrmse(told.predict(*X), val["tau"]).max() < nrmse(blind.predict(*X), val["tau"]).max()
+
+
+def test_a_failed_refit_leaves_no_model_beside_its_new_prior(trajectories):
+    """A refit that fails after the new prior is fitted (here: in the learner's training) leaves the estimator unfitted,
+    not the old learner's arrays beside the new identification's θ."""
+    model = baseline_id("ridge", {"basis": "generic"}, residual="identification").fit(ROBOT, trajectories["train"])
+    d = trajectories["val"]
+    model.predict(d["q"], d["qd"], d["qdd"])
+
+    def broken(*args):
+        raise RuntimeError("the learner failed")
+
+    model._train = broken
+    with pytest.raises(RuntimeError, match="the learner failed"):
+        model.fit(ROBOT, trajectories["val"])
+    with pytest.raises(ValueError, match="not fitted yet"):
+        model.predict(d["q"], d["qd"], d["qdd"])

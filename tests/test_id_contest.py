@@ -117,12 +117,15 @@ def test_the_rigid_body_sweeps_keep_each_tiers_best_on_seed_0_over_the_resolved_
 
 
 def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
-    """Two configurations each; a least squares with nothing to tune, one."""
+    """Two configurations each (four each in the identification + learned tier); a least squares with nothing to
+    tune, one."""
     sweep = load_sweep(PARAMS / "sweeps" / "id_contest.yaml")
     tried = collections.Counter(contest.id_family(c.params) for c in sweep.cells
                                 if c.params["study_file"].endswith("intelbot5.yaml"))
     untunable = {"identification", "friction"}
-    assert {n for n, k in tried.items() if k != 2} == {n for n in tried if n.rsplit(":", 1)[1] in untunable}
+    widened = {n for n in tried if n.startswith("identification + learned:")}
+    assert {n for n, k in tried.items() if k != 2} == {n for n in tried if n.rsplit(":", 1)[1] in untunable} | widened
+    assert {tried[n] for n in widened} == {4}
     assert all(k == 1 for n, k in tried.items() if n.rsplit(":", 1)[1] in untunable)
     assert {n.rsplit(":", 1)[0] for n in tried} == {"generic", "structure-informed", "rigid-body span", "identification",
                                                     "identification + learned", "nominal model + learned"}
@@ -133,13 +136,15 @@ def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
     assert {n for n in tried if n.startswith("identification:")} == {f"identification:{k}" for k in (
         "anfis", "identification", "kernel", "boosting", "mlp")}
     # ... and identification plus a learned residual, each learner (issue 65), with the configurations of the nominal tier's
+    # and two of its own each
     assert {n for n in tried if n.startswith("identification + learned:")} == {f"identification + learned:{k}" for k in (
         "anfis", "ridge", "kernel", "boosting", "mlp")}
     residual_options = lambda prior: sorted(json.dumps({k: v for k, v in c.params["options"].items() if k != "residual"},  # noqa: E731
                                                        sort_keys=True) for c in sweep.cells
                                             if (c.params.get("options") or {}).get("residual") == prior
                                             and c.params["learner"] != "friction" and c.params["study_file"].endswith("intelbot5.yaml"))
-    assert residual_options("identification") == residual_options(True)
+    nominal, identified = residual_options(True), residual_options("identification")
+    assert set(nominal) < set(identified) and len(identified) == 2 * len(nominal)
 
 
 def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
@@ -160,7 +165,7 @@ def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "learner": "forest"}))
     with pytest.raises(ParamsError, match="id_contest: options: random_state is the cell's own parameter"):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"random_state": 3}}))
-    with pytest.raises(ParamsError, match="id_contest: options: residual must be false, true .*'nominal' or 'identification', got 'no'"):
+    with pytest.raises(ParamsError, match=r"id_contest: options: residual must be false \(no prior\), true or 'nominal' .* or 'identification' .*, got 'no'"):
         JOBS["id_contest"].function(JOBS["id_contest"].complete({**cell, "options": {"residual": "no"}}))
     # An ANFIS cell without options: the tier of LearnedID's defaults (its own joint's state: generic)
     anfis = JOBS["id_contest"].function(JOBS["id_contest"].complete(

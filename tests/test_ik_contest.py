@@ -248,8 +248,9 @@ def test_each_contestant_is_chosen_on_its_seed_0_validation_by_the_tool_metrics(
     assert list(chosen) == ["anfis:arm_plane", "anfis:quat_xyz", "rbf"]
     assert chosen["anfis:arm_plane"].cell.params["options"] == {"n_rules": 64}
     assert chosen["rbf"].cell.params["options"] == {"neighbors": 64}      # the orientation breaks the tie
-    assert contest.budgets(results) == {"anfis:arm_plane": (2, 2.0, 2.0), "anfis:quat_xyz": (1, 1.0, 1.0),
-                                        "rbf": (2, 2.0, 2.0)}
+    # configurations, fits, poses × passes (no poses in these records), training and cells' seconds
+    assert contest.budgets(results) == {"anfis:arm_plane": (2, 2, 0, 2.0, 2.0), "anfis:quat_xyz": (1, 1, 0, 1.0, 1.0),
+                                        "rbf": (2, 2, 0, 2.0, 2.0)}
     # In contention: the two best, and those within twice the best's p95 (the recipe's 9 mm is not)
     assert contest.contending(chosen) == ["anfis:arm_plane", "rbf"]
     assert contest.contending(chosen, keep_within=10) == ["anfis:arm_plane", "rbf", "anfis:quat_xyz"]
@@ -273,7 +274,7 @@ def test_successive_halving_promotes_each_contestants_best_two_to_all_the_poses(
     from nfarm.study.sweep_files import Cell
     again = [CellResult(Cell(p, f"full{k}"), "ok", {"position_p95_mm": p95, "orientation_p95_deg": 0.1, "fit_seconds": 4.0},
                         4.0, "w") for k, (p, p95) in enumerate(zip(promoted[:2], (1.5, 0.9)))]
-    assert contest.budgets(rung[:4] + again)["anfis:arm_plane"] == (4, 12.0, 12.0)
+    assert contest.budgets(rung[:4] + again)["anfis:arm_plane"] == (4, 6, 0, 12.0, 12.0)     # 4 configurations, 6 fits
     assert contest.choose(again)["anfis:arm_plane"].cell.params["options"] == {"n_rules": 64}
 
 

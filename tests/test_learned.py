@@ -391,7 +391,7 @@ def test_residual_model_learns_what_rnea_misses(id_data):
 def test_an_identification_residual_anfis_adds_to_the_arm_identified_on_its_training_states(id_data, tmp_path):
     """``residual="identification"``: the identification of the arm as built (its masses refitted, its drives
     identified) fitted first on the training states, the ANFIS on what it leaves; on a built arm whose Coulomb friction is
-    smoothed near rest (``coulomb_velocity``), which the identification's ``sign q̇`` term cannot hold, the sum's RMSE over the joints is below the
+    smoothed near rest (``coulomb_velocity``), which the identification's ``tanh(q̇ / ε)`` term of the robot file's ε = 0.01 rad/s cannot hold, the sum's RMSE over the joints is below the
     identification's alone; saved, it loads to the same bits, and a file whose θ is missing or whose residual has
     none is refused, naming the field."""
     import dataclasses
@@ -424,7 +424,7 @@ def test_an_identification_residual_anfis_adds_to_the_arm_identified_on_its_trai
         path.write_text(json.dumps(with_content_digest({**data, **edit})))
         with pytest.raises(ParamsError, match=r"learned_id.json: prior\b"):
             LearnedID.load(tmp_path, ROBOT)
-    with pytest.raises(ValueError, match="residual must be false, true"):
+    with pytest.raises(ValueError, match=r"residual must be false \(no prior\), true"):
         LearnedID(inputs="own", residual="identified", n_mfs=1, epochs=1).fit(ROBOT, measured["train"])
 
 
@@ -469,7 +469,7 @@ def test_id_save_load_batching_and_bad_input(id_data, tmp_path):
 
 @pytest.mark.parametrize("kwargs, change, message", [
     (dict(inputs="torques"), None, r"inputs must be one of own, all, trig, affine_generic, affine, affine_generic_drives, affine_drives, regressor"),
-    (dict(residual="yes"), None, r"residual must be false, true \(Newton–Euler.s nominal model\), .nominal. or .identification., got .yes."),
+    (dict(residual="yes"), None, r"residual must be false \(no prior\), true or .nominal. \(Newton–Euler.s nominal model\) or .identification. \(the identification of the arm as built\), got .yes."),
     (dict(n_mfs=0), None, r"joint 1: .*n_mfs"),
     ({}, lambda d: {k: v for k, v in d.items() if k != "tau"}, r"train must be a mapping with arrays 'q', 'qd', 'qdd', 'tau'"),
     ({}, lambda d: {**d, "qd": d["qd"][:-1]}, r"train: q, qd, qdd, tau must have one row per sample"),

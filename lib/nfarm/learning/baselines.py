@@ -28,12 +28,13 @@ name sweep files give it (what they share is :class:`~nfarm.learning.id_baseline
   the ANFIS gets, on the same validation trajectories;
 * ``"friction"`` (:class:`FrictionID`) — not a learner but the identification any engineer tries
   first on a real arm: a residual only, per joint, least squares of ``τ − rnea`` on that joint's
-  ``[q̈_j, q̇_j, sign q̇_j]`` — armature, viscous and Coulomb friction (chapter 06.8);
+  ``[q̈_j, q̇_j, tanh(q̇_j / ε_j)]`` — armature, viscous and Coulomb friction, the robot file's drive
+  law (:func:`nfarm.learning.priors.drive_terms`; chapter 06.8);
 * ``"identification"`` (:class:`IdentificationID`) — the full identification of a built arm whose
   geometry is known (Atkeson, An & Hollerbach 1986; the *identification* tier): one least squares of
   ``τ`` over every joint on the rigid-body regressor ``Y(q, q̇, q̈)`` (:func:`nfarm.model.dynamics.regressor`,
-  the inertial parameters shared by all joints' rows) and each joint's ``[q̈_j, q̇_j, sign q̇_j]``
-  (armature, viscous and Coulomb friction) — it refits the masses, centres of mass and
+  the inertial parameters shared by all joints' rows) and each joint's ``[q̈_j, q̇_j, tanh(q̇_j / ε_j)]``
+  (armature, viscous and Coulomb friction, the robot file's drive law) — it refits the masses, centres of mass and
   inertias where the built arm differs from the model. Columns are scaled to unit norm and
   the minimum-norm solution is kept (the regressor's columns are not all identifiable).
 
@@ -196,7 +197,7 @@ class _SmoothInputs:
 def regressor_inputs(robot: Robot, q, qd, qdd) -> np.ndarray:
     """``(N, F)``: what the identification of a built arm sees, as one learner's inputs — every joint
     j's row of the rigid-body regressor ``Y(q, q̇, q̈)`` on the columns its torque depends on and its
-    drive terms ``q̈_j, q̇_j, sign q̇_j`` (:func:`nfarm.learning.learned_id.id_features`,
+    drive terms ``q̈_j, q̇_j, tanh(q̇_j / ε_j)`` (:func:`nfarm.learning.learned_id.id_features`,
     ``"regressor_drives"``), side by side: ``F = Σ_j (c_j + 3)``, 140 for intelbot5. A learner on these
     knows the geometry, as the identification does, and may learn what is not linear in them.
 
@@ -392,7 +393,7 @@ class FrictionID(_LeastSquaresLaw):
         super().__init__(residual=residual, random_state=random_state)
 
     def _features(self, q, qd, qdd):
-        return drive_terms(qd, qdd)                                       # (N, n, 3)
+        return drive_terms(self.robot_, qd, qdd)                          # (N, n, 3)
 
     def _estimator(self, options):
         return PerJointLeastSquares()

@@ -37,7 +37,7 @@ from ..model.robot import Robot, robot_hash
 from .bases import BASES
 from .estimator import Registry, SavedModel, check_robot
 from .learned_id import id_states
-from .priors import check_residual, fit_identification, identification_width, prior_of, prior_torques
+from .priors import check_residual, fit_prior, prior_of, prior_torques, read_prior
 
 __all__ = ["BaselineID", "Standardised", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "smooth_inputs"]
 
@@ -191,11 +191,11 @@ class BaselineID(SavedModel):
         options = self._options()
         self._check_prior()
         q, qd, qdd, tau = id_states(train, robot, "train")
+        for name in ("state_", "model_"):     # a failed refit leaves no model beside the new prior
+            self.__dict__.pop(name, None)
         self.robot_, self.options_ = robot, options
-        start = time.perf_counter()
-        self.prior_ = fit_identification(robot, q, qd, qdd, tau) if prior_of(self.residual) == "identification" else None
-        target = tau - prior_torques(robot, self.residual, q, qd, qdd, self.prior_)
-        prior_seconds = time.perf_counter() - start
+        self.prior_, prior, prior_seconds = fit_prior(robot, self.residual, q, qd, qdd, tau)
+        target = tau - prior
         if not self.scaled_targets:      # a physical law: no offset, no scaling
             self.y_mean_, self.y_scale_ = np.zeros(robot.n), np.ones(robot.n)
         else:
@@ -263,8 +263,10 @@ class BaselineID(SavedModel):
         n = v.integer(data["n_joints"], "n_joints", lo=robot.n, hi=robot.n)
         options = v.mapping(data["options"], "options", dict.fromkeys(learner.hyper_params(), True))
         residual = data["residual"]
-        if not (isinstance(residual, bool) or residual in ("nominal", "identification")):
-            v.fail("residual", f"must be true, false, 'nominal' or 'identification', got {show(residual)}")
+        try:
+            check_residual(residual)
+        except ValueError as exc:
+            v.fail("residual", str(exc).removeprefix("residual "))
         model = learner(**options, residual=residual, random_state=v.integer(data["random_state"], "random_state", lo=0))
         try:
             options = model._options()
@@ -275,11 +277,7 @@ class BaselineID(SavedModel):
         except ValueError as exc:
             v.fail("residual", str(exc))
         model.robot_, model.options_ = robot, options
-        model.prior_ = None
-        if prior_of(residual) == "identification":
-            model.prior_ = v.array(data.get("prior"), "prior", (identification_width(robot),))
-        elif data.get("prior") is not None:
-            v.fail("prior", f"must be absent for residual={show(residual)} (only an identification residual has one)")
+        model.prior_ = read_prior(v, data, residual, robot)
         model.n_features_ = v.integer(data["n_features"], "n_features", lo=1, hi=10_000_000)
         model.y_mean_ = v.array(data["y_mean"], "y_mean", (n,))
         model.y_scale_ = v.array(data["y_scale"], "y_scale", (n,))

@@ -37,7 +37,7 @@ from ..model.robot import Robot, joint_array, robot_hash
 from .anfis import ANFIS, fit_shared
 from .bases import basis, basis_width
 from .encoding import check_scaling, input_scaling
-from .priors import check_residual, fit_identification, identification_width, prior_of, prior_torques
+from .priors import check_residual, drive_terms, fit_prior, prior_of, prior_torques, read_prior
 from .per_joint import (PerJointModel, CHUNK, FAR, beyond_range, check_far, check_joint_array, joint_anfis_options,
                         model_lines, read_joint_models, warn_far)
 
@@ -87,7 +87,8 @@ def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, in
       geometry (DH parameters) is known, the masses are not: ``τ_j`` is linear in these
       inputs, so one rule (least squares) can already be exact;
     * ``"regressor_drives"`` — those columns and the joint's own drive terms ``q̈_j, q̇_j,
-      sign q̇_j`` (armature, viscous and Coulomb friction): what the identification of a built
+      tanh(q̇_j / ε_j)`` (armature, viscous and Coulomb friction, the robot file's drive law:
+      :func:`nfarm.learning.priors.drive_terms`): what the identification of a built
       arm (:class:`nfarm.learning.baselines.BaselineID`, learner ``identification``) sees of
       joint j, so that the ANFIS of the identification tier gets the same inputs as its rival.
     """
@@ -105,7 +106,8 @@ def id_features(robot: Robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, in
     Y = regressor(robot, q, qd, qdd)
     rows = [np.ascontiguousarray(Y[:, j, cols]) for j, cols in enumerate(regressor_columns(robot))]
     if inputs == "regressor_drives":
-        rows = [np.column_stack([Y_j, qdd[:, j], qd[:, j], np.sign(qd[:, j])]) for j, Y_j in enumerate(rows)]
+        drives = drive_terms(robot, qd, qdd)                                     # (N, n, 3)
+        rows = [np.column_stack([Y_j, drives[:, j]]) for j, Y_j in enumerate(rows)]
     return rows
 
 
@@ -247,10 +249,8 @@ class LearnedID(PerJointModel):
         q, qd, qdd, tau = id_states(train, robot, "train")
         val_states = id_states(val, robot, "val") if val is not None else None
         self.__dict__.pop("models_", None)       # a failed refit leaves no half-fitted model
-        start = time.perf_counter()
-        prior = fit_identification(robot, q, qd, qdd, tau) if prior_of(self.residual) == "identification" else None
-        target = tau - prior_torques(robot, self.residual, q, qd, qdd, prior)
-        prior_seconds = time.perf_counter() - start
+        prior, prior_train, prior_seconds = fit_prior(robot, self.residual, q, qd, qdd, tau)
+        target = tau - prior_train
         if val_states is not None:
             vq, vqd, vqdd, vtau = val_states
             val_target = vtau - prior_torques(robot, self.residual, vq, vqd, vqdd, prior)
@@ -351,8 +351,10 @@ class LearnedID(PerJointModel):
             v.fail("format", f"must be {ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
         inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
         residual = data["residual"]
-        if not (isinstance(residual, bool) or residual in ("nominal", "identification")):
-            v.fail("residual", f"must be true, false, 'nominal' or 'identification', got {show(residual)}")
+        try:
+            check_residual(residual)
+        except ValueError as exc:
+            v.fail("residual", str(exc).removeprefix("residual "))
         shared_premises = v.boolean(data.get("shared_premises", False), "shared_premises")
         widths = _id_widths(inputs, robot)
         n, options, joint_options, fitted, seconds = read_joint_models(
@@ -367,11 +369,7 @@ class LearnedID(PerJointModel):
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options,
                     shared_premises=shared_premises, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
-        model.prior_ = None
-        if prior_of(residual) == "identification":
-            model.prior_ = v.array(data.get("prior"), "prior", (identification_width(robot),))
-        elif data.get("prior") is not None:
-            v.fail("prior", f"must be absent for residual={show(residual)} (only an identification residual has one)")
+        model.prior_ = read_prior(v, data, residual, robot)
         model.input_lo_, model.input_span_ = list(lo), list(span)
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n

@@ -45,7 +45,7 @@ import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -59,7 +59,7 @@ from ..model.robot import Robot
 from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Cell, Sweep
 
-__all__ = ["SEVEN_FCM", "ID_TIER_DIRS", "ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "VALIDATION_FILE", "save_validation", "saved_ranking", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "budgets", "spread_params",
+__all__ = ["SEVEN_FCM", "ID_TIER_DIRS", "ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "VALIDATION_FILE", "save_validation", "saved_ranking", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "Budget", "passes_of", "budgets", "spread_params",
            "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
@@ -359,19 +359,41 @@ def _size(value: Any) -> float | None:
     return float(value)
 
 
-def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, tuple[int, float, float]]:
+class Budget(NamedTuple):
+    """What one contestant's tuning spent over its seed-0 cells (:func:`budgets`)."""
+
+    configurations: int          #: configurations tried (a promoted one counted once)
+    fits: int                    #: models trained (each rung's)
+    pose_passes: int             #: training poses (or states) times the passes over them, summed over the fits
+    fit_seconds: float           #: the models' own training seconds (``fit_seconds``)
+    cell_seconds: float          #: the cells' seconds (training, the validation's predictions, the data's loading)
+
+
+def passes_of(metrics: Mapping) -> int:
+    """The passes over its training data one fit made: the epochs its models ran, summed over its
+    per-joint models (``metrics["epochs"]``, a number or a list), and one for a fit in closed form
+    (no epochs: least squares, kernel ridge, RBF, k-NN, boosting's trees counted as one pass)."""
+    epochs = metrics.get("epochs") or 0
+    total = int(sum(epochs)) if isinstance(epochs, (list, tuple)) else int(epochs)
+    return max(total, 1)
+
+
+def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, Budget]:
     """Each contestant's tuning budget spent over its seed-0 cells (both rungs of successive
-    halving): the configurations it tried, the seconds their training took (the models' own
-    ``fit_seconds``) and the seconds their cells took (training, the validation's predictions
-    and the data's loading, when they ran)."""
-    spent: dict[str, list[tuple[float, float]]] = {}
+    halving, :class:`Budget`): the configurations it tried, the fits made, the training poses
+    times the passes over them (machine-independent: the published budget, issue 64), and the
+    seconds their training took (the models' own ``fit_seconds``) and their cells took (training,
+    the validation's predictions and the data's loading, when they ran: they depend on the machine)."""
+    spent: dict[str, list[tuple[int, float, float]]] = {}
     tried: dict[str, set[str]] = {}
     for r in results:
         if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
             name = family_of(r.cell.params)
-            spent.setdefault(name, []).append((float(r.metrics["fit_seconds"]), float(r.seconds)))
+            work = int(r.metrics.get("train_samples", 0)) * passes_of(r.metrics)
+            spent.setdefault(name, []).append((work, float(r.metrics["fit_seconds"]), float(r.seconds)))
             tried.setdefault(name, set()).add(json_key({k: v for k, v in r.cell.params.items() if k != "fraction"}))
-    return {name: (len(tried[name]), float(sum(a for a, _ in s)), float(sum(b for _, b in s))) for name, s in spent.items()}
+    return {name: Budget(len(tried[name]), len(s), sum(w for w, _, _ in s), float(sum(a for _, a, _ in s)),
+                         float(sum(b for _, _, b in s))) for name, s in spent.items()}
 
 
 def contending(chosen: Mapping[str, CellResult], keep_within: float = KEEP_WITHIN) -> list[str]:
@@ -490,7 +512,7 @@ class IDContest:
     chosen: Mapping[str, CellResult]
     finalists: tuple[str, ...]
     standings: tuple[Replicates, ...]
-    budgets: Mapping[str, tuple[int, float, float]]
+    budgets: Mapping[str, Budget]
 
     @property
     def tiers(self) -> list[str]:

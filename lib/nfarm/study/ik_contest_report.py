@@ -29,7 +29,7 @@ from . import contest
 from .sweep import CellResult, Replicates
 
 __all__ = ["MM_FLOOR", "DEG_FLOOR", "mm_text", "deg_text", "seeds_text", "configuration_text", "planar_note",
-           "contest_table", "budget_table", "configurations_table", "spread_figure", "contest_prose"]
+           "contest_table", "budget_table", "seconds_table", "configurations_table", "spread_figure", "contest_prose"]
 
 #: [mm] a tool position error below this is rounding (1 nm), shown as such.
 MM_FLOOR = 1e-6
@@ -91,7 +91,7 @@ def contest_table(ranked: Sequence[Replicates], spent: Mapping[str, tuple]) -> T
         else:
             mean, low, high = contest.paired_gap(g, leader)
             gap = f"{mm_text(mean)} ({mm_text(low)} to {mm_text(high)})" + (" no difference shown" if low <= 0 <= high else "")
-        rows.append([contest.label(name), spent[name][0], g.n, configuration_text(g.cell.params),
+        rows.append([contest.label(name), spent[name].configurations, g.n, configuration_text(g.cell.params),
                      seeds_text(g, "position_p50_mm", mm_text), seeds_text(g, "position_p95_mm", mm_text),
                      seeds_text(g, "orientation_p50_deg", deg_text), seeds_text(g, "orientation_p95_deg", deg_text), gap])
     return Table(["contestant", "configurations tried", "seeds", "chosen configuration",
@@ -101,16 +101,30 @@ def contest_table(ranked: Sequence[Replicates], spent: Mapping[str, tuple]) -> T
                          f"seed 0 by the 95th-percentile tool position error, then, if still in contention, its mean over {leader.n} "
                          f"seeds (each a draw of the training and validation poses and of the initialisation) and the least–largest "
                          f"over them; the last column is the difference from the leader seed by seed (the same draw for both), its mean "
-                         f"and range. The budget: the configurations tried (their seconds, which depend on the machine, in the "
-                         f"table below)")
+                         f"and range. The budget: the configurations tried (the fits and their seconds in the tables below)")
 
 
-def budget_table(ranked: Sequence[Replicates], spent: Mapping[str, tuple]) -> Table:
-    """The contest's budget in seconds, in the standings' order: each contestant's configurations
-    tried, its tuning's training and its cells' seconds. Wall-clock times depend on the machine
-    and its load: a table to show, not to save (the saved tables are byte-reproducible)."""
+def budget_table(ranked: Sequence[Replicates], spent: Mapping[str, contest.Budget]) -> Table:
+    """The contest's budget, machine-independent (saved: ``06_ik_contest_budget``), in the
+    standings' order: each contestant's configurations tried, the fits its tuning made (both rungs)
+    and the training poses times the passes over them (:class:`nfarm.study.contest.Budget`). Its
+    seconds are :func:`seconds_table`'s."""
+    return Table(["contestant", "configurations tried", "fits", "training poses × passes"],
+                 [[contest.label(name), spent[name].configurations, spent[name].fits, f"{spent[name].pose_passes:,}"]
+                  for name in (_name(g) for g in ranked)],
+                 caption="The contest's budget: each contestant's configurations tried, the models its tuning trained "
+                         "(both rungs of successive halving, seed 0) and the training poses they saw times the passes "
+                         "over them (the epochs each joint's model ran, summed; a fit in closed form, one pass). The "
+                         "same on any machine; the seconds are in the next table")
+
+
+def seconds_table(ranked: Sequence[Replicates], spent: Mapping[str, contest.Budget]) -> Table:
+    """The contest's budget in seconds, in the standings' order: each contestant's tuning's
+    training and its cells' seconds. Wall-clock times depend on the machine and its load: a table
+    to show, not to save (the saved tables are byte-reproducible; :func:`budget_table` is saved)."""
     return Table(["contestant", "configurations tried", "tuning's training [s]", "tuning's cells [s]"],
-                 [[contest.label(name), *spent[name]] for name in (_name(g) for g in ranked)],
+                 [[contest.label(name), spent[name].configurations, spent[name].fit_seconds, spent[name].cell_seconds]
+                  for name in (_name(g) for g in ranked)],
                  floatfmt=["", "", ".0f", ".0f"],
                  caption="The contest's budget in seconds: each contestant's tuning, its training's and its cells' (training, "
                          "validation predictions, data loading) when they ran, on one core each (not saved: it depends on the "
