@@ -218,4 +218,16 @@ def contest_prose(ranked: Sequence[Replicates], spent: Mapping[str, tuple], rung
              + "; ".join(f"{contest.label(name)}, {key}={value} (the {side} tried)" for name, found in edges.items()
                          for key, value, side in found) + "." if edges else
              " No contestant's chosen configuration lies at the edge of a value its search tried.")
+    if edges:       # what stops the search there: the cost of the chosen fit, and the sweep file's reasons
+        costs = [f"{contest.label(name)} {_cost_text(chosen[name].metrics)}" for name in edges]
+        text += (" On this machine, one fit of each of those chosen configurations on all the training poses cost: "
+                 + "; ".join(costs) + ". The sweep file (`params/sweeps/ik_contest.yaml`) says why each search "
+                 "stops where it does (a wider one's cost or a flat search).")
     return text
+
+
+def _cost_text(metrics: Mapping) -> str:
+    """``"12 s of training, 3.6 ms a pose to predict"``: a chosen fit's cost on this machine."""
+    us = float(metrics.get("predict_us", 0.0))
+    predict = f"{us / 1000:.2g} ms" if us >= 1000 else f"{us:.2g} µs"
+    return f"{float(metrics['fit_seconds']):.3g} s of training, {predict} a pose to predict"
