@@ -120,3 +120,22 @@ def test_the_residual_anfis_is_the_nominal_tiers_anfis_finalist():
     assert len([line for line in fig.axes[0].get_lines() if line.get_linestyle() == ":"]) == ROBOT.n + 1   # each σ, its key
     assert "sensor noise" in caption
     plt.close(fig)
+
+
+def test_the_prose_names_a_choice_at_the_edge_of_a_search_of_three_values():
+    """Given the tuning round's cells, a learner whose chosen value is an end of three or more tried is named (the
+    identification + learned tier's four configurations a learner); two configurations bracket nothing: not judged."""
+    seed0 = [result("anfis", 0, 0.30, inputs="affine_generic"), result("anfis", 0, 0.32, inputs="own"),
+             *(result("ridge", 0, value, basis="generic", alpha=alpha) for alpha, value in ((1.0, 0.25), (100.0, 0.22),
+                                                                                           (1.0e4, 0.20))),
+             result("mlp", 0, 0.26, hidden=[8]), result("mlp", 0, 0.24, hidden=[16])]
+    idc = contest.id_contest(seed0)
+    curves = {name: [(1500, 30.0)] for name in ("generic: ANFIS", "generic: ridge regression")}
+    text = report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE, seed0)
+    assert text.endswith(" At the edge of what its search tried, so that a wider search that way might do better: "
+                         "generic: ridge regression, alpha=10000.0 (the largest tried).")
+    assert "hidden" not in text                                             # two widths: no edge judged
+    inside = [r for r in seed0 if r.cell.params["options"].get("alpha") != 1.0e4]
+    assert report.contest_prose(contest.id_contest(inside), curves, np.full(ROBOT.n, 0.3), NOISE, inside).endswith(
+        " No learner's chosen value lies at the edge of a search of three or more values.")
+    assert "edge" not in report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE)      # no cells given: nothing said

@@ -151,11 +151,13 @@ def sizes_figure(curves: Mapping[str, Sequence[tuple[int, float]]], robot_name: 
 
 
 def contest_prose(idc: contest.IDContest, curves: Mapping[str, Sequence[tuple[int, float]]], ne_rmse: np.ndarray,
-                  noise) -> str:
+                  noise, runs: Sequence[CellResult] = ()) -> str:
     """The contest's verdicts in words: in each tier the ANFIS against its best rival, paired
     seed by seed, and whether their order holds on the most training states (``curves``:
     :func:`size_curves`); then Newton–Euler alone (``ne_rmse``), the best of all, and the sensor
-    noise (``noise (n,)`` [N·m]) no model can predict."""
+    noise (``noise (n,)`` [N·m]) no model can predict; and, given the tuning round's cells
+    (``runs``), every learner whose choice lies at the edge of a search of three or more values
+    (:func:`nfarm.study.contest.at_edge`; two configurations bracket nothing and are not judged)."""
     sentences = []
     for tier in idc.tiers:
         a, b = idc.pair(tier)
@@ -191,7 +193,18 @@ def contest_prose(idc: contest.IDContest, curves: Mapping[str, Sequence[tuple[in
         f"{contest.id_label(contest.id_family(best.cell.params))} at {pct(best.metrics['worst_nrmse'])} % "
         f"({best.metrics['worst_rmse']:.3g} N·m on the worst joint; the rigid-body span, an identification in disguise, "
         f"aside). The sensor noise, which no model can predict, is {np.max(noise):.3g} N·m. Chapter 7 tests each "
-        f"tier's finalists, frozen, on the held-out trajectories.")
+        f"tier's finalists, frozen, on the held-out trajectories.") + _edges_text(idc, runs)
+
+
+def _edges_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str:
+    """`` At the edge of …``: the learners whose chosen value lies at an end of a search of three or
+    more values (``""`` when none does or no ``runs`` are given)."""
+    edges = contest.at_edge(runs, idc.chosen, family_of=contest.id_family) if runs else {}
+    if not edges:
+        return " No learner's chosen value lies at the edge of a search of three or more values." if runs else ""
+    return (" At the edge of what its search tried, so that a wider search that way might do better: "
+            + "; ".join(f"{contest.id_label(name)}, {key}={value} (the {side} tried)" for name, found in edges.items()
+                        for key, value, side in found) + ".")
 
 
 def nominal_anfis(idc: contest.IDContest) -> Replicates | None:
