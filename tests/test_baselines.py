@@ -400,3 +400,25 @@ def test_a_failed_refit_leaves_no_model_beside_its_new_prior(trajectories):
         model.fit(ROBOT, trajectories["val"])
     with pytest.raises(ValueError, match="not fitted yet"):
         model.predict(d["q"], d["qd"], d["qdd"])
+
+
+def test_a_model_of_the_drive_law_names_it_and_one_without_it_is_refused(trajectories, tmp_path):
+    """A model whose predictions use the drive terms saves ``drive_law``; a file of one without it (saved while the
+    Coulomb column was ``sign q̇``) or a file of another that names one is refused in one line naming the field."""
+    import json
+
+    from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
+    from nfarm.learning.baselines import load_id_model
+    from nfarm.learning.priors import DRIVE_LAW
+
+    for learner, options, residual, uses in (("identification", {}, False, True), ("friction", {}, True, True),
+                                             ("ridge", {"basis": "generic"}, "identification", True),
+                                             ("ridge", {"basis": "generic"}, True, False)):
+        model = baseline_id(learner, options, residual=residual).fit(ROBOT, trajectories["train"])
+        path = model.save(tmp_path / learner / str(residual))
+        data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
+        assert (data.get("drive_law") == DRIVE_LAW) is uses and ("drive_law" in data) is uses
+        edited = {k: v for k, v in data.items() if k != "drive_law"} if uses else {**data, "drive_law": DRIVE_LAW}
+        path.write_text(json.dumps(with_content_digest(edited)))
+        with pytest.raises(ParamsError, match=r"baseline_id.json: drive_law: must be"):
+            load_id_model(path.parent, ROBOT)

@@ -136,7 +136,22 @@ def test_every_baseline_saved_and_loaded_predicts_the_same_bits(learner, states,
     assert _same_content(loaded.to_dict(), model.to_dict())
 
 
-@pytest.mark.parametrize("directory", sorted(p.name for p in OLD.iterdir() if p.is_dir()))
+#: The old files whose predictions use the drive terms, whose Coulomb column was sign(qd) then: refused, not loaded
+DRIVE_LAW_OLD = ("friction", "identification")
+
+
+@pytest.mark.parametrize("directory", DRIVE_LAW_OLD)
+def test_a_model_saved_with_the_old_coulomb_column_is_refused_in_one_line(directory):
+    """The friction identification and the identification saved while their Coulomb column was ``sign q̇`` would predict
+    other torques near rest with today's ``tanh(q̇/ε)``: refused, naming the field, with what to do."""
+    from nfarm.infra.reading import ParamsError
+
+    with pytest.raises(ParamsError, match=r"baseline_id.json: drive_law: must be 'tanh\(qd/coulomb_velocity\)', got "
+                                          r"nothing \(the field is missing\).*sign\(qd\).*refit it"):
+        load_id_model(OLD / directory, ROBOT)
+
+
+@pytest.mark.parametrize("directory", sorted(p.name for p in OLD.iterdir() if p.is_dir() and p.name not in DRIVE_LAW_OLD))
 def test_a_model_saved_before_the_classes_loads_into_its_class_bit_for_bit(directory):
     """The JSON of one RivalIK with a ``kind`` and one BaselineID with a ``learner`` (before issue
     67; tests/data/models_before_67/README.md): loaded into the learner's class, it predicts what

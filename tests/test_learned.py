@@ -420,6 +420,11 @@ def test_an_identification_residual_anfis_adds_to_the_arm_identified_on_its_trai
 
     from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
     data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
+    from nfarm.learning.priors import DRIVE_LAW
+    assert data["drive_law"] == DRIVE_LAW                 # the identification's law is named: an older file is refused
+    path.write_text(json.dumps(with_content_digest({k: v for k, v in data.items() if k != "drive_law"})))
+    with pytest.raises(ParamsError, match=r"learned_id.json: drive_law: must be"):
+        LearnedID.load(tmp_path, ROBOT)
     for edit in ({"prior": None}, {"residual": True}):
         path.write_text(json.dumps(with_content_digest({**data, **edit})))
         with pytest.raises(ParamsError, match=r"learned_id.json: prior\b"):

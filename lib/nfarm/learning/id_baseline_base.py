@@ -37,7 +37,7 @@ from ..model.robot import Robot, robot_hash
 from .bases import BASES
 from .estimator import Registry, SavedModel, check_robot
 from .learned_id import id_states
-from .priors import check_residual, fit_prior, prior_of, prior_torques, read_prior
+from .priors import check_residual, drive_law_field, fit_prior, prior_of, prior_torques, read_drive_law, read_prior
 
 __all__ = ["BaselineID", "Standardised", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "smooth_inputs"]
 
@@ -214,6 +214,13 @@ class BaselineID(SavedModel):
         self.state_ = self._state_of(self.model_)
         return self
 
+    def _uses_drive_law(self) -> bool:
+        """Whether the predictions use :func:`nfarm.learning.priors.drive_terms`: the friction
+        identification, the identification, a learner on the regressor's columns
+        (``angles="regressor"``) or on the identification's residual."""
+        return type(self).learner in ("friction", "identification") or self.options_.get("angles") == "regressor" \
+            or prior_of(self.residual) == "identification"
+
     def _validation(self, robot: Robot, val: Mapping) -> tuple[np.ndarray, np.ndarray]:
         """The validation states' features and scaled targets, as the training states'."""
         vq, vqd, vqdd, vtau = id_states(val, robot, "val")
@@ -240,7 +247,8 @@ class BaselineID(SavedModel):
                 "n_features": int(self.n_features_), "y_mean": json_ready(self.y_mean_),
                 "y_scale": json_ready(self.y_scale_), "fit_seconds": float(self.fit_seconds_),
                 "epochs": self.epochs_, "best_epoch": self.best_epoch_, "state": json_ready(self.state_),
-                **({} if self.prior_ is None else {"prior": json_ready(self.prior_)})}
+                **({} if self.prior_ is None else {"prior": json_ready(self.prior_)}),
+                **drive_law_field(self._uses_drive_law())}
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "BaselineID":
@@ -255,7 +263,7 @@ class BaselineID(SavedModel):
         keys = ("format", "nfarm_version", "learner", "options", "residual", "random_state", "robot",
                 "robot_params_sha256", "n_joints", "n_features", "y_mean", "y_scale", "fit_seconds", "epochs",
                 "best_epoch", "state")
-        v.mapping(data, "", {**dict.fromkeys(keys, True), "prior": False})
+        v.mapping(data, "", {**dict.fromkeys(keys, True), "prior": False, "drive_law": False})
         learner = BASELINES[v.choice(data["learner"], "learner", tuple(BASELINES))]
         if not issubclass(learner, cls):
             v.fail("learner", f"must be {cls.learner!r} (a {cls.__name__}), got {show(data['learner'])}")
@@ -278,6 +286,7 @@ class BaselineID(SavedModel):
             v.fail("residual", str(exc))
         model.robot_, model.options_ = robot, options
         model.prior_ = read_prior(v, data, residual, robot)
+        read_drive_law(v, data, model._uses_drive_law())
         model.n_features_ = v.integer(data["n_features"], "n_features", lo=1, hi=10_000_000)
         model.y_mean_ = v.array(data["y_mean"], "y_mean", (n,))
         model.y_scale_ = v.array(data["y_scale"], "y_scale", (n,))

@@ -37,7 +37,7 @@ from ..model.robot import Robot, joint_array, robot_hash
 from .anfis import ANFIS, fit_shared
 from .bases import basis, basis_width
 from .encoding import check_scaling, input_scaling
-from .priors import check_residual, drive_terms, fit_prior, prior_of, prior_torques, read_prior
+from .priors import check_residual, drive_law_field, drive_terms, fit_prior, prior_of, prior_torques, read_drive_law, read_prior
 from .per_joint import (PerJointModel, CHUNK, FAR, beyond_range, check_far, check_joint_array, joint_anfis_options,
                         model_lines, read_joint_models, warn_far)
 
@@ -341,12 +341,13 @@ class LearnedID(PerJointModel):
                 "input_lo": json_ready(self.input_lo_), "input_span": json_ready(self.input_span_),
                 "fit_seconds": list(self.fit_seconds_),
                 "models": [m.to_dict() for m in self.models_],
-                **({} if self.prior_ is None else {"prior": json_ready(self.prior_)})}
+                **({} if self.prior_ is None else {"prior": json_ready(self.prior_)}),
+                **drive_law_field(_uses_drive_law(self.inputs, self.residual))}
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedID":
         v = Validator(source)
-        v.mapping(data, "", {**dict.fromkeys(_ID_KEYS, True), "shared_premises": False, "prior": False})
+        v.mapping(data, "", {**dict.fromkeys(_ID_KEYS, True), "shared_premises": False, "prior": False, "drive_law": False})
         if data["format"] != ID_FORMAT:
             v.fail("format", f"must be {ID_FORMAT!r} (an nfarm learned ID model), got {show(data['format'])}")
         inputs = v.choice(data["inputs"], "inputs", INPUT_SETS)
@@ -370,11 +371,18 @@ class LearnedID(PerJointModel):
                     shared_premises=shared_premises, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
         model.prior_ = read_prior(v, data, residual, robot)
+        read_drive_law(v, data, _uses_drive_law(inputs, residual))
         model.input_lo_, model.input_span_ = list(lo), list(span)
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
         model.robot_ = robot
         return model
+
+
+def _uses_drive_law(inputs: str, residual) -> bool:
+    """Whether a learned ID's predictions use :func:`nfarm.learning.priors.drive_terms`: the
+    regressor's rows with the drive terms, or the identification's residual."""
+    return inputs == "regressor_drives" or prior_of(residual) == "identification"
 
 
 _ID_KEYS = ("format", "nfarm_version", "inputs", "residual", "anfis_options", "joint_options",

@@ -55,7 +55,11 @@ from ..model.robot import Robot
 from .baseline_parts import StackedLeastSquares
 
 __all__ = ["RESIDUALS", "check_residual", "prior_of", "drive_terms", "identification_columns", "identification_width",
-           "fit_identification", "fit_prior", "prior_torques", "read_prior"]
+           "fit_identification", "fit_prior", "prior_torques", "read_prior", "DRIVE_LAW", "drive_law_field", "read_drive_law"]
+
+#: A saved model's ``drive_law`` field where its predictions use :func:`drive_terms`: a file without it was saved while
+#: the Coulomb column was ``sign q̇`` (before 2026-12-07) and would predict other torques, so it is refused.
+DRIVE_LAW = "tanh(qd/coulomb_velocity)"
 
 #: The values ``residual`` takes: no prior, Newton–Euler's nominal model (``True`` is the same), the identification.
 RESIDUALS = (False, True, "nominal", "identification")
@@ -171,3 +175,21 @@ def read_prior(v: Validator, data: dict, residual: Any, robot: Robot) -> np.ndar
         v.fail("prior", f"must be absent for residual={show(residual)} (only an identification residual has one), "
                         f"got {show(data['prior'])}")
     return None
+
+
+def drive_law_field(uses: bool) -> dict:
+    """``{"drive_law": DRIVE_LAW}`` for a model whose predictions use :func:`drive_terms` (``uses``), else ``{}``."""
+    return {"drive_law": DRIVE_LAW} if uses else {}
+
+
+def read_drive_law(v: Validator, data: dict, uses: bool) -> None:
+    """Refuse (through ``v``) a saved model whose predictions use :func:`drive_terms` (``uses``) but
+    whose ``drive_law`` is not :data:`DRIVE_LAW` — saved while the Coulomb column was ``sign q̇``,
+    it would predict other torques — or one that names a law it does not use."""
+    if uses and data.get("drive_law") != DRIVE_LAW:
+        got = show(data["drive_law"]) if "drive_law" in data else "nothing (the field is missing)"
+        v.fail("drive_law", f"must be {DRIVE_LAW!r}, got {got}: the file was saved while the "
+                            f"identification's Coulomb column was sign(qd) (before 2026-12-07) and would predict other "
+                            f"torques; refit it")
+    if not uses and "drive_law" in data:
+        v.fail("drive_law", f"must be absent for a model that uses no drive terms, got {show(data['drive_law'])}")
