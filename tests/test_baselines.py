@@ -272,7 +272,8 @@ def test_a_saved_identification_residual_is_read_with_its_prior_checked(trajecto
     path = tmp_path / "baseline_id.json"
     data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
     for edit, field in (({"prior": None}, "prior"), ({"prior": data["prior"][:-1]}, "prior"), ({"prior": "θ"}, "prior"),
-                        ({"residual": True}, "prior"), ({"residual": "learned"}, "residual")):
+                        ({"residual": True}, "prior"), ({"residual": True, "prior": None}, "prior"),
+                        ({"residual": "learned"}, "residual")):
         path.write_text(json.dumps(with_content_digest({**data, **edit})))       # edited, as if saved so
         with pytest.raises(ParamsError, match=rf"baseline_id.json: {field}\b"):
             load_id_model(tmp_path, ROBOT)
