@@ -42,16 +42,21 @@ def test_ridge_on_the_chain_basis_identifies_the_arm_and_the_linear_floor_does_n
 
 def test_residual_baseline_adds_newton_euler(trajectories):
     """On torques that are Newton–Euler's plus a viscous term, a linear residual learns the term;
-    the friction identification recovers each joint's armature, viscous and Coulomb values."""
+    the friction identification recovers each joint's armature, viscous and Coulomb values and the
+    reading's zero offset."""
     train = dict(trajectories["train"])
     train["tau"] = train["tau"] + 0.05 * train["qd"]
     model = baseline_id("linear", residual=True).fit(ROBOT, train)
     v = trajectories["val"]
     np.testing.assert_allclose(model.predict(v["q"], v["qd"], v["qdd"]), v["tau"] + 0.05 * v["qd"], atol=1e-9)
     law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
-    train["tau"] = trajectories["train"]["tau"] + _drive_law(law, train)
+    train["tau"] = trajectories["train"]["tau"] + _drive_law(law, train) + OFFSET
     friction = baseline_id("friction", residual=True).fit(ROBOT, train)
-    np.testing.assert_allclose(friction.model_.coef_, law, atol=1e-9)
+    np.testing.assert_allclose(friction.model_.coef_, np.column_stack([law, OFFSET]), atol=1e-9)
+
+
+#: Each joint's zero offset of the torque reading [N·m] (a current sensor's uncalibrated zero: chapter 05)
+OFFSET = np.array([0.012, -0.004, 0.0, 0.008, -0.015])
 
 
 def _drive_law(law, d):
@@ -88,16 +93,16 @@ def _built_arm_torques(trajectories):
     law = np.array([[0.003, 0.06, 0.05], [0.001, 0.2, 0.02], [0.0, 0.1, 0.0], [0.002, 0.0, 0.08], [0.0, 0.01, 0.01]])
 
     def measured(d):
-        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + _drive_law(law, d)}
+        return {**d, "tau": rnea(built, d["q"], d["qd"], d["qdd"]) + _drive_law(law, d) + OFFSET}
 
     return measured(trajectories["train"]), measured(trajectories["val"])
 
 
 def test_the_identification_refits_a_built_arm_that_the_friction_identification_cannot(trajectories):
     """Torques of a built arm (masses, centres and inertias off the model's) plus a drive law of
-    the identified form: the full identification reproduces them to rounding on other
-    trajectories; Newton–Euler with the nominal masses plus the friction identification does
-    not, by far more than rounding."""
+    the identified form and a zero offset of each reading: the full identification reproduces them
+    to rounding on other trajectories; Newton–Euler with the nominal masses plus the friction
+    identification does not, by far more than rounding."""
     train, val = _built_arm_torques(trajectories)
     X = (val["q"], val["qd"], val["qdd"])
     full = baseline_id("identification").fit(ROBOT, train)
@@ -274,7 +279,10 @@ def test_a_saved_identification_residual_is_read_with_its_prior_checked(trajecto
     for edit, field in (({"prior": None}, "prior"), ({"prior": data["prior"][:-1]}, "prior"), ({"prior": "θ"}, "prior"),
                         ({"residual": True}, "prior"), ({"residual": True, "prior": None}, "prior"),
                         ({"residual": "learned"}, "residual")):
-        path.write_text(json.dumps(with_content_digest({**data, **edit})))       # edited, as if saved so
+        edited = {**data, **edit}
+        if edit.get("residual") is True:            # a nominal residual's file names no drive law: its prior is refused
+            edited.pop("drive_law")
+        path.write_text(json.dumps(with_content_digest(edited)))       # edited, as if saved so
         with pytest.raises(ParamsError, match=rf"baseline_id.json: {field}\b"):
             load_id_model(tmp_path, ROBOT)
 
@@ -410,16 +418,20 @@ def test_a_model_of_the_drive_law_names_it_and_one_without_it_is_refused(traject
 
     from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
     from nfarm.learning.baselines import load_id_model
-    from nfarm.learning.priors import DRIVE_LAW
+    from nfarm.learning.priors import DRIVE_LAW, FITTED_LAW
 
-    for learner, options, residual, uses in (("identification", {}, False, True), ("friction", {}, True, True),
-                                             ("ridge", {"basis": "generic"}, "identification", True),
-                                             ("ridge", {"basis": "generic"}, True, False)):
+    for learner, options, residual, law in (("identification", {}, False, FITTED_LAW), ("friction", {}, True, FITTED_LAW),
+                                            ("ridge", {"basis": "generic"}, "identification", FITTED_LAW),
+                                            ("mlp", {"angles": "regressor", "hidden": [4], "max_iter": 2}, False, DRIVE_LAW),
+                                            ("ridge", {"basis": "generic"}, True, None)):
         model = baseline_id(learner, options, residual=residual).fit(ROBOT, trajectories["train"])
         path = model.save(tmp_path / learner / str(residual))
         data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
-        assert (data.get("drive_law") == DRIVE_LAW) is uses and ("drive_law" in data) is uses
-        edited = {k: v for k, v in data.items() if k != "drive_law"} if uses else {**data, "drive_law": DRIVE_LAW}
-        path.write_text(json.dumps(with_content_digest(edited)))
-        with pytest.raises(ParamsError, match=r"baseline_id.json: drive_law: must be"):
-            load_id_model(path.parent, ROBOT)
+        assert data.get("drive_law") == law and ("drive_law" in data) is (law is not None)
+        older = ([{k: v for k, v in data.items() if k != "drive_law"}] if law else [{**data, "drive_law": DRIVE_LAW}])
+        if law == FITTED_LAW:           # saved before the zero offset: the law without it is refused too
+            older.append({**data, "drive_law": DRIVE_LAW})
+        for edited in older:
+            path.write_text(json.dumps(with_content_digest(edited)))
+            with pytest.raises(ParamsError, match=r"baseline_id.json: drive_law: must be"):
+                load_id_model(path.parent, ROBOT)

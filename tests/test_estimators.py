@@ -136,7 +136,8 @@ def test_every_baseline_saved_and_loaded_predicts_the_same_bits(learner, states,
     assert _same_content(loaded.to_dict(), model.to_dict())
 
 
-#: The old files whose predictions use the drive terms, whose Coulomb column was sign(qd) then: refused, not loaded
+#: The old files whose predictions use the drive law, whose Coulomb column was sign(qd) then (and no zero offset): refused,
+#: not loaded
 DRIVE_LAW_OLD = ("friction", "identification")
 
 
@@ -146,7 +147,7 @@ def test_a_model_saved_with_the_old_coulomb_column_is_refused_in_one_line(direct
     other torques near rest with today's ``tanh(q̇/ε)``: refused, naming the field, with what to do."""
     from nfarm.infra.reading import ParamsError
 
-    with pytest.raises(ParamsError, match=r"baseline_id.json: drive_law: must be 'tanh\(qd/coulomb_velocity\)', got "
+    with pytest.raises(ParamsError, match=r"baseline_id.json: drive_law: must be 'tanh\(qd/coulomb_velocity\) \+ offset', got "
                                           r"nothing \(the field is missing\).*sign\(qd\).*refit it"):
         load_id_model(OLD / directory, ROBOT)
 

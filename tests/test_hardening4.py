@@ -332,7 +332,7 @@ def test_implausible_study_values_are_refused(tmp_path, path, value, message):
 @pytest.mark.parametrize("fixed, grid, message", [
     ("{problem: sinc, epochs: -1}", "{}", r"fixed.epochs: must be >= 1, got -1"),
     ("{problem: sinc, epochs: 1000000000000}", "{}", r"fixed.epochs: must be <= 1e\+08"),
-    ("{problem: sinc}", "{n_mfs: [2, 1000000]}", r"grid.n_mfs: must be <= 8, got 1000000"),
+    ("{problem: sinc}", "{n_mfs: [2, 1000000]}", r"grid.n_mfs: must be <= 16, got 1000000"),
     ("{problem: sinc}", "{epochs: [2, 10000000000]}", r"grid.epochs: must be <= 1e\+08"),
     ("{problem: sinc, n_rules: 100000, partition: fcm}", "{}", r"fixed.n_rules: must be <= 4096"),
 ])

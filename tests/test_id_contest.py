@@ -135,16 +135,17 @@ def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
     # Issue 65: the identification tier is a contest — the learners given the regressor's columns beside its least squares
     assert {n for n in tried if n.startswith("identification:")} == {f"identification:{k}" for k in (
         "anfis", "identification", "kernel", "boosting", "mlp")}
-    # ... and identification plus a learned residual, each learner (issue 65), with the configurations of the nominal tier's
-    # and two of its own each
+    # ... and identification plus a learned residual, each learner (issue 65), four configurations that search one
+    # option over at least three values, so that chapter 6.8 judges whether the choice lies at an edge (the ANFIS: its
+    # grid's resolution over q̇, beside fuzzy c-means rules)
     assert {n for n in tried if n.startswith("identification + learned:")} == {f"identification + learned:{k}" for k in (
         "anfis", "ridge", "kernel", "boosting", "mlp")}
-    residual_options = lambda prior: sorted(json.dumps({k: v for k, v in c.params["options"].items() if k != "residual"},  # noqa: E731
-                                                       sort_keys=True) for c in sweep.cells
-                                            if (c.params.get("options") or {}).get("residual") == prior
-                                            and c.params["learner"] != "friction" and c.params["study_file"].endswith("intelbot5.yaml"))
-    nominal, identified = residual_options(True), residual_options("identification")
-    assert set(nominal) < set(identified) and len(identified) == 2 * len(nominal)
+    for learner, option in (("ridge", "alpha"), ("kernel", "gamma"), ("boosting", "learning_rate"), ("mlp", "hidden"),
+                            ("anfis", "n_mfs")):
+        values = {json.dumps(c.params["options"].get(option)) for c in sweep.cells
+                  if contest.id_family(c.params) == f"identification + learned:{learner}"
+                  and c.params["study_file"].endswith("intelbot5.yaml") and option in c.params["options"]}
+        assert len(values) >= 3, (learner, values)
 
 
 def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):

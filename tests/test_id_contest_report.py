@@ -132,10 +132,41 @@ def test_the_prose_names_a_choice_at_the_edge_of_a_search_of_three_values():
     idc = contest.id_contest(seed0)
     curves = {name: [(1500, 30.0)] for name in ("generic: ANFIS", "generic: ridge regression")}
     text = report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE, seed0)
-    assert text.endswith(" At the edge of what its search tried, so that a wider search that way might do better: "
-                         "generic: ridge regression, alpha=10000.0 (the largest tried).")
+    assert " At the edge of what its search tried: generic: ridge regression, alpha=10000.0 (the largest tried; the step " \
+           "from 100.0 moved the validation score by +9.1 %). Where the last step moved the score by less than 1 % the " \
+           "search is flat there" in text                                   # (0.22 - 0.20) / 0.22: not flat
+    flat = [r for r in seed0 if r.cell.params["options"].get("alpha") != 1.0e4] + [
+        result("ridge", 0, 0.2195, basis="generic", alpha=1.0e4)]
+    assert "alpha=10000.0 (the largest tried; the step from 100.0 moved the validation score by 0.23 %: flat)" in \
+        report.contest_prose(contest.id_contest(flat), curves, np.full(ROBOT.n, 0.3), NOISE, flat)
     assert "hidden" not in text                                             # two widths: no edge judged
     inside = [r for r in seed0 if r.cell.params["options"].get("alpha") != 1.0e4]
     assert report.contest_prose(contest.id_contest(inside), curves, np.full(ROBOT.n, 0.3), NOISE, inside).endswith(
         " No learner's chosen value lies at the edge of a search of three or more values.")
     assert "edge" not in report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE)      # no cells given: nothing said
+
+
+def test_the_prose_says_which_learners_add_nothing_to_the_identification():
+    """On the identification's residual, a learner whose chosen configuration scores within 1 % of the identification
+    alone adds nothing; one below it is named with its score."""
+    seed0 = [result("identification", 0, 0.1453), result("anfis", 0, 0.20, inputs="regressor_drives"),
+             result("anfis", 0, 0.125, inputs="own", residual="identification"),
+             result("ridge", 0, 0.1453, basis="generic_drives", alpha=1e8, residual="identification"),
+             result("mlp", 0, 0.1454, hidden=[4, 4], residual="identification"),
+             result("boosting", 0, 0.086, residual="identification")]
+    idc = contest.id_contest(seed0)
+    curves = {contest.id_label(name): [(1500, 30.0)] for name in idc.chosen}
+    text = report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE, seed0)
+    assert " On validation (seed 0) the identification alone reaches 14.5 %. On its residual, ridge regression and " \
+           "multilayer perceptron do no better than it (within 1 %): they add nothing the identification lacks. " \
+           "Learners that improve on it: ANFIS 12.5 % and gradient-boosted trees 8.6 %." in text
+    assert "identification alone" not in report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE)
+
+
+def test_a_boosting_fit_counts_a_pass_a_tree_of_each_joint():
+    """Gradient boosting sweeps every training state once a tree: its budget counts ``max_iter`` passes for each joint,
+    not one (a fit in closed form, one)."""
+    seed0 = [result("boosting", 0, 0.1, max_iter=300, learning_rate=0.05), result("ridge", 0, 0.2, basis="generic")]
+    spent = contest.budgets(seed0, family_of=contest.id_family)
+    assert spent["generic:boosting"].pose_passes == 1500 * 300 * ROBOT.n
+    assert spent["generic:ridge"].pose_passes == 1500

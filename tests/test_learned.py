@@ -420,13 +420,16 @@ def test_an_identification_residual_anfis_adds_to_the_arm_identified_on_its_trai
 
     from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
     data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
-    from nfarm.learning.priors import DRIVE_LAW
-    assert data["drive_law"] == DRIVE_LAW                 # the identification's law is named: an older file is refused
+    from nfarm.learning.priors import FITTED_LAW
+    assert data["drive_law"] == FITTED_LAW                # the identification's law is named: an older file is refused
     path.write_text(json.dumps(with_content_digest({k: v for k, v in data.items() if k != "drive_law"})))
     with pytest.raises(ParamsError, match=r"learned_id.json: drive_law: must be"):
         LearnedID.load(tmp_path, ROBOT)
     for edit in ({"prior": None}, {"residual": True}):
-        path.write_text(json.dumps(with_content_digest({**data, **edit})))
+        edited = {**data, **edit}
+        if edit.get("residual") is True:            # a nominal residual's file names no drive law: its prior is refused
+            edited.pop("drive_law")
+        path.write_text(json.dumps(with_content_digest(edited)))
         with pytest.raises(ParamsError, match=r"learned_id.json: prior\b"):
             LearnedID.load(tmp_path, ROBOT)
     with pytest.raises(ValueError, match=r"residual must be false \(no prior\), true"):

@@ -181,8 +181,9 @@ PORT = Range(lo=1, hi=65535, why="a TCP port")
 #: cell's time limit (a study file's learned_ik.epochs keeps its own tighter budget, 10 000).
 EPOCHS = Range(lo=1, hi=100_000_000, why="more epochs than any cell could train: a typo?")
 #: Membership functions per input of a grid partition: the rules are their product over the
-#: inputs (8 on 7 inputs is 2 million rules).
-N_MFS = Range(lo=1, hi=8, why="the grid's rules are their product over the inputs")
+#: inputs (16 on one input of three, the measured arm's finest q̇ grid, is a handful of rules; 8 on
+#: 7 inputs is 2 million, which the learner's memory budget refuses before it trains).
+N_MFS = Range(lo=1, hi=16, why="the grid's rules are their product over the inputs")
 #: Rules of a clustered rule base (at most; fewer than 1 is the learner's to refuse, in its cell).
 N_RULES = Range(hi=4096, why="the contest's largest is 512; more do not fit the memory of one cell")
 #: Iterations of an iterative learner (an MLP's, boosting's).

@@ -28,14 +28,14 @@ name sweep files give it (what they share is :class:`~nfarm.learning.id_baseline
   the ANFIS gets, on the same validation trajectories;
 * ``"friction"`` (:class:`FrictionID`) — not a learner but the identification any engineer tries
   first on a real arm: a residual only, per joint, least squares of ``τ − rnea`` on that joint's
-  ``[q̈_j, q̇_j, tanh(q̇_j / ε_j)]`` — armature, viscous and Coulomb friction, the robot file's drive
-  law (:func:`nfarm.learning.priors.drive_terms`; chapter 06.8);
+  ``[q̈_j, q̇_j, tanh(q̇_j / ε_j), 1]`` — armature, viscous and Coulomb friction, the robot file's drive
+  law, and the torque reading's zero offset (:func:`nfarm.learning.priors.law_terms`; chapter 06.8);
 * ``"identification"`` (:class:`IdentificationID`) — the full identification of a built arm whose
   geometry is known (Atkeson, An & Hollerbach 1986; the *identification* tier): one least squares of
   ``τ`` over every joint on the rigid-body regressor ``Y(q, q̇, q̈)`` (:func:`nfarm.model.dynamics.regressor`,
-  the inertial parameters shared by all joints' rows) and each joint's ``[q̈_j, q̇_j, tanh(q̇_j / ε_j)]``
-  (armature, viscous and Coulomb friction, the robot file's drive law) — it refits the masses, centres of mass and
-  inertias where the built arm differs from the model. Columns are scaled to unit norm and
+  the inertial parameters shared by all joints' rows) and each joint's ``[q̈_j, q̇_j, tanh(q̇_j / ε_j), 1]``
+  (armature, viscous and Coulomb friction, the robot file's drive law, and the reading's zero offset) — it refits the
+  masses, centres of mass and inertias where the built arm differs from the model. Columns are scaled to unit norm and
   the minimum-norm solution is kept (the regressor's columns are not all identifiable).
 
 **Saving.** A fitted baseline is saved as JSON (:meth:`BaselineID.save`, no pickle): once fitted,
@@ -85,7 +85,7 @@ from .bases import angle_sums, basis
 from .id_baseline_base import (ANGLES, BASELINES, FILE_NAME, FORMAT, MAXIMA, BaselineID, Standardised, baseline_id,
                                smooth_inputs)
 from .learned_id import ID_FILE_NAME, LearnedID, id_features
-from .priors import drive_terms, identification_columns
+from .priors import identification_columns, law_terms
 
 __all__ = ["BaselineID", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "option_names", "label",
            "load_id_model", "regressor_inputs", "LinearID", "RidgeID", "KernelID", "BoostingID", "MLPID", "FrictionID",
@@ -372,7 +372,7 @@ class MLPID(_SmoothInputs, Standardised):
 
 
 class _LeastSquaresLaw(BaselineID):
-    """A physical law fitted by least squares (no offset, no scaling of the targets): its
+    """A physical law fitted by least squares (the targets as they are: its zero-offset column is its constant): its
     ``coef`` is all it keeps."""
 
     scaled_targets = False
@@ -393,7 +393,7 @@ class FrictionID(_LeastSquaresLaw):
         super().__init__(residual=residual, random_state=random_state)
 
     def _features(self, q, qd, qdd):
-        return drive_terms(self.robot_, qd, qdd)                          # (N, n, 3)
+        return law_terms(self.robot_, qd, qdd)                            # (N, n, 4)
 
     def _estimator(self, options):
         return PerJointLeastSquares()
@@ -403,7 +403,7 @@ class FrictionID(_LeastSquaresLaw):
 
     def _read_state(self, v: Validator, state, k, n, options):
         v.mapping(state, "state", {"coef": True})
-        return {"coef": v.array(state["coef"], "state.coef", (n, 3))}
+        return {"coef": v.array(state["coef"], "state.coef", (n, 4))}
 
 
 @BASELINES.register
@@ -417,7 +417,7 @@ class IdentificationID(_LeastSquaresLaw):
     def __init__(self, *, residual: bool = False, random_state: int = 0):
         super().__init__(residual=residual, random_state=random_state)
 
-    def _features(self, q, qd, qdd):                                      # (N, n, 10 n + 3 n)
+    def _features(self, q, qd, qdd):                                      # (N, n, 10 n + 4 n)
         return identification_columns(self.robot_, q, qd, qdd)
 
     def _estimator(self, options):

@@ -37,7 +37,7 @@ from ..model.robot import Robot, robot_hash
 from .bases import BASES
 from .estimator import Registry, SavedModel, check_robot
 from .learned_id import id_states
-from .priors import check_residual, drive_law_field, fit_prior, prior_of, prior_torques, read_drive_law, read_prior
+from .priors import DRIVE_LAW, FITTED_LAW, check_residual, drive_law_field, fit_prior, prior_of, prior_torques, read_drive_law, read_prior
 
 __all__ = ["BaselineID", "Standardised", "BASELINES", "ANGLES", "MAXIMA", "FILE_NAME", "FORMAT", "baseline_id", "smooth_inputs"]
 
@@ -89,7 +89,7 @@ class BaselineID(SavedModel):
         random_state: seed of every random draw.
 
     Learned attributes: ``state_`` (the fitted arithmetic as arrays, what :meth:`predict` uses
-    and :meth:`save` writes), ``prior_`` (the identification's ``θ (13 n,)`` under
+    and :meth:`save` writes), ``prior_`` (the identification's ``θ (14 n,)`` under
     ``residual="identification"``, else ``None``), ``model_`` (the scikit-learn estimator, after :meth:`fit` only),
     ``options_`` (the options checked, as saved), ``robot_``, ``y_mean_``, ``y_scale_``,
     ``fit_seconds_``, ``n_features_`` (inputs the learner sees), ``epochs_`` and ``best_epoch_``
@@ -102,7 +102,8 @@ class BaselineID(SavedModel):
     #: The baseline's name in :data:`BASELINES` (a sweep file's ``learner``) and in words.
     learner: ClassVar[str]
     label: ClassVar[str]
-    #: ``False``: a physical law, fitted without an offset or a scaling of the targets.
+    #: ``False``: a physical law, fitted to the targets as they are (no mean removed, no scaling: its own columns hold any
+    #: constant, the reading's zero offset among them).
     scaled_targets: ClassVar[bool] = True
     #: ``True``: a residual of Newton–Euler's nominal model only; ``False``: never a residual;
     #: ``None``: any :data:`~nfarm.learning.priors.RESIDUALS`. The reason, in words, follows the
@@ -196,7 +197,7 @@ class BaselineID(SavedModel):
         self.robot_, self.options_ = robot, options
         self.prior_, prior, prior_seconds = fit_prior(robot, self.residual, q, qd, qdd, tau)
         target = tau - prior
-        if not self.scaled_targets:      # a physical law: no offset, no scaling
+        if not self.scaled_targets:      # a physical law: the targets as they are
             self.y_mean_, self.y_scale_ = np.zeros(robot.n), np.ones(robot.n)
         else:
             self.y_mean_ = target.mean(axis=0)
@@ -214,12 +215,14 @@ class BaselineID(SavedModel):
         self.state_ = self._state_of(self.model_)
         return self
 
-    def _uses_drive_law(self) -> bool:
-        """Whether the predictions use :func:`nfarm.learning.priors.drive_terms`: the friction
-        identification, the identification, a learner on the regressor's columns
-        (``angles="regressor"``) or on the identification's residual."""
-        return type(self).learner in ("friction", "identification") or self.options_.get("angles") == "regressor" \
-            or prior_of(self.residual) == "identification"
+    def _drive_law(self) -> str | None:
+        """The drive law the predictions use (the saved ``drive_law``): :data:`~nfarm.learning.priors.FITTED_LAW`
+        for a least-squares law (the friction identification, the identification) or a learner on the
+        identification's residual; :data:`~nfarm.learning.priors.DRIVE_LAW` for a learner on the regressor's
+        columns (``angles="regressor"``: the drive terms among its inputs); ``None`` for any other."""
+        if type(self).learner in ("friction", "identification") or prior_of(self.residual) == "identification":
+            return FITTED_LAW
+        return DRIVE_LAW if self.options_.get("angles") == "regressor" else None
 
     def _validation(self, robot: Robot, val: Mapping) -> tuple[np.ndarray, np.ndarray]:
         """The validation states' features and scaled targets, as the training states'."""
@@ -248,7 +251,7 @@ class BaselineID(SavedModel):
                 "y_scale": json_ready(self.y_scale_), "fit_seconds": float(self.fit_seconds_),
                 "epochs": self.epochs_, "best_epoch": self.best_epoch_, "state": json_ready(self.state_),
                 **({} if self.prior_ is None else {"prior": json_ready(self.prior_)}),
-                **drive_law_field(self._uses_drive_law())}
+                **drive_law_field(self._drive_law())}
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "BaselineID":
@@ -285,8 +288,8 @@ class BaselineID(SavedModel):
         except ValueError as exc:
             v.fail("residual", str(exc))
         model.robot_, model.options_ = robot, options
+        read_drive_law(v, data, model._drive_law())               # before the prior: an older law's has other columns
         model.prior_ = read_prior(v, data, residual, robot)
-        read_drive_law(v, data, model._uses_drive_law())
         model.n_features_ = v.integer(data["n_features"], "n_features", lo=1, hi=10_000_000)
         model.y_mean_ = v.array(data["y_mean"], "y_mean", (n,))
         model.y_scale_ = v.array(data["y_scale"], "y_scale", (n,))

@@ -37,7 +37,7 @@ from ..model.robot import Robot, joint_array, robot_hash
 from .anfis import ANFIS, fit_shared
 from .bases import basis, basis_width
 from .encoding import check_scaling, input_scaling
-from .priors import check_residual, drive_law_field, drive_terms, fit_prior, prior_of, prior_torques, read_drive_law, read_prior
+from .priors import DRIVE_LAW, FITTED_LAW, check_residual, drive_law_field, drive_terms, fit_prior, prior_of, prior_torques, read_drive_law, read_prior
 from .per_joint import (PerJointModel, CHUNK, FAR, beyond_range, check_far, check_joint_array, joint_anfis_options,
                         model_lines, read_joint_models, warn_far)
 
@@ -171,7 +171,7 @@ class LearnedID(PerJointModel):
             its own consequents and best epoch; the saved models are ordinary per-joint ones.
         **anfis_options: passed to every joint's :class:`nfarm.learning.anfis.ANFIS`.
 
-    Learned attributes: ``models_``, ``prior_`` (the identification's ``θ (13 n,)`` under
+    Learned attributes: ``models_``, ``prior_`` (the identification's ``θ (14 n,)`` under
     ``residual="identification"``, else ``None``), ``robot_`` (the robot it was fitted or loaded with),
     ``robot_hash_``, ``robot_name_``, ``n_joints_``, ``input_lo_``, ``input_span_`` (per joint, the inputs' scaling to ``[0, 1]``),
     ``fit_seconds_`` (with shared premises, the joint training's time split evenly).
@@ -342,7 +342,7 @@ class LearnedID(PerJointModel):
                 "fit_seconds": list(self.fit_seconds_),
                 "models": [m.to_dict() for m in self.models_],
                 **({} if self.prior_ is None else {"prior": json_ready(self.prior_)}),
-                **drive_law_field(_uses_drive_law(self.inputs, self.residual))}
+                **drive_law_field(_drive_law(self.inputs, self.residual))}
 
     @classmethod
     def from_dict(cls, data: Any, robot: Robot, source: str = "<dict>") -> "LearnedID":
@@ -370,8 +370,8 @@ class LearnedID(PerJointModel):
         model = cls(inputs=inputs, residual=residual, joint_options=joint_options,
                     shared_premises=shared_premises, **options)
         model.models_, model.fit_seconds_ = fitted, seconds
+        read_drive_law(v, data, _drive_law(inputs, residual))     # before the prior: an older law's has other columns
         model.prior_ = read_prior(v, data, residual, robot)
-        read_drive_law(v, data, _uses_drive_law(inputs, residual))
         model.input_lo_, model.input_span_ = list(lo), list(span)
         model.robot_hash_, model.robot_name_, model.n_joints_ = data["robot_params_sha256"], \
             data["robot"], n
@@ -379,10 +379,13 @@ class LearnedID(PerJointModel):
         return model
 
 
-def _uses_drive_law(inputs: str, residual) -> bool:
-    """Whether a learned ID's predictions use :func:`nfarm.learning.priors.drive_terms`: the
-    regressor's rows with the drive terms, or the identification's residual."""
-    return inputs == "regressor_drives" or prior_of(residual) == "identification"
+def _drive_law(inputs: str, residual) -> str | None:
+    """The drive law a learned ID's predictions use (its saved ``drive_law``): the identification's
+    (:data:`~nfarm.learning.priors.FITTED_LAW`) on its residual, the drive terms' among the inputs
+    (:data:`~nfarm.learning.priors.DRIVE_LAW`) on the regressor's rows with them, else ``None``."""
+    if prior_of(residual) == "identification":
+        return FITTED_LAW
+    return DRIVE_LAW if inputs == "regressor_drives" else None
 
 
 _ID_KEYS = ("format", "nfarm_version", "inputs", "residual", "anfis_options", "joint_options",

@@ -12,18 +12,21 @@ A learned inverse dynamics with ``residual`` set learns ``τ − τ_prior(q, q̇
   states the learner then fits the rest of (the *identification + learned* tier: the geometry
   known, nothing of the masses; :func:`identification_columns`, :func:`fit_identification`).
 
-``Y_d (N, n, 13 n)`` is the rigid-body regressor :func:`nfarm.model.dynamics.regressor` (the
-inertial parameters shared by all joints' rows) beside every joint's drive terms
-``[q̈_j, q̇_j, tanh(q̇_j / ε_j)]`` in its own columns: the robot file's own drive law
-(:func:`nfarm.model.dynamics.joint_drive_torques`, ``I_a q̈ + b q̇ + τ_c tanh(q̇ / ε)``; armature,
-viscous and Coulomb friction, the robot file's smoothing speed ``ε``), whose three parameters per
+``Y_d (N, n, 14 n)`` is the rigid-body regressor :func:`nfarm.model.dynamics.regressor` (the
+inertial parameters shared by all joints' rows) beside every joint's law terms
+``[q̈_j, q̇_j, tanh(q̇_j / ε_j), 1]`` in its own columns (:func:`law_terms`): the robot file's own
+drive law (:func:`nfarm.model.dynamics.joint_drive_torques`, ``I_a q̈ + b q̇ + τ_c tanh(q̇ / ε)``;
+armature, viscous and Coulomb friction, the robot file's smoothing speed ``ε``) and the torque
+reading's zero offset (a current sensor's uncalibrated zero, chapter 05), whose four parameters per
 joint the identification fits. (With ``sign q̇`` for the Coulomb column, as before 2026-12-07, the
-identification's residual held a jump at rest that the arm's friction does not have: on validation
-the SO-101's identification scored 5.7 % worst-joint NRMSE with it and 4.7 % with the file's law,
-and a smooth learner on its residual 5.1 % and 4.0 %.) ``θ`` is the least squares of the stacked
-rows with columns scaled to unit norm, the minimum-norm solution kept (the regressor's columns are
-not all identifiable). The same least squares is the ``identification`` baseline
-(:class:`nfarm.learning.baselines.IdentificationID`).
+identification's residual held a jump at rest that the arm's friction does not have: on seed 0's
+validation data the SO-101's identification scored 5.7 % worst-joint NRMSE with it and 4.7 % with
+the file's law, and a smooth learner on its residual 5.1 % and 4.0 %. Without the offset column (added
+later on 2026-12-07), the identification missed each reading's constant zero, which every learner's
+intercept fits: on the same data its worst joint scored 21.7 % on intelbot5 and 4.7 % on the SO-101,
+with it 14.5 % and 3.9 %.) ``θ`` is the least squares of the stacked rows with columns scaled to unit
+norm, the minimum-norm solution kept (the regressor's columns are not all identifiable). The same
+least squares is the ``identification`` baseline (:class:`nfarm.learning.baselines.IdentificationID`).
 
 Example:
     >>> from nfarm.infra.paths import PARAMS
@@ -32,10 +35,10 @@ Example:
     >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
     >>> rng = np.random.default_rng(0)
     >>> q, qd, qdd = (rng.uniform(-1, 1, (300, robot.n)) for _ in range(3))
-    >>> tau = rnea(robot, q, qd, qdd) + 0.05 * qd                 # the arm plus a viscous term
+    >>> tau = rnea(robot, q, qd, qdd) + 0.05 * qd + 0.01          # the arm, a viscous term, a zero offset
     >>> theta = fit_identification(robot, q, qd, qdd, tau)
-    >>> theta.shape, identification_width(robot)                  # 10 n + 3 n columns
-    ((65,), 65)
+    >>> theta.shape, identification_width(robot)                  # 10 n + 4 n columns
+    ((70,), 70)
     >>> bool(np.abs(prior_torques(robot, "identification", q, qd, qdd, theta) - tau).max() < 1e-9)
     True
     >>> bool(np.array_equal(prior_torques(robot, True, q, qd, qdd), rnea(robot, q, qd, qdd)))
@@ -54,12 +57,19 @@ from ..model.dynamics import regressor, rnea
 from ..model.robot import Robot
 from .baseline_parts import StackedLeastSquares
 
-__all__ = ["RESIDUALS", "check_residual", "prior_of", "drive_terms", "identification_columns", "identification_width",
-           "fit_identification", "fit_prior", "prior_torques", "read_prior", "DRIVE_LAW", "drive_law_field", "read_drive_law"]
+__all__ = ["RESIDUALS", "check_residual", "prior_of", "drive_terms", "law_terms", "identification_columns",
+           "identification_width", "fit_identification", "fit_prior", "prior_torques", "read_prior", "DRIVE_LAW",
+           "FITTED_LAW", "drive_law_field", "read_drive_law"]
 
-#: A saved model's ``drive_law`` field where its predictions use :func:`drive_terms`: a file without it was saved while
-#: the Coulomb column was ``sign q̇`` (before 2026-12-07) and would predict other torques, so it is refused.
+#: A saved model's ``drive_law`` field where its inputs hold :func:`drive_terms` (a learner on the regressor's columns):
+#: a file without it was saved while the Coulomb column was ``sign q̇`` (before 2026-12-07) and would predict other
+#: torques, so it is refused.
 DRIVE_LAW = "tanh(qd/coulomb_velocity)"
+
+#: The ``drive_law`` field of a model that fits :func:`law_terms` by least squares (the friction identification, the
+#: identification, a learner on the identification's residual): a file with another was saved before the law had its
+#: zero offset or its ``tanh`` (both added on 2026-12-07) and would predict other torques, so it is refused.
+FITTED_LAW = "tanh(qd/coulomb_velocity) + offset"
 
 #: The values ``residual`` takes: no prior, Newton–Euler's nominal model (``True`` is the same), the identification.
 RESIDUALS = (False, True, "nominal", "identification")
@@ -104,23 +114,41 @@ def drive_terms(robot: Robot, qd, qdd) -> np.ndarray:
     return np.stack([qdd, qd, np.tanh(qd / robot.coulomb_velocity)], axis=-1)
 
 
+def law_terms(robot: Robot, qd, qdd) -> np.ndarray:
+    """``(N, n, 4)``: each joint's ``[q̈_j, q̇_j, tanh(q̇_j / ε_j), 1]`` — :func:`drive_terms` and
+    the torque reading's zero offset, the columns a least-squares law fits per joint (the friction
+    identification's and, beside the rigid-body regressor, the identification's: module docstring).
+    A learner needs no offset column: its intercept is one.
+
+    Example:
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> robot = load_robot(PARAMS / "robots" / "so101.yaml")
+        >>> law_terms(robot, np.array([[0.5, -0.5, 0.0, 0.001, 1.0]]), np.ones((1, 5)))[0, 1].round(3).tolist()
+        [1.0, -0.5, -1.0, 1.0]
+    """
+    drives = drive_terms(robot, qd, qdd)
+    return np.concatenate([drives, np.ones(drives.shape[:-1] + (1,))], axis=-1)
+
+
 def identification_columns(robot: Robot, q, qd, qdd) -> np.ndarray:
-    """``Y_d (N, n, 13 n)``: every joint's row of the rigid-body regressor and the drive terms,
-    joint j's in its own three columns (module docstring)."""
+    """``Y_d (N, n, 14 n)``: every joint's row of the rigid-body regressor and its law terms
+    (:func:`law_terms`), joint j's in its own four columns (module docstring)."""
     n = q.shape[1]
-    own = drive_terms(robot, qd, qdd)                                             # (N, n, 3)
-    drives = (np.eye(n)[None, :, :, None] * own[:, :, None, :]).reshape(len(q), n, 3 * n)
+    own = law_terms(robot, qd, qdd)                                               # (N, n, 4)
+    k = own.shape[-1]
+    drives = (np.eye(n)[None, :, :, None] * own[:, :, None, :]).reshape(len(q), n, k * n)
     return np.concatenate([regressor(robot, q, qd, qdd), drives], axis=-1)
 
 
 def identification_width(robot: Robot) -> int:
-    """The columns of :func:`identification_columns` for ``robot`` (``13 n``)."""
+    """The columns of :func:`identification_columns` for ``robot`` (``14 n``)."""
     z = np.zeros((1, robot.n))
     return identification_columns(robot, z, z, z).shape[-1]
 
 
 def fit_identification(robot: Robot, q, qd, qdd, tau) -> np.ndarray:
-    """``θ (13 n,)``: the least squares of ``τ (N, n)`` on :func:`identification_columns` of the
+    """``θ (14 n,)``: the least squares of ``τ (N, n)`` on :func:`identification_columns` of the
     states ``q, q̇, q̈ (N, n)`` (module docstring)."""
     return StackedLeastSquares().fit(identification_columns(robot, q, qd, qdd), tau).coef_
 
@@ -140,7 +168,7 @@ def fit_prior(robot: Robot, residual: Any, q, qd, qdd, tau) -> tuple[np.ndarray 
         >>> q = np.random.default_rng(0).uniform(-1, 1, (50, robot.n))
         >>> theta, torques, seconds = fit_prior(robot, "identification", q, q, q, np.zeros_like(q))
         >>> theta.shape, torques.shape, fit_prior(robot, False, q, q, q, q)[:2]
-        ((65,), (50, 5), (None, 0.0))
+        ((70,), (50, 5), (None, 0.0))
     """
     if prior_of(residual) == "identification":
         columns = identification_columns(robot, q, qd, qdd)
@@ -167,7 +195,7 @@ def prior_torques(robot: Robot, residual: Any, q, qd, qdd, theta: np.ndarray | N
 
 
 def read_prior(v: Validator, data: dict, residual: Any, robot: Robot) -> np.ndarray | None:
-    """A saved model's ``prior`` field, checked by ``v``: ``θ (13 n,)`` for an identification
+    """A saved model's ``prior`` field, checked by ``v``: ``θ (14 n,)`` for an identification
     residual (required), absent for any other (``null`` included: refused)."""
     if prior_of(residual) == "identification":
         return v.array(data.get("prior"), "prior", (identification_width(robot),))
@@ -177,19 +205,20 @@ def read_prior(v: Validator, data: dict, residual: Any, robot: Robot) -> np.ndar
     return None
 
 
-def drive_law_field(uses: bool) -> dict:
-    """``{"drive_law": DRIVE_LAW}`` for a model whose predictions use :func:`drive_terms` (``uses``), else ``{}``."""
-    return {"drive_law": DRIVE_LAW} if uses else {}
+def drive_law_field(law: str | None) -> dict:
+    """``{"drive_law": law}`` for a model whose predictions use a drive law (:data:`DRIVE_LAW` or
+    :data:`FITTED_LAW`), ``{}`` for one that uses none (``law`` ``None``)."""
+    return {} if law is None else {"drive_law": law}
 
 
-def read_drive_law(v: Validator, data: dict, uses: bool) -> None:
-    """Refuse (through ``v``) a saved model whose predictions use :func:`drive_terms` (``uses``) but
-    whose ``drive_law`` is not :data:`DRIVE_LAW` — saved while the Coulomb column was ``sign q̇``,
-    it would predict other torques — or one that names a law it does not use."""
-    if uses and data.get("drive_law") != DRIVE_LAW:
+def read_drive_law(v: Validator, data: dict, law: str | None) -> None:
+    """Refuse (through ``v``) a saved model whose predictions use a drive law (``law``:
+    :data:`DRIVE_LAW` or :data:`FITTED_LAW`) but whose ``drive_law`` is not it — saved under an older
+    law, it would predict other torques — or one that names a law it does not use (``law`` ``None``)."""
+    if law is not None and data.get("drive_law") != law:
         got = show(data["drive_law"]) if "drive_law" in data else "nothing (the field is missing)"
-        v.fail("drive_law", f"must be {DRIVE_LAW!r}, got {got}: the file was saved while the "
-                            f"identification's Coulomb column was sign(qd) (before 2026-12-07) and would predict other "
-                            f"torques; refit it")
-    if not uses and "drive_law" in data:
+        v.fail("drive_law", f"must be {law!r}, got {got}: the file was saved under an older drive law (the Coulomb "
+                            f"column sign(qd), or no zero offset, before 2026-12-07) and would predict "
+                            f"other torques; refit it")
+    if law is None and "drive_law" in data:
         v.fail("drive_law", f"must be absent for a model that uses no drive terms, got {show(data['drive_law'])}")

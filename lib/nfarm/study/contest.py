@@ -60,7 +60,7 @@ from .sweep import CellResult, Replicates, by_configuration, sweep_results
 from .sweep_files import Cell, Sweep
 
 __all__ = ["SEVEN_FCM", "ID_TIER_DIRS", "ID_RANKED_BY", "ID_LABELS", "id_label", "in_span", "id_configuration", "IDContest", "id_contest", "id_model_dir", "id_spread_params", "id_spread_runs", "json_key", "id_family", "id_tier", "id_contending", "RANKED_BY", "SPREAD_SEEDS", "SMOKE_SPREAD_SEEDS", "KEEP_WITHIN", "LABELS", "contending", "saved_rivals", "VALIDATION_FILE", "save_validation", "saved_ranking", "rival_ranking", "family", "label", "STRUCTURE_OF", "structure_of", "learner_of", "choose", "Budget", "passes_of", "budgets", "spread_params",
-           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
+           "standings", "paired_gap", "RUNG_FRACTION", "PROMOTED", "RUNG_TOLERANCE", "promoted_params", "at_edge", "EDGE_FLAT", "edge_step", "edges_text", "tier_finalists", "tier_spread_params", "with_tier_finalists"]
 
 #: The tool metrics a contestant is ranked by, in order (validation, lower is better).
 RANKED_BY = ("position_p95_mm", "orientation_p95_deg")
@@ -349,6 +349,78 @@ def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
     return edges
 
 
+#: A search is *flat* toward its edge when its last step there changed the contestant's best seed-0 validation score by
+#: less than this share of it (assumed: well inside every contest's spread over the seeds): a wider search that way is
+#: unlikely to move the score, as a steeper last step says it might (:func:`edge_step`).
+EDGE_FLAT = 0.01
+
+
+def edge_step(results: Iterable[CellResult], name: str, option: str, value: Any, metric: str, *,
+              family_of=family) -> tuple[Any, float] | None:
+    """The last step of contestant ``name``'s search toward its edge ``option=value`` (one of
+    :func:`at_edge`'s): ``(neighbour, gain)`` — the value tried next to the edge and the relative
+    change of the best seed-0 validation ``metric`` over the step, ``(m_neighbour − m_edge) / m_neighbour``,
+    among ``name``'s configurations with each value (positive: the edge scored better; below
+    :data:`EDGE_FLAT` in size, the search is flat there). ``None`` where no configuration holds a
+    neighbouring value.
+
+    Example (ridge's penalty: from 1e4 to 1e6 the score moved by 0.05 %, flat):
+        >>> from nfarm.study.sweep import CellResult
+        >>> from nfarm.study.sweep_files import Cell
+        >>> cells = [CellResult(Cell({"learner": "ridge", "options": {"alpha": a}, "seed": 0}, str(a)), "ok",
+        ...                     {"worst_nrmse": m}, 1.0, "w") for a, m in ((1.0, 0.158), (1e4, 0.14535), (1e6, 0.14528))]
+        >>> neighbour, gain = edge_step(cells, "ridge", "alpha", 1e6, "worst_nrmse")
+        >>> neighbour, round(gain, 5), abs(gain) < EDGE_FLAT
+        (10000.0, 0.00048, True)
+    """
+    best: dict[float, tuple[float, Any]] = {}
+    for r in results:
+        params = r.cell.params
+        if params.get("seed", 0) != 0 or params.get("split", "val") != "val" or family_of(params) != name:
+            continue
+        size = _size((params.get("options") or {}).get(option))
+        if size is not None and metric in r.metrics:
+            m = float(r.metrics[metric])
+            if size not in best or m < best[size][0]:
+                best[size] = (m, (params.get("options") or {})[option])
+    edge = _size(value)
+    if edge not in best:
+        return None
+    sizes = sorted(best)
+    k = sizes.index(edge)
+    inward = k + 1 if k == 0 else k - 1
+    if not 0 <= inward < len(sizes) or inward == k:
+        return None
+    m_in, neighbour = best[sizes[inward]]
+    return neighbour, (m_in - best[edge][0]) / m_in if m_in else 0.0
+
+
+def edges_text(results: Sequence[CellResult], edges: Mapping[str, Sequence[tuple[str, Any, str]]], metric: str, *,
+               label_of, family_of=family) -> str:
+    """Each of :func:`at_edge`'s ``edges`` in words with its last step (:func:`edge_step` of ``metric``):
+    ``"ridge regression, alpha=1e+06 (the largest tried; the step from 1e+04 moved the validation score by
+    0.05 %: flat)"``, joined by ``"; "`` (``label_of``: a contestant's name in words)."""
+    phrases = []
+    for name, found in edges.items():
+        for key, value, side in found:
+            step = edge_step(results, name, key, value, metric, family_of=family_of)
+            said = f"{label_of(name)}, {key}={_option_text(value)} (the {side} tried"
+            if step is not None:
+                neighbour, gain = step
+                said += (f"; the step from {_option_text(neighbour)} moved the validation score by "
+                         + (f"{100 * abs(gain):.2g} %: flat" if abs(gain) < EDGE_FLAT else
+                            f"{100 * gain:+.2g} %"))
+            phrases.append(said + ")")
+    return "; ".join(phrases)
+
+
+def _option_text(value: Any) -> str:
+    """An option's value in prose: ``1e+06`` for a float of six digits or more, else as written."""
+    if isinstance(value, float) and (abs(value) >= 1e5 or 0 < abs(value) < 1e-3):
+        return f"{value:.0e}"
+    return str(value)
+
+
 def _size(value: Any) -> float | None:
     """A numerical option's size for :func:`at_edge`: the number itself, or a list of numbers'
     sum (an MLP's ``hidden`` widths: its hidden units); ``None`` for anything else."""
@@ -369,12 +441,24 @@ class Budget(NamedTuple):
     cell_seconds: float          #: the cells' seconds (training, the validation's predictions, the data's loading)
 
 
-def passes_of(metrics: Mapping) -> int:
+def passes_of(metrics: Mapping, params: Mapping | None = None) -> int:
     """The passes over its training data one fit made: the epochs its models ran, summed over its
-    per-joint models (``metrics["epochs"]``, a number or a list), and one for a fit in closed form
-    (no epochs: least squares, kernel ridge, RBF, k-NN, boosting's trees counted as one pass)."""
+    per-joint models (``metrics["epochs"]``, a number or a list); for gradient boosting (``params``'
+    learner), one a tree, ``max_iter`` trees for each joint (``metrics["rmse"]``'s length: each
+    iteration sweeps every training state for its gradients and histograms); one for a fit in
+    closed form (least squares, kernel ridge, RBF, k-NN).
+
+    Example:
+        >>> passes_of({"epochs": [20, 18]}), passes_of({}), passes_of({"rmse": [0.1] * 5},
+        ...                                                              {"learner": "boosting", "options": {"max_iter": 300}})
+        (38, 1, 1500)
+    """
     epochs = metrics.get("epochs") or 0
     total = int(sum(epochs)) if isinstance(epochs, (list, tuple)) else int(epochs)
+    if not total and params is not None and params.get("learner") == "boosting":
+        joints = metrics.get("rmse")
+        trees = (params.get("options") or {}).get("max_iter", BASELINES.of("boosting")().max_iter)
+        total = int(trees) * (len(joints) if isinstance(joints, (list, tuple)) else 1)
     return max(total, 1)
 
 
@@ -389,7 +473,7 @@ def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, Bud
     for r in results:
         if r.cell.params.get("seed", 0) == 0 and r.cell.params.get("split", "val") == "val":
             name = family_of(r.cell.params)
-            work = int(r.metrics.get("train_samples", 0)) * passes_of(r.metrics)
+            work = int(r.metrics.get("train_samples", 0)) * passes_of(r.metrics, r.cell.params)
             spent.setdefault(name, []).append((work, float(r.metrics["fit_seconds"]), float(r.seconds)))
             tried.setdefault(name, set()).add(json_key({k: v for k, v in r.cell.params.items() if k != "fraction"}))
     return {name: Budget(len(tried[name]), len(s), sum(w for w, _, _ in s), float(sum(a for _, a, _ in s)),

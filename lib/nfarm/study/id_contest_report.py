@@ -91,7 +91,7 @@ def budget_table(idc: contest.IDContest) -> Table:
                    f"{idc.budgets[name].pose_passes:,}"] for name in idc.chosen],
                  caption="The tuning budget each learner spent on seed 0: configurations, the models trained and the "
                          "training states they saw times the passes over them (the epochs each joint's model ran, "
-                         "summed; a fit in closed form or by boosting, one pass). The same on any machine; the seconds "
+                         "summed; boosting, one a tree of each joint; a fit in closed form, one pass). The same on any machine; the seconds "
                          "are in the next table")
 
 
@@ -193,7 +193,34 @@ def contest_prose(idc: contest.IDContest, curves: Mapping[str, Sequence[tuple[in
         f"{contest.id_label(contest.id_family(best.cell.params))} at {pct(best.metrics['worst_nrmse'])} % "
         f"({best.metrics['worst_rmse']:.3g} N·m on the worst joint; the rigid-body span, an identification in disguise, "
         f"aside). The sensor noise, which no model can predict, is {np.max(noise):.3g} N·m. Chapter 7 tests each "
-        f"tier's finalists, frozen, on the held-out trajectories.") + _edges_text(idc, runs)
+        f"tier's finalists, frozen, on the held-out trajectories.") + _prior_alone_text(idc, runs) + _edges_text(idc, runs)
+
+
+def _prior_alone_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str:
+    """`` The identification alone reaches …``: the identification + learned tier's learners whose
+    chosen configuration scores within :data:`~nfarm.study.contest.EDGE_FLAT` of the identification
+    alone (the identification tier's least squares, seed 0, from the tuning round's ``runs``) add
+    nothing to it; those below it are named with their scores (``""`` where the tier or that cell is missing)."""
+    metric = contest.ID_RANKED_BY[0]
+    alone = next((r for r in runs if r.cell.params.get("learner") == "identification" and r.cell.params.get("seed", 0) == 0
+                  and r.cell.params.get("split", "val") == "val"), None)
+    tier = TIERS["identified"]
+    learners = {name: r for name, r in idc.chosen.items() if name.rsplit(":", 1)[0] == tier}
+    if alone is None or not learners:
+        return ""
+    base = float(alone.metrics[metric])
+    nothing = [contest.id_label(name).split(": ", 1)[1] for name, r in learners.items()
+               if float(r.metrics[metric]) > (1 - contest.EDGE_FLAT) * base]
+    gained = [f"{contest.id_label(name).split(': ', 1)[1]} {pct(r.metrics[metric])} %" for name, r in learners.items()
+              if float(r.metrics[metric]) <= (1 - contest.EDGE_FLAT) * base]
+    text = f" On validation (seed 0) the identification alone reaches {pct(base)} %."
+    if nothing:
+        text += (f" On its residual, {listed(nothing)} {'does' if len(nothing) == 1 else 'do'} no better than it (within "
+                 f"{100 * contest.EDGE_FLAT:g} %): {'it adds' if len(nothing) == 1 else 'they add'} nothing the identification "
+                 f"lacks.")
+    if gained:
+        text += f" Learners that improve on it: {listed(gained)}."
+    return text
 
 
 def _edges_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str:
@@ -202,9 +229,12 @@ def _edges_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str:
     edges = contest.at_edge(runs, idc.chosen, family_of=contest.id_family) if runs else {}
     if not edges:
         return " No learner's chosen value lies at the edge of a search of three or more values." if runs else ""
-    return (" At the edge of what its search tried, so that a wider search that way might do better: "
-            + "; ".join(f"{contest.id_label(name)}, {key}={value} (the {side} tried)" for name, found in edges.items()
-                        for key, value, side in found) + ".")
+    return (" At the edge of what its search tried: "
+            + contest.edges_text(runs, edges, contest.ID_RANKED_BY[0], label_of=contest.id_label,
+                                 family_of=contest.id_family)
+            + f". Where the last step moved the score by less than {100 * contest.EDGE_FLAT:g} % the search is flat "
+              "there, and a wider one that way is unlikely to move it; where it moved it more, a wider one might "
+              "do better.")
 
 
 def nominal_anfis(idc: contest.IDContest) -> Replicates | None:

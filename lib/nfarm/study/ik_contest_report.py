@@ -214,9 +214,11 @@ def contest_prose(ranked: Sequence[Replicates], spent: Mapping[str, tuple], rung
     text += (f"; pruned after seed 0, more than {contest.KEEP_WITHIN:g} times the best's 95th percentile: "
              f"{listed(pruned)}." if pruned else ".")
     edges = contest.at_edge(rung_runs, chosen)
-    text += (" At the edge of what its search tried, so that a wider search that way might do better: "
-             + "; ".join(f"{contest.label(name)}, {key}={value} (the {side} tried)" for name, found in edges.items()
-                         for key, value, side in found) + "." if edges else
+    text += (" At the edge of what its search tried (on the first rung's poses): "
+             + contest.edges_text(rung_runs, edges, contest.RANKED_BY[0], label_of=contest.label)
+             + f". Where the last step moved the score by less than {100 * contest.EDGE_FLAT:g} % the search is flat "
+               "there, and a wider one that way is unlikely to move it; where it moved it more, a wider one might "
+               "do better." if edges else
              " No contestant's chosen configuration lies at the edge of a value its search tried.")
     if edges:       # what stops the search there: the cost of the chosen fit, and the sweep file's reasons
         costs = [f"{contest.label(name)} {_cost_text(chosen[name].metrics)}" for name in edges]
