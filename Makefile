@@ -22,7 +22,12 @@ export PYTHONHASHSEED := 0
 # their last bits differ; chaotic quantities (ANFIS step-size oscillations, Jacobian-transpose
 # iteration counts) then differ in the published tables. `make report` pins both to what every
 # x86-64 machine since 2013 (Haswell, Zen) runs natively; measured, see docs/reproducibility.md and docs/performance.md.
-REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 \
+# NUMPY_MADVISE_HUGEPAGE=0: numpy asks the kernel for transparent huge pages for every large array, and where the
+# kernel compacts memory to serve them on the fault (defrag "madvise", as on this project's machines) the study's
+# large, short-lived designs spend more seconds in the kernel than in their arithmetic: the rigid-body span's ridge
+# fits took 4.5-7.5 s of system time with it and 1.9 s without, the same 5.6 s of user time and the same bits
+# (measured 2026-12-07, docs/performance.md). The numbers do not depend on it.
+REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 NUMPY_MADVISE_HUGEPAGE=0 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 
 .PHONY: setup arm report test bench sweep course lock lab panel verify clean distclean worker
@@ -69,7 +74,7 @@ verify: $(STAMP)
 # thread per worker: two workers already use both cores (two threads each would thrash them).
 test: $(STAMP)
 	@$(BYTECODE)
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(PY) -m pytest -n 2 --dist loadgroup
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 NUMPY_MADVISE_HUGEPAGE=0 $(PY) -m pytest -n 2 --dist loadgroup
 
 bench: $(STAMP)
 	@set -e; for b in benchmarks/bench_*.py; do echo "== $$b"; $(PY) $$b; done
