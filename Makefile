@@ -23,10 +23,12 @@ export PYTHONHASHSEED := 0
 # iteration counts) then differ in the published tables. `make report` pins both to what every
 # x86-64 machine since 2013 (Haswell, Zen) runs natively; measured, see docs/reproducibility.md and docs/performance.md.
 # NUMPY_MADVISE_HUGEPAGE=0: numpy asks the kernel for transparent huge pages for every large array, and where the
-# kernel compacts memory to serve them on the fault (defrag "madvise", as on this project's machines) the study's
-# large, short-lived designs spend more seconds in the kernel than in their arithmetic: the rigid-body span's ridge
-# fits took 4.5-7.5 s of system time with it and 1.9 s without, the same 5.6 s of user time and the same bits
-# (measured 2026-12-07, docs/performance.md). The numbers do not depend on it.
+# kernel compacts memory to serve them on the fault (defrag "madvise", as on this project's machines) a large,
+# short-lived design spends seconds in the kernel: the rigid-body span's ridge fits took 4.5-7.5 s of system time with
+# them and 1.9 s without, the same 5.6 s of user time. Over the clean build the gain is small — system time 310 → 171 s,
+# user time 1 912 → 2 037 s (small pages cost the arithmetic more), 14 CPU-s in all; the cells whose cost had swung
+# most between builds, the rigid-body span's ridge fits (31 and 50 CPU-s over their seed-0 cells), took 20 (measured
+# 2026-12-07, docs/performance.md). The numbers do not depend on it.
 REPORT_ENV := OPENBLAS_CORETYPE=Haswell OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 NUMPY_MADVISE_HUGEPAGE=0 \
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"
 

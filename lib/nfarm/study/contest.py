@@ -415,9 +415,16 @@ def edges_text(results: Sequence[CellResult], edges: Mapping[str, Sequence[tuple
 
 
 def _option_text(value: Any) -> str:
-    """An option's value in prose: ``1e+06`` for a float of six digits or more, else as written."""
-    if isinstance(value, float) and (abs(value) >= 1e5 or 0 < abs(value) < 1e-3):
-        return f"{value:.0e}"
+    """An option's value in prose: a power of ten's mantissa and exponent from 1e5 up or below 1e-3
+    (``1e8``, ``2.5e-06`` → ``2.5e-6``), anything else as written.
+
+    Example:
+        >>> _option_text(100000000), _option_text(1.0e6), _option_text(2.5e-6), _option_text(0.025), _option_text([4, 4])
+        ('1e8', '1e6', '2.5e-6', '0.025', '[4, 4]')
+    """
+    if is_number(value, numpy=False) and not isinstance(value, bool) and (abs(value) >= 1e5 or 0 < abs(value) < 1e-3):
+        mantissa, exponent = f"{float(value):.3e}".split("e")
+        return f"{float(mantissa):g}e{int(exponent)}"
     return str(value)
 
 
