@@ -129,7 +129,7 @@ def test_the_identification_refits_a_built_arm_that_the_friction_identification_
     ("mlp", {"hidden": [10**6]}, "mlp: hidden must be a list of 1 to 16 layer widths from 1 to 4,096"),
     ("mlp", {"hidden": [True]}, "mlp: hidden must be a list of 1 to 16 layer widths"),
     ("linear", {"alpha": 1.0}, "unknown option 'alpha' for learner 'linear'; valid: none"),
-    ("mlp", {"angles": "sums"}, "mlp: angles must be one of joints, chain, regressor, got 'sums'"),
+    ("mlp", {"angles": "sums"}, "mlp: angles must be one of joints, chain, regressor, own, got 'sums'"),
 ])
 def test_bad_baseline_options_are_refused_before_any_work(learner, options, message, trajectories):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -308,6 +308,37 @@ def test_the_structure_informed_rivals_see_the_parallel_joints_angle_sums(learne
     assert tier_of({**plain.options_, "learner": learner}) == "generic"
     model.save(tmp_path)
     np.testing.assert_array_equal(load_id_model(tmp_path, ROBOT).predict(*X), model.predict(*X))
+
+
+@pytest.mark.parametrize("learner", ["kernel", "boosting", "mlp"])
+def test_a_rival_on_each_joints_own_state_has_a_model_a_joint(learner, trajectories, tmp_path):
+    """``angles="own"``: joint j's model sees its own ``q_j, q̇_j, q̈_j`` alone (the residual ANFIS's ``own`` inputs), so
+    its torque moves with no other joint's state; the MLP stops each joint's model early on that joint's validation
+    torque; saved, it predicts the same bits, and a file with fewer joints' models is refused in one line."""
+    import json
+
+    from nfarm.infra.reading import CONTENT_FIELD, ParamsError, with_content_digest
+    from nfarm.learning.baselines import load_id_model
+
+    train, val = trajectories["train"], trajectories["val"]
+    model = baseline_id(learner, {**SMALL[learner], "angles": "own"}).fit(ROBOT, train, val)
+    X = [val["q"].copy(), val["qd"].copy(), val["qdd"].copy()]
+    before = model.predict(*X)
+    for a in X:                                  # every joint's state but the third's moved
+        a[:, [0, 1, 3, 4]] = a[::-1][:, [0, 1, 3, 4]]
+    after = model.predict(*X)
+    np.testing.assert_array_equal(after[:, 2], before[:, 2])
+    assert not np.allclose(after[:, 0], before[:, 0]) and model.n_features_ == 3
+    assert len(model.state_["per_joint"]) == ROBOT.n
+    if learner == "mlp":
+        assert len(model.epochs_) == ROBOT.n and all(1 <= b < e for b, e in zip(model.best_epoch_, model.epochs_))
+    path = model.save(tmp_path)
+    np.testing.assert_array_equal(load_id_model(tmp_path, ROBOT).predict(*X), after)
+    data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
+    data["state"] = {"per_joint": data["state"]["per_joint"][:-1]}
+    path.write_text(json.dumps(with_content_digest(data)))
+    with pytest.raises(ParamsError, match=r"baseline_id.json: state.per_joint: must .*5"):
+        load_id_model(tmp_path, ROBOT)
 
 
 def test_an_edited_or_foreign_baseline_file_is_refused_in_one_line(trajectories, tmp_path):

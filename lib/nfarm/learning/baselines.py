@@ -186,11 +186,15 @@ class _SmoothInputs:
     """The ``sin, cos`` of the joint angles (``angles="joints"``) or of them and their sums over
     parallel joints (``"chain"``), then ``q̇, q̈`` (:func:`~nfarm.learning.id_baseline_base.smooth_inputs`);
     or (``"regressor"``, the identification tier's knowledge) every joint's row of the rigid-body
-    regressor and its drive terms, side by side (:func:`regressor_inputs`)."""
+    regressor and its drive terms, side by side (:func:`regressor_inputs`); or (``"own"``) each
+    joint's own ``q_j, q̇_j, q̈_j``, ``(N, n, 3)``, one model a joint — the inputs of the residual
+    ANFIS's ``own`` set, so that a rival gets the ANFIS's structure too."""
 
     def _features(self, q, qd, qdd):
         if self.options_["angles"] == "regressor":
             return regressor_inputs(self.robot_, q, qd, qdd)
+        if self.options_["angles"] == "own":
+            return np.stack([q, qd, qdd], axis=-1)
         return smooth_inputs(q if self.options_["angles"] == "joints" else angle_sums(self.robot_, q), qd, qdd)
 
 
@@ -240,7 +244,7 @@ class KernelID(_SmoothInputs, Standardised):
     def _scaled_state(self, rest, last):
         (nystroem,) = rest
         return {"landmarks": nystroem.components_, "normalization": nystroem.normalization_,
-                "gamma": float(nystroem.gamma), "coef": last.coef_, "intercept": np.atleast_1d(last.intercept_)}
+                "gamma": float(nystroem.gamma), "coef": np.atleast_2d(last.coef_), "intercept": np.atleast_1d(last.intercept_)}
 
     def _predict_scaled(self, state, Xs):
         from sklearn.metrics.pairwise import rbf_kernel
@@ -315,17 +319,21 @@ class MLPID(_SmoothInputs, Standardised):
             max_iter=options["max_iter"], early_stopping=False, random_state=self.random_state, tol=0.0,
             n_iter_no_change=options["max_iter"] + 1))
 
-    def _train(self, options, X, Z, robot, val):
+    def _train(self, options, X, Z, robot, val, joint=None):
         """Without ``val``: ``max_iter`` epochs. With it: trained epoch by epoch (``partial_fit``:
         one pass of Adam over shuffled batches, as ``fit`` makes), its weights those of the epoch
         of least validation RMSE, stopped ``patience`` epochs after it or at ``max_iter``; sets
         ``epochs_`` and ``best_epoch_`` (0-based)."""
+        if Z.ndim == 2 and Z.shape[1] == 1:     # a model a joint: one output, as scikit-learn wants it (1-D)
+            Z = Z[:, 0]
         if val is None:
-            return super()._train(options, X, Z, robot, val)
+            return super()._train(options, X, Z, robot, val, joint)
         from sklearn.pipeline import make_pipeline
         from sklearn.preprocessing import StandardScaler
 
         X_val, Z_val = self._validation(robot, val)
+        if joint is not None:                   # a model a joint: its own inputs and torque
+            X_val, Z_val = X_val[:, joint], Z_val[:, joint:joint + 1]
         _, MLPRegressor = _timed_learners()
         scaler = StandardScaler().fit(X)
         net = MLPRegressor(hidden_layer_sizes=tuple(options["hidden"]), alpha=options["alpha"],

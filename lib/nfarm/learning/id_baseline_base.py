@@ -51,8 +51,9 @@ BASELINES = Registry("ID baseline", "learner")
 #: and the MLP's widths bound the work of one iteration, which the time limit cannot split.
 MAXIMA = {"n_components": 10_000, "max_iter": 100_000, "max_leaf_nodes": 4_096, "hidden": 4_096, "patience": 100_000}
 #: The angles whose ``sin, cos`` the kernel, boosting and the MLP see (:mod:`nfarm.learning.baselines`), or
-#: ``"regressor"``: the rigid-body regressor's columns and the drive terms instead (the identification tier's inputs).
-ANGLES = ("joints", "chain", "regressor")
+#: ``"regressor"``: the rigid-body regressor's columns and the drive terms instead (the identification tier's inputs),
+#: or ``"own"``: one model a joint, each on its own ``q_j, q̇_j, q̈_j`` alone (the residual ANFIS's ``own`` inputs).
+ANGLES = ("joints", "chain", "regressor", "own")
 
 
 def smooth_inputs(angles, qd, qdd) -> np.ndarray:
@@ -159,10 +160,15 @@ class BaselineID(SavedModel):
     def _estimator(self, options: dict):
         raise NotImplementedError
 
-    def _train(self, options: dict, X, Z, robot: Robot, val: Mapping | None):
+    def _train(self, options: dict, X, Z, robot: Robot, val: Mapping | None, joint: int | None = None):
         """The fitted estimator of features ``X`` and scaled targets ``Z`` (``val``: the
-        validation states, for a learner that stops early on them)."""
+        validation states, for a learner that stops early on them; ``joint``: the joint whose
+        model this is, for a model a joint, :meth:`_per_joint`)."""
         return self._estimator(options).fit(X, Z)
+
+    def _per_joint(self) -> bool:
+        """One model a joint, each on its own state (``angles="own"``: features ``(N, n, 3)``)."""
+        return self.options_.get("angles") == "own"
 
     def _state_of(self, model) -> dict:
         raise NotImplementedError
@@ -210,9 +216,20 @@ class BaselineID(SavedModel):
         with warnings.catch_warnings():
             # A budget of epochs is the design: reaching it is not a failure.
             warnings.simplefilter("ignore", ConvergenceWarning)
-            self.model_ = self._train(options, X, Z, robot, val)
+            if self._per_joint():       # joint j's model on its own state and torque alone
+                fits, epochs, best = [], [], []
+                for j in range(robot.n):
+                    self.epochs_ = self.best_epoch_ = None
+                    fits.append(self._train(options, X[:, j], Z[:, j:j + 1], robot, val, joint=j))
+                    epochs.append(self.epochs_)
+                    best.append(self.best_epoch_)
+                self.model_ = fits
+                self.epochs_, self.best_epoch_ = (None, None) if epochs[0] is None else (epochs, best)
+            else:
+                self.model_ = self._train(options, X, Z, robot, val)
         self.fit_seconds_ = time.perf_counter() - start + prior_seconds
-        self.state_ = self._state_of(self.model_)
+        self.state_ = ({"per_joint": [self._state_of(m) for m in self.model_]} if self._per_joint()
+                       else self._state_of(self.model_))
         return self
 
     def _drive_law(self) -> str | None:
@@ -234,7 +251,12 @@ class BaselineID(SavedModel):
         """Torques ``(N, n)`` [N·m] for states ``(N, n)``."""
         self._check_fitted()
         q, qd, qdd = id_states({"q": q, "qd": qd, "qdd": qdd}, self.robot_, "states", tau=False)
-        y = self._predict_state(self.state_, self._features(q, qd, qdd)).reshape(len(q), -1)
+        X = self._features(q, qd, qdd)
+        if self._per_joint():
+            y = np.column_stack([self._predict_state(state, X[:, j]).reshape(len(q))
+                                 for j, state in enumerate(self.state_["per_joint"])])
+        else:
+            y = self._predict_state(self.state_, X).reshape(len(q), -1)
         return y * self.y_scale_ + self.y_mean_ + prior_torques(self.robot_, self.residual, q, qd, qdd, self.prior_)
 
     # -- persistence --------------------------------------------------------------------------
@@ -296,15 +318,29 @@ class BaselineID(SavedModel):
         if not (model.y_scale_ > 0).all():
             v.fail("y_scale", "must hold positive numbers")
         model.fit_seconds_ = v.number(data["fit_seconds"], "fit_seconds", lo=0)
-        model.epochs_ = None if data["epochs"] is None else v.integer(data["epochs"], "epochs", lo=1)
-        model.best_epoch_ = None if data["best_epoch"] is None else v.integer(data["best_epoch"], "best_epoch", lo=0)
+        model.epochs_ = _counts(v, data["epochs"], "epochs", 1, n, model._per_joint())
+        model.best_epoch_ = _counts(v, data["best_epoch"], "best_epoch", 0, n, model._per_joint())
         q = np.zeros((1, n))
         expected = model._features(q, q, q).shape[-1]      # the features this learner computes for the robot
         if model.n_features_ != expected:
             v.fail("n_features", f"must be {expected} for learner {model.learner!r} on {robot.name}, "
                                  f"got {model.n_features_}")
-        model.state_ = model._read_state(v, data["state"], expected, n, options)
+        if model._per_joint():
+            v.mapping(data["state"], "state", {"per_joint": True})
+            joints = v.sequence(data["state"]["per_joint"], "state.per_joint", min_len=n, max_len=n)
+            model.state_ = {"per_joint": [model._read_state(v, state, expected, 1, options) for state in joints]}
+        else:
+            model.state_ = model._read_state(v, data["state"], expected, n, options)
         return model
+
+
+def _counts(v: Validator, value: Any, name: str, lo: int, n: int, per_joint: bool) -> int | list[int] | None:
+    """A saved ``epochs`` or ``best_epoch``: ``None`` (no epochs), a count, or with a model a joint one count a joint."""
+    if value is None:
+        return None
+    if per_joint:
+        return [v.integer(x, f"{name}[{j}]", lo=lo) for j, x in enumerate(v.sequence(value, name, min_len=n, max_len=n))]
+    return v.integer(value, name, lo=lo)
 
 
 class Standardised(BaselineID):

@@ -615,8 +615,18 @@ def id_baseline(p: dict) -> dict:
     return {"rmse": rmse.tolist(), "nrmse": nrmse.tolist(), "worst_nrmse": float(nrmse.max()),
             "fit_seconds": float(model.fit_seconds_), "predict_us": 1e6 * seconds / len(predicted),
             "features": int(model.n_features_), "train_samples": int(len(train["q"])),
-            "epochs": int(model.epochs_ or 0), "trajectory_sums": sums.ravel().tolist(), "trajectory_maxima": maxima.ravel().tolist(),
+            "epochs": _epochs_run(model.epochs_), "trajectory_sums": sums.ravel().tolist(), "trajectory_maxima": maxima.ravel().tolist(),
             "payload_trajectory_sums": payload_sums, "payload_trajectory_maxima": payload_maxima}
+
+
+def _epochs_run(epochs) -> int:
+    """A baseline's epochs (``epochs_``: ``None``, a count, or one a joint's model), summed: 0 for none."""
+    return int(sum(epochs)) if isinstance(epochs, list) else int(epochs or 0)
+
+
+def _per_model(counts) -> list[int]:
+    """A baseline's ``epochs_`` or ``best_epoch_`` as one count a model (one model, or one a joint); 0 for none."""
+    return [int(c) for c in counts] if isinstance(counts, list) else [int(counts or 0)]
 
 
 def _fit_id_contestant(p: dict):
@@ -675,8 +685,8 @@ def id_contest(p: dict) -> dict:
         out |= {"fit_seconds": float(sum(model.fit_seconds_)), "epochs": [len(m.loss_curve_) for m in model.models_],
                 "best_epoch": [int(m.best_epoch_) for m in model.models_]}
     else:
-        out |= {"fit_seconds": float(model.fit_seconds_), "epochs": [int(model.epochs_ or 0)],
-                "best_epoch": [int(model.best_epoch_ or 0)]}
+        out |= {"fit_seconds": float(model.fit_seconds_), "epochs": _per_model(model.epochs_),
+                "best_epoch": _per_model(model.best_epoch_)}
     sums = maxima = payload_sums = payload_maxima = []
     if p["split"] == "test":                  # what chapter 7's intervals over the held-out trajectories need
         sums = trajectory_sums(predicted, judged["tau"], judged["trajectory"]).ravel().tolist()
