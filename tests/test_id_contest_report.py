@@ -158,9 +158,15 @@ def test_the_prose_says_which_learners_add_nothing_to_the_identification():
     curves = {contest.id_label(name): [(1500, 30.0)] for name in idc.chosen}
     text = report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE, seed0)
     assert " On validation (seed 0) the identification alone reaches 14.5 %. On its residual, ridge regression and " \
-           "multilayer perceptron do no better than it (within 1 %): they add nothing the identification lacks. " \
-           "Learners that improve on it: ANFIS 12.5 % and gradient-boosted trees 8.6 %." in text
+           "multilayer perceptron do no better than it (within 1 %): on the inputs they are given here, they add nothing " \
+           "the identification lacks. The ANFIS's chosen configuration sees each joint's own state alone, one model a " \
+           "joint: a structure these rivals, on every joint's state, are not given. Learners that improve on it: ANFIS " \
+           "12.5 % and gradient-boosted trees 8.6 %." in text
     assert "identification alone" not in report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE)
+    # with a rival on each joint's own state in the tier, the ANFIS's structure is not its alone: nothing said of it
+    given = seed0 + [result("mlp", 0, 0.088, hidden=[32, 32], angles="own", residual="identification")]
+    text = report.contest_prose(contest.id_contest(given), curves, np.full(ROBOT.n, 0.3), NOISE, given)
+    assert "not given" not in text and "multilayer perceptron 8.8 %" in text
 
 
 def test_a_boosting_fit_counts_a_pass_a_tree_of_each_joint():
@@ -170,3 +176,18 @@ def test_a_boosting_fit_counts_a_pass_a_tree_of_each_joint():
     spent = contest.budgets(seed0, family_of=contest.id_family)
     assert spent["generic:boosting"].pose_passes == 1500 * 300 * ROBOT.n
     assert spent["generic:ridge"].pose_passes == 1500
+
+
+def test_a_search_along_a_number_compares_configurations_of_one_design():
+    """The ANFIS's grid over q̇ ever finer beside one of fuzzy c-means rules: the grid's resolution is judged among the
+    grids alone (the c-means configuration sets no ``n_mfs``), its last step from [1, 7, 2] flat."""
+    grid = [result("anfis", 0, value, inputs="own", residual="identification", partition="grid", n_mfs=mfs)
+            for mfs, value in (([1, 5, 2], 0.1260), ([1, 7, 2], 0.1250), ([1, 11, 2], 0.1248))]
+    seed0 = grid + [result("anfis", 0, 0.1458, inputs="all", residual="identification", partition="fcm", n_rules=8),
+                    result("boosting", 0, 0.0860, residual="identification")]
+    idc = contest.id_contest(seed0)
+    assert contest.at_edge(seed0, idc.chosen, family_of=contest.id_family) == {
+        "identification + learned:anfis": [("n_mfs", [1, 11, 2], "largest")]}
+    curves = {contest.id_label(name): [(1500, 30.0)] for name in idc.chosen}
+    assert "identification + learned: ANFIS, n_mfs=[1, 11, 2] (the largest tried; the step from [1, 7, 2] moved the " \
+           "validation score by 0.16 %: flat)" in report.contest_prose(idc, curves, np.full(ROBOT.n, 0.3), NOISE, seed0)

@@ -312,7 +312,9 @@ def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
             family_of=family) -> dict[str, list[tuple[str, Any, str]]]:
     """Where each contestant's chosen configuration lies at the edge of what its search tried:
     for every numerical option (a number, or a list of numbers sized by their sum) that all of the
-    contestant's seed-0 configurations set, with at least three distinct values, ``(option, value, "smallest" | "largest")`` when the chosen
+    contestant's seed-0 configurations *alike the chosen one* set — those with its other options,
+    the words and flags (an ANFIS's ``inputs`` and ``partition``, RBF's ``kernel``), equal — with at
+    least three distinct values, ``(option, value, "smallest" | "largest")`` when the chosen
     value is the least or the greatest tried — a wider search in that direction might do better.
     ``chosen``: :func:`choose`'s result (contestant → its chosen cell).
 
@@ -336,8 +338,8 @@ def at_edge(results: Iterable[CellResult], chosen: Mapping[str, CellResult], *,
             tried.setdefault(family_of(r.cell.params), []).append(dict(r.cell.params.get("options") or {}))
     edges: dict[str, list[tuple[str, Any, str]]] = {}
     for name, r in chosen.items():
-        options = tried.get(name, [])
         mine = dict(r.cell.params.get("options") or {})
+        options = [o for o in tried.get(name, []) if _alike(o, mine)]
         for key, value in mine.items():
             size = _size(value)
             sizes = [_size(o.get(key)) for o in options]
@@ -356,11 +358,12 @@ EDGE_FLAT = 0.01
 
 
 def edge_step(results: Iterable[CellResult], name: str, option: str, value: Any, metric: str, *,
-              family_of=family) -> tuple[Any, float] | None:
+              family_of=family, like: Mapping[str, Any] | None = None) -> tuple[Any, float] | None:
     """The last step of contestant ``name``'s search toward its edge ``option=value`` (one of
     :func:`at_edge`'s): ``(neighbour, gain)`` — the value tried next to the edge and the relative
     change of the best seed-0 validation ``metric`` over the step, ``(m_neighbour − m_edge) / m_neighbour``,
-    among ``name``'s configurations with each value (positive: the edge scored better; below
+    among ``name``'s configurations with each value — those alike ``like`` (the chosen configuration's
+    options: :func:`at_edge`'s same design) where it is given — (positive: the edge scored better; below
     :data:`EDGE_FLAT` in size, the search is flat there). ``None`` where no configuration holds a
     neighbouring value.
 
@@ -377,6 +380,8 @@ def edge_step(results: Iterable[CellResult], name: str, option: str, value: Any,
     for r in results:
         params = r.cell.params
         if params.get("seed", 0) != 0 or params.get("split", "val") != "val" or family_of(params) != name:
+            continue
+        if like is not None and not _alike(params.get("options") or {}, like):
             continue
         size = _size((params.get("options") or {}).get(option))
         if size is not None and metric in r.metrics:
@@ -396,14 +401,16 @@ def edge_step(results: Iterable[CellResult], name: str, option: str, value: Any,
 
 
 def edges_text(results: Sequence[CellResult], edges: Mapping[str, Sequence[tuple[str, Any, str]]], metric: str, *,
-               label_of, family_of=family) -> str:
+               label_of, family_of=family, chosen: Mapping[str, CellResult] | None = None) -> str:
     """Each of :func:`at_edge`'s ``edges`` in words with its last step (:func:`edge_step` of ``metric``):
     ``"ridge regression, alpha=1e+06 (the largest tried; the step from 1e+04 moved the validation score by
-    0.05 %: flat)"``, joined by ``"; "`` (``label_of``: a contestant's name in words)."""
+    0.05 %: flat)"``, joined by ``"; "`` (``label_of``: a contestant's name in words; ``chosen``: the
+    chosen cells, whose designs the steps compare alike, as :func:`at_edge` does)."""
     phrases = []
     for name, found in edges.items():
         for key, value, side in found:
-            step = edge_step(results, name, key, value, metric, family_of=family_of)
+            like = None if chosen is None else dict(chosen[name].cell.params.get("options") or {})
+            step = edge_step(results, name, key, value, metric, family_of=family_of, like=like)
             said = f"{label_of(name)}, {key}={_option_text(value)} (the {side} tried"
             if step is not None:
                 neighbour, gain = step
@@ -426,6 +433,14 @@ def _option_text(value: Any) -> str:
         mantissa, exponent = f"{float(value):.3e}".split("e")
         return f"{float(mantissa):g}e{int(exponent)}"
     return str(value)
+
+
+def _alike(options: Mapping[str, Any], like: Mapping[str, Any]) -> bool:
+    """Whether two configurations' options agree on every option that is not numerical (:func:`_size`):
+    a search along a number compares configurations of one design, not an ANFIS of fuzzy c-means rules
+    with one of a grid."""
+    words = lambda o: {k: v for k, v in o.items() if _size(v) is None}        # noqa: E731
+    return words(options) == words(like)
 
 
 def _size(value: Any) -> float | None:

@@ -216,8 +216,14 @@ def _prior_alone_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str
     text = f" On validation (seed 0) the identification alone reaches {pct(base)} %."
     if nothing:
         text += (f" On its residual, {listed(nothing)} {'does' if len(nothing) == 1 else 'do'} no better than it (within "
-                 f"{100 * contest.EDGE_FLAT:g} %): {'it adds' if len(nothing) == 1 else 'they add'} nothing the identification "
-                 f"lacks.")
+                 f"{100 * contest.EDGE_FLAT:g} %): on the inputs {'it is' if len(nothing) == 1 else 'they are'} given here, "
+                 f"{'it adds' if len(nothing) == 1 else 'they add'} nothing the identification lacks.")
+        anfis = idc.chosen.get(f"{tier}:anfis")
+        own_rivals = any((r.cell.params.get("options") or {}).get("angles") == "own" for r in runs
+                         if contest.id_family(r.cell.params).rsplit(":", 1)[0] == tier)
+        if anfis is not None and (anfis.cell.params.get("options") or {}).get("inputs") == "own" and not own_rivals:
+            text += (" The ANFIS's chosen configuration sees each joint's own state alone, one model a joint: a "
+                     "structure these rivals, on every joint's state, are not given.")
     if gained:
         text += f" Learners that improve on it: {listed(gained)}."
     return text
@@ -231,7 +237,7 @@ def _edges_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str:
         return " No learner's chosen value lies at the edge of a search of three or more values." if runs else ""
     return (" At the edge of what its search tried: "
             + contest.edges_text(runs, edges, contest.ID_RANKED_BY[0], label_of=contest.id_label,
-                                 family_of=contest.id_family)
+                                 family_of=contest.id_family, chosen=idc.chosen)
             + f". Where the last step moved the score by less than {100 * contest.EDGE_FLAT:g} % the search is flat "
               "there, and a wider one that way is unlikely to move it; where it moved it more, a wider one might "
               "do better.")

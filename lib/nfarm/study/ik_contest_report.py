@@ -215,7 +215,7 @@ def contest_prose(ranked: Sequence[Replicates], spent: Mapping[str, tuple], rung
              f"{listed(pruned)}." if pruned else ".")
     edges = contest.at_edge(rung_runs, chosen)
     text += (" At the edge of what its search tried (on the first rung's poses): "
-             + contest.edges_text(rung_runs, edges, contest.RANKED_BY[0], label_of=contest.label)
+             + contest.edges_text(rung_runs, edges, contest.RANKED_BY[0], label_of=contest.label, chosen=chosen)
              + f". Where the last step moved the score by less than {100 * contest.EDGE_FLAT:g} % the search is flat "
                "there, and a wider one that way is unlikely to move it; where it moved it more, a wider one might "
                "do better." if edges else
