@@ -331,7 +331,7 @@ def test_a_rival_on_each_joints_own_state_has_a_model_a_joint(learner, trajector
     assert not np.allclose(after[:, 0], before[:, 0]) and model.n_features_ == 3
     assert len(model.state_["per_joint"]) == ROBOT.n
     if learner == "mlp":
-        assert len(model.epochs_) == ROBOT.n and all(1 <= b < e for b, e in zip(model.best_epoch_, model.epochs_))
+        assert len(model.epochs_) == ROBOT.n and all(0 <= b < e for b, e in zip(model.best_epoch_, model.epochs_))
     path = model.save(tmp_path)
     np.testing.assert_array_equal(load_id_model(tmp_path, ROBOT).predict(*X), after)
     data = {k: v for k, v in json.loads(path.read_text()).items() if k != CONTENT_FIELD}
