@@ -403,8 +403,8 @@ def edge_step(results: Iterable[CellResult], name: str, option: str, value: Any,
 def edges_text(results: Sequence[CellResult], edges: Mapping[str, Sequence[tuple[str, Any, str]]], metric: str, *,
                label_of, family_of=family, chosen: Mapping[str, CellResult] | None = None) -> str:
     """Each of :func:`at_edge`'s ``edges`` in words with its last step (:func:`edge_step` of ``metric``):
-    ``"ridge regression, alpha=1e+06 (the largest tried; the step from 1e+04 moved the validation score by
-    0.05 %: flat)"``, joined by ``"; "`` (``label_of``: a contestant's name in words; ``chosen``: the
+    ``"ridge regression, alpha=1e6 (the largest tried; the step from 10000.0 moved the validation score by
+    0.048 %: flat)"``, joined by ``"; "`` (``label_of``: a contestant's name in words; ``chosen``: the
     chosen cells, whose designs the steps compare alike, as :func:`at_edge` does)."""
     phrases = []
     for name, found in edges.items():
