@@ -209,10 +209,13 @@ def _prior_alone_text(idc: contest.IDContest, runs: Sequence[CellResult]) -> str
     if alone is None or not learners:
         return ""
     base = float(alone.metrics[metric])
-    nothing = [contest.id_label(name).split(": ", 1)[1] for name, r in learners.items()
-               if float(r.metrics[metric]) > (1 - contest.EDGE_FLAT) * base]
-    gained = [f"{contest.id_label(name).split(': ', 1)[1]} {pct(r.metrics[metric])} %" for name, r in learners.items()
-              if float(r.metrics[metric]) <= (1 - contest.EDGE_FLAT) * base]
+    nothing, gained = [], []
+    for name, r in learners.items():
+        learner = contest.id_label(name).split(": ", 1)[1]
+        if float(r.metrics[metric]) > (1 - contest.EDGE_FLAT) * base:
+            nothing.append(learner)
+        else:
+            gained.append(f"{learner} {pct(r.metrics[metric])} %")
     text = f" On validation (seed 0) the identification alone reaches {pct(base)} %."
     if nothing:
         text += (f" On its residual, {listed(nothing)} {'does' if len(nothing) == 1 else 'do'} no better than it (within "
