@@ -507,6 +507,55 @@ def test_editions_side_by_side_publish_what_one_after_the_other_does(two_arms, t
     assert not list(tmp_path.glob(".figures2.*")), "no publishing leftovers"
 
 
+def test_the_editions_side_by_side_send_their_sweep_cells_to_one_cluster(tmp_path, monkeypatch):
+    """Issue 63: each edition's chapter 6 started a local cluster of one worker per core, so two editions side by
+    side ran four worker processes on two cores (a cell 8-14 % dearer in CPU). The report starts one
+    (nfarm.study.sweep.shared_cluster) for every chapter that runs sweep cells (it declares sweep_workers), and
+    none in a smoke run, where the user chose the workers, or where those chapters are up to date."""
+    import contextlib
+
+    from nfarm.study import sweep as sweep_module
+    notebooks = tmp_path / "notebooks"
+    notebooks.mkdir()
+    make_chapter(notebooks / "01_robot.ipynb", 'robot_file = "ra.yaml"')
+    make_chapter(notebooks / "02_sweeps.ipynb", 'study_file = "sa.yaml"\nsweep_workers = None')
+    make_chapter(notebooks / "03_compare.ipynb", 'study_files = ["sa.yaml"]')
+    started = []
+
+    @contextlib.contextmanager
+    def fake_cluster(workers=None):
+        started.append(workers)
+        monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", f"tcp://127.0.0.1:{len(started)}")
+        try:
+            yield os.environ["DASK_SCHEDULER_ADDRESS"]
+        finally:
+            monkeypatch.delenv("DASK_SCHEDULER_ADDRESS")
+
+    monkeypatch.setattr(sweep_module, "shared_cluster", fake_cluster)
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    log = tmp_path / "seen.log"
+
+    def run(notebook, output, parameters, **options):
+        with open(log, "a") as f:
+            f.write(f"{notebook.name} {parameters.get('study_file', '-')} {os.environ.get('DASK_SCHEDULER_ADDRESS', '-')}\n")
+        return fake_run([])(notebook, output, parameters, **options)
+
+    monkeypatch.setattr(report, "run_notebook", run)
+    arms = [report.Edition("a", "sa.yaml", "ra.yaml", True), report.Edition("b", "sb.yaml", "rb.yaml", False)]
+    dirs = dict(notebooks_dir=notebooks, figures_dir=tmp_path / "figures", build_dir=tmp_path / "build", arms=arms,
+                parallel=True)
+    assert build_report(**dirs) == 0
+    seen = sorted(line.split() for line in log.read_text().splitlines())
+    # the primary edition runs on the chapter's own study_file (not given), the other on its own
+    assert [s for s in seen if s[0] == "02_sweeps.ipynb"] == [["02_sweeps.ipynb", "-", "tcp://127.0.0.1:1"],
+                                                              ["02_sweeps.ipynb", "sb.yaml", "tcp://127.0.0.1:1"]]
+    assert started == [report._cpus()] and "DASK_SCHEDULER_ADDRESS" not in os.environ
+    assert build_report(**dirs) == 0 and started == [report._cpus()], "nothing to run: no cluster"
+    assert build_report(smoke=True, **dirs) == 0 and started == [report._cpus()], "smoke cells run in the chapter"
+    assert build_report(extra_parameters={"sweep_workers": 1}, **dirs) == 0 and len(started) == 1
+    assert build_report(force=True, **dirs) == 0 and len(started) == 2
+
+
 def test_a_failing_edition_side_by_side_stops_the_run_in_one_line(two_arms, tmp_path, monkeypatch, capfd):
     runs, dirs = two_arms
 

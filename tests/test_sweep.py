@@ -323,6 +323,96 @@ def test_a_scheduler_and_two_workers_started_apart_give_the_same_results(tmp_pat
     assert all(r.reused for r in run_sweep(sweep, tmp_path / "remote", scheduler=loopback))
 
 
+@DASK
+def test_one_shared_cluster_serves_every_sweep_started_inside_it_and_ends_with_it(tmp_path):
+    """nfarm.study.sweep.shared_cluster (issue 63: make report's editions side by side send their cells
+    to one cluster of one worker per core, not a cluster each): inside the block, a sweep that names
+    neither a scheduler nor workers runs on it, in this process and in a process started inside; its
+    workers are the same processes for every sweep (nothing imported twice); afterwards the environment
+    is as before and the cluster is gone."""
+    from distributed import Client
+
+    from nfarm.study.sweep import shared_cluster
+    sweep = load_sweep(SMOKE).restrict(epochs=20)
+    here = run_sweep(sweep, tmp_path / "here", workers=0)
+    before = os.environ.get("DASK_SCHEDULER_ADDRESS")
+    with shared_cluster(1) as address:
+        assert os.environ["DASK_SCHEDULER_ADDRESS"] == address
+        shared = run_sweep(sweep, tmp_path / "shared")
+        assert metrics(shared) == metrics(here) and len({r.worker for r in shared}) == 1
+        seen = subprocess.run([sys.executable, "-c", "import os; print(os.environ['DASK_SCHEDULER_ADDRESS'])"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+        assert seen == address, "a process started inside inherits the address"
+        with Client(address, timeout="20s") as client:
+            pids = set(client.run(os.getpid).values())
+            again = run_sweep(sweep.restrict(epochs=21), tmp_path / "again")
+            assert all(r.ok for r in again) and set(client.run(os.getpid).values()) == pids
+    assert os.environ.get("DASK_SCHEDULER_ADDRESS") == before
+    with pytest.raises(OSError):
+        Client(address, timeout="3s")
+
+
+@DASK
+def test_ctrl_c_inside_a_shared_cluster_stops_its_sweep_and_ends_every_process(tmp_path):
+    """SIGINT to the whole process group while a sweep runs on a shared cluster: the sweep stops, the
+    cluster's process (which ignores SIGINT) closes its workers as the block is left, no process of the
+    group is left behind and nothing but the caller's own line is printed."""
+    import signal
+
+    from nfarm.infra import progress
+    sweep_file = write(tmp_path, {"name": "slow", "job": "idle", "fixed": {"seconds": 60.0},
+                                  "grid": {"value": [1, 2]}, "metrics": ["value"]})
+    posts = tmp_path / "progress.json"
+    code = f"""
+import signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)
+from nfarm.study.sweep import load_sweep, run_sweep, shared_cluster
+try:
+    with shared_cluster(2):
+        run_sweep(load_sweep({str(sweep_file)!r}), {str(tmp_path / "out")!r})
+except KeyboardInterrupt:
+    print("stopped", file=sys.stderr)
+    sys.exit(130)
+"""
+    run = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           start_new_session=True, cwd=ROOT, env={**os.environ, progress.ENV: str(posts)})
+    deadline, first, state = time.monotonic() + 120, None, None
+    while run.poll() is None and time.monotonic() < deadline:
+        state = progress.read(posts)
+        if state is not None and first is None:
+            first = state["posted"]
+        if state is not None and state["posted"] != first:
+            break
+        time.sleep(0.2)
+    assert run.poll() is None and state is not None and state["posted"] != first, "the cells run on the cluster"
+    os.killpg(run.pid, signal.SIGINT)
+    _, err = run.communicate(timeout=90)
+    assert run.returncode == 130 and err.strip() == "stopped", err
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(run.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    else:
+        pytest.fail("a process of the shared cluster outlived the block")
+
+
+def test_a_shared_cluster_that_cannot_start_is_one_line():
+    from nfarm.study.sweep import SweepError, shared_cluster
+    before = os.environ.get("DASK_SCHEDULER_ADDRESS")
+    with pytest.raises(SweepError, match=r"^the local Dask cluster for the chapters' sweep cells did not start: "
+                                         r"no address within 0.01 s$"):
+        with shared_cluster(1, start_timeout=0.01):
+            pass
+    assert os.environ.get("DASK_SCHEDULER_ADDRESS") == before
+    for bad in (0, -1, 1.5, True, "2"):
+        with pytest.raises(ValueError, match="workers must be a whole number >= 1 or None"):
+            with shared_cluster(bad):
+                pass
+
+
 # --------------------------------------------------------------------------------------------
 # Seeds: a configuration's spread
 

@@ -30,6 +30,7 @@ the checkout and no widget state; their HTML pages load MathJax from ``build/rep
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import json
@@ -246,7 +247,8 @@ def build_report(*, smoke: bool = False, only: Sequence[str] | None = None,
     relay = _Relay(say, tell)                     # an edition's process sends its lines here
     try:
         _prepare(plan)
-        _run_editions(plan, relay)
+        with _sweep_cluster(plan):
+            _run_editions(plan, relay)
         _run_comparing_chapters(plan, relay)
         _stamp_clean_build(plan)
         _write_pdf_and_pages(plan, say)
@@ -397,6 +399,31 @@ def _run_editions(plan: _Plan, relay: _Relay) -> None:
         _run_in_order(plan, relay, [j for j in plan.jobs if j[0].name not in plan.comparing])
 
 
+def _sweep_cluster(plan: _Plan):
+    """The one local Dask cluster that every edition's chapters send their missing sweep cells to
+    (:func:`nfarm.study.sweep.shared_cluster`, one worker per CPU this process may use), or nothing:
+    in a smoke run (its cells run in the chapter's own process), where the user named a scheduler
+    (``scheduler``, ``DASK_SCHEDULER_ADDRESS``) or the chapters' workers (a parameter), and where no
+    chapter that runs sweep cells is out of date. Side by side, each edition's chapter would
+    otherwise start a cluster of one worker per core, twice as many worker processes as cores
+    (issue 63)."""
+    sweeping = [(nb, arm) for nb, arm, _ in plan.jobs if "sweep_workers" in plan.declared[nb.name]]
+    if plan.smoke or plan.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or \
+            {"sweep_workers", "sweep_scheduler"} & set(plan.extra) or \
+            (not plan.force and all(_up_to_date(*_stamped(plan, nb, arm)) for nb, arm in sweeping)):
+        return contextlib.nullcontext()
+    from ..study.sweep import shared_cluster
+
+    return shared_cluster(_cpus())
+
+
+def _stamped(plan: _Plan, nb: Path, arm: Edition) -> tuple[Path, str, Path, Path, str, str]:
+    """What :func:`_up_to_date` compares for one chapter run: its stamp, key, executed notebook,
+    the figures directory, the edition's part of it and the chapter's prefix."""
+    return (plan.base / "stamps" / arm.name / f"{nb.stem}.json", plan.keys[nb.name, arm.name],
+            plan.base / "notebooks" / arm.subdir / nb.name, plan.figures_dir, arm.subdir, nb.name[:2])
+
+
 def _run_comparing_chapters(plan: _Plan, relay: _Relay) -> None:
     """Run and publish the chapters that compare the editions, after the editions' own."""
     _run_in_order(plan, relay, [j for j in plan.jobs if j[0].name in plan.comparing])
@@ -412,14 +439,11 @@ def _run_chapter(plan: _Plan, relay: _Relay, nb: Path, arm: Edition, own: dict) 
     """Run and publish one chapter of one edition, and stamp it with its key and its published
     files; nothing when it is up to date (:func:`_up_to_date`) and the run is not forced (raises
     :class:`ReportError`)."""
-    prefix = nb.name[:2]
     label = nb.name if arm.primary else f"{nb.name} ({arm.name})"
     stage = plan.build_dir / "stage" / (nb.stem if arm.primary else f"{arm.name}-{nb.stem}")
-    executed = plan.base / "notebooks" / arm.subdir / nb.name
-    stamp = plan.base / "stamps" / arm.name / f"{nb.stem}.json"
+    stamp, key, executed, _, _, prefix = stamped = _stamped(plan, nb, arm)
     parameters = {"smoke": plan.smoke, **own, **plan.extra}
-    key = plan.keys[nb.name, arm.name]
-    if not plan.force and _up_to_date(stamp, key, executed, plan.figures_dir, arm.subdir, prefix):
+    if not plan.force and _up_to_date(*stamped):
         relay.say(f"{label}: up to date (its inputs are unchanged)")
         return
     shutil.rmtree(stage, ignore_errors=True)

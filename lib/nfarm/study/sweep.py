@@ -13,7 +13,9 @@ widened grid runs only its new cells.
 
 Cells run on Dask's ``distributed``: a :class:`~distributed.LocalCluster` of one
 single-threaded worker process per core by default, or any running scheduler
-(``tcp://host:8786``: ``dask scheduler`` / ``dask worker``, dask-jobqueue, Kubernetes). The
+(``tcp://host:8786``: ``dask scheduler`` / ``dask worker``, dask-jobqueue, Kubernetes), given or
+named by Dask's configuration (``DASK_SCHEDULER_ADDRESS``; :func:`shared_cluster` starts one local
+cluster for several processes, as ``make report`` does for its editions' chapters). The
 workers only compute; the client writes every cell's directory as its result arrives
 (atomically: a directory renamed into place), so workers need the same checkout and
 environment, not the same disk. ``workers=0`` runs the cells one by one in this process.
@@ -64,7 +66,7 @@ from .sweep_files import SWEEPS, Cell, Sweep, canonical, load_sweep, sweep_from_
 from .jobs import cell_threads as _cell_threads
 
 __all__ = ["Sweep", "Cell", "CellResult", "Replicates", "SweepError", "load_sweep", "sweep_from_dict",
-           "run_sweep", "run_sweeps", "sweep_results", "sweeps_results", "by_configuration", "best_by",
+           "run_sweep", "run_sweeps", "sweep_results", "sweeps_results", "shared_cluster", "by_configuration", "best_by",
            "code_key", "record_metrics", "write_summary", "METRICS_MIME", "SWEEPS"]
 
 METRICS_MIME = "application/vnd.nfarm.metrics+json"
@@ -448,14 +450,30 @@ WORKER_ENVIRON = {"MALLOC_ARENA_MAX": 1}
 
 
 def _client(scheduler: str | None, workers: int | None):
-    from distributed import Client, LocalCluster
+    """A client of the scheduler at ``scheduler``; else, with ``workers`` not given, of the one Dask's
+    configuration names (``DASK_SCHEDULER_ADDRESS``: :func:`shared_cluster`'s, or the user's); else of a
+    local cluster of ``workers`` processes (:func:`_local_cluster`), closed with the client."""
+    from distributed import Client
 
+    if scheduler is None and workers is None:
+        import dask
+
+        # the environment first: Dask reads it into its configuration once, when it is imported
+        scheduler = os.environ.get("DASK_SCHEDULER_ADDRESS") or dask.config.get("scheduler-address", None)
     if scheduler:
         try:
             return Client(scheduler, timeout="20s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ParamsError(f"cannot reach the Dask scheduler at {scheduler}: "
                               f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    return Client(_local_cluster(workers))
+
+
+def _local_cluster(workers: int | None):
+    """A :class:`~distributed.LocalCluster` of ``workers`` single-threaded worker processes (default one
+    per core), with :data:`QUIET_CLUSTER`'s settings and :data:`WORKER_ENVIRON`'s environment."""
+    from distributed import LocalCluster
+
     # silence_logs=CRITICAL: a worker whose scheduler is shutting down logs an ERROR with a
     # traceback from its heartbeat (seen once in a make report, printed into a chapter's
     # output with the machine's paths); a cell's own failure is in its cell.json, not the log.
@@ -463,11 +481,85 @@ def _client(scheduler: str | None, workers: int | None):
 
     environ = {**dask.config.get("distributed.nanny.pre-spawn-environ", default={}), **WORKER_ENVIRON}
     with dask.config.set({**QUIET_CLUSTER, "distributed.nanny.pre-spawn-environ": environ}):
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                               processes=True, silence_logs=50,
-                               # no fixed port (its HTTP server starts anyway; clusters side by side)
-                               dashboard_address="127.0.0.1:0")
-    return Client(cluster)
+        return LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                            processes=True, silence_logs=50,
+                            # no fixed port (its HTTP server starts anyway; clusters side by side)
+                            dashboard_address="127.0.0.1:0")
+
+
+#: How long :func:`shared_cluster` waits for its cluster to start [s].
+SHARED_CLUSTER_START_S = 120.0
+
+
+@contextlib.contextmanager
+def shared_cluster(workers: int | None = None, *, start_timeout: float = SHARED_CLUSTER_START_S):
+    """One local cluster (:func:`_local_cluster`, ``workers`` processes) for every process this one
+    starts while the ``with`` block runs; yields its scheduler's address.
+
+    The cluster runs in a child process of its own, and the address is put in this process's
+    environment as ``DASK_SCHEDULER_ADDRESS`` (Dask's ``scheduler-address``), which the processes
+    started inside the block inherit: every :func:`run_sweeps` there that names neither a
+    scheduler nor ``workers`` sends its cells to it (:func:`_client`). ``make report`` runs its two
+    editions' chapters side by side (issue 63): with a local cluster of one worker per core each,
+    four worker processes shared two cores, and a cell cost 8-14 % more CPU than with two
+    (an MLP of the learned-IK contest 5.5 → 6.2 CPU-s, boosted trees on the regressor 19.0 →
+    21.7; measured 2026-12-08, ``docs/performance.md``); and every chapter's call started, and
+    imported into, workers of its own.
+
+    The child ignores Ctrl-C (the processes that send it cells stop theirs) and closes the cluster
+    when this process leaves the block or dies (its standard input ends); the environment is then
+    restored. Raises :class:`SweepError` when the cluster does not start within ``start_timeout``
+    seconds (the child's last line of error)."""
+    import select
+    import subprocess
+
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
+        raise ValueError(f"workers must be a whole number >= 1 or None, got {workers!r}")
+    code = ("import signal, sys; signal.signal(signal.SIGINT, signal.SIG_IGN); "
+            "from nfarm.study.sweep import _serve_cluster; _serve_cluster(%r)" % (workers,))
+    with tempfile.TemporaryFile(mode="w+", encoding="utf-8") as errors:
+        child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                 stderr=errors, text=True, cwd=ROOT)
+        try:
+            ready, _, _ = select.select([child.stdout], [], [], start_timeout)
+            address = child.stdout.readline().strip() if ready else ""
+            if not address.startswith("tcp://"):
+                child.kill()
+                child.wait()
+                errors.seek(0)
+                lines = [line.strip() for line in errors.read().splitlines() if line.strip()]
+                why = lines[-1][:300] if lines else (f"no address within {start_timeout:g} s" if not ready
+                                                     else f"it ended with status {child.returncode}")
+                raise SweepError(f"the local Dask cluster for the chapters' sweep cells did not start: {why}")
+            before = os.environ.get("DASK_SCHEDULER_ADDRESS")
+            os.environ["DASK_SCHEDULER_ADDRESS"] = address
+            try:
+                yield address
+            finally:
+                if before is None:
+                    os.environ.pop("DASK_SCHEDULER_ADDRESS", None)
+                else:
+                    os.environ["DASK_SCHEDULER_ADDRESS"] = before
+        finally:
+            if child.poll() is None:
+                with contextlib.suppress(OSError):
+                    child.stdin.close()             # the child closes its cluster and ends
+                try:
+                    child.wait(timeout=60)
+                except subprocess.TimeoutExpired:
+                    child.kill()
+                    child.wait()
+
+
+def _serve_cluster(workers: int | None) -> None:
+    """:func:`shared_cluster`'s child: start the cluster, print its address, hold it until standard
+    input ends, close it."""
+    cluster = _local_cluster(workers)
+    try:
+        print(cluster.scheduler_address, flush=True)
+        sys.stdin.read()
+    finally:
+        cluster.close()
 
 
 def run_sweep(sweep: Sweep, out: str | os.PathLike | None = None, *, scheduler: str | None = None,
