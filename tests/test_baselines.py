@@ -31,6 +31,26 @@ def test_baselines_are_seeded_functions_of_their_options(learner, trajectories):
     assert set(BASELINES[learner].hyper_params()) >= set(SMALL[learner])
 
 
+@pytest.mark.parametrize("learner, options", [*SMALL.items(), ("kernel", {"n_components": 20, "angles": "own"}),
+                                              ("mlp", {"hidden": [4], "max_iter": 3, "angles": "own"}),
+                                              ("boosting", {"max_iter": 3, "angles": "regressor"})])
+def test_a_baseline_predicts_in_blocks_what_it_predicts_at_once(learner, options, trajectories):
+    """Issue 63: ``predict`` builds a block of ``rows`` states' features at a time (memory bounded
+    whatever the states); the torques are those of one pass, the blocks' edges anywhere (up to the
+    last bits a matrix product may sum in another order)."""
+    train, val = trajectories["train"], trajectories["val"]
+    model = baseline_id(learner, options, residual=learner == "friction", random_state=1).fit(ROBOT, train, val)
+    X = (val["q"], val["qd"], val["qdd"])
+    once = model.predict(*X, rows=len(val["q"]))
+    assert len(val["q"]) > 7 and once.shape == val["tau"].shape
+    for rows in (1, 7, len(val["q"]) - 1):
+        np.testing.assert_allclose(model.predict(*X, rows=rows), once, rtol=1e-12, atol=1e-12)
+    assert model.predict(*(x[:0] for x in X)).shape == (0, ROBOT.n)
+    for bad in (0, -3, 2.5, "8"):
+        with pytest.raises(ValueError, match="rows must be a whole number >= 1"):
+            model.predict(*X, rows=bad)
+
+
 def test_ridge_on_the_chain_basis_identifies_the_arm_and_the_linear_floor_does_not(random_states):
     train, val = random_states["train"], random_states["val"]
     exact = baseline_id("ridge", {"basis": "chain", "alpha": 1e-9}).fit(ROBOT, train)

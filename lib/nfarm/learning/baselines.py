@@ -18,7 +18,9 @@ name sweep files give it (what they share is :class:`~nfarm.learning.id_baseline
   (:func:`nfarm.learning.bases.angle_sums`: which axes are parallel, the *structure-informed*
   tier's knowledge, the inputs its ANFIS and its ridge on the ANFIS's columns, ``chain_linear``, get), with
   ``angles="regressor"`` every joint's row of the rigid-body regressor and its drive terms
-  (:func:`regressor_inputs`: the geometry known, the *identification* tier's knowledge);
+  (:func:`regressor_inputs`: the geometry known, the *identification* tier's knowledge), with
+  ``angles="own"`` each joint's own ``q_j, q̇_j, q̈_j`` alone, one model a joint (the
+  structure of the residual ANFIS's ``inputs="own"``; the residual tiers);
 * ``"boosting"`` (:class:`BoostingID`) — gradient-boosted trees per joint
   (``HistGradientBoostingRegressor``: ``max_iter``, ``learning_rate``, ``max_leaf_nodes``) on the
   same inputs (``angles`` too);
