@@ -137,3 +137,23 @@ def test_joint_groups_split_the_joints_by_what_moves_them():
         rigid = rnea(built, data["q"], data["qd"], data["qdd"])
         drive = stribeck_drive_torques(built, data["qd"], data["qdd"], rigid, **study.id.friction)
         np.testing.assert_array_equal(groups["rigid-dominated"], np.sqrt((rigid ** 2).mean(0)) > np.sqrt((drive ** 2).mean(0)))
+
+
+def test_the_joint_groups_are_fixed_on_the_validation_trajectories(monkeypatch, tmp_path):
+    """The verdict's rows by joint group come from the validation trajectories' exact states (``id_val.npz`` in the data
+    directory), as the resolved joints do, never from the test split's: the same groups as ``joint_groups`` of them."""
+    import numpy as np
+
+    from nfarm.infra.paths import PARAMS
+    from nfarm.study import datasets
+    from nfarm.study.id_trajectories import random_trajectories
+    from nfarm.study.measured_test import joint_groups, joint_groups_on_validation
+    from nfarm.study.study_files import load_study
+
+    study = load_study(PARAMS / "studies" / "intelbot5.yaml")
+    val = random_trajectories(study.robot, study.id, 6, np.random.SeedSequence([7, 2]))
+    read = []
+    monkeypatch.setattr(datasets, "load", lambda path, robot, study=None: read.append(str(path)) or val)
+    groups = joint_groups_on_validation(study, tmp_path)
+    assert read == [str(tmp_path / "id_val.npz")]
+    assert {k: v.tolist() for k, v in groups.items()} == {k: v.tolist() for k, v in joint_groups(study, val).items()}

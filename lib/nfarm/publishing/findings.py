@@ -301,17 +301,17 @@ def joint_groups_in_words(groups: Mapping[str, Sequence[bool]], joint_names: Seq
     Example:
         >>> print(joint_groups_in_words({"rigid-dominated": [False, True], "friction-dominated": [True, False]},
         ...                             ["yaw", "pitch"], "arm"))
-        **What moves the joints.** On arm's built arm the rigid body's torque exceeds the drives' (RMS on the test trajectories) on pitch (rigid-dominated); the drives' torque (their friction and armature) exceeds it on yaw (friction-dominated). The verdict judges the every-tier pair on each group apart: on the rigid-dominated joints what a method learned of the dynamics, on the friction-dominated ones how well it fits the drives' friction.
+        **What moves the joints.** On arm's built arm the rigid body's torque exceeds the drives' (RMS on the validation trajectories, where the groups are fixed) on pitch (rigid-dominated); the drives' torque (their friction and armature) exceeds it on yaw (friction-dominated). The verdict judges the every-tier pair on each group apart: on the rigid-dominated joints what a method learned of the dynamics, on the friction-dominated ones how well it fits the drives' friction.
     """
     named = {g: [j for j, on in zip(joint_names, mask) if on] for g, mask in groups.items()}
     rigid, friction = named.get("rigid-dominated", []), named.get("friction-dominated", [])
     head = f"**What moves the joints.** On {arm}'s built arm "
     if not rigid:
-        return (head + f"the drives' torque (their friction and armature) exceeds the rigid body's (RMS on the test trajectories) "
+        return (head + f"the drives' torque (their friction and armature) exceeds the rigid body's (RMS on the validation trajectories, where the groups are fixed) "
                 f"on every joint "
                 f"({', '.join(friction)}): **its measured-arm verdict judges how well each method fits the drives' friction, "
                 f"not what it learned of the rigid body's dynamics**.")
-    return (head + f"the rigid body's torque exceeds the drives' (RMS on the test trajectories) on {', '.join(rigid)} "
+    return (head + f"the rigid body's torque exceeds the drives' (RMS on the validation trajectories, where the groups are fixed) on {', '.join(rigid)} "
             f"(rigid-dominated)" + (f"; the drives' torque (their friction and armature) exceeds it on {', '.join(friction)} (friction-dominated)"
                                     if friction else "")
             + ". The verdict judges the every-tier pair on each group apart: on the rigid-dominated joints what a method "
