@@ -352,6 +352,24 @@ def test_one_shared_cluster_serves_every_sweep_started_inside_it_and_ends_with_i
         Client(address, timeout="3s")
 
 
+def _wait_until_cells_run(run: subprocess.Popen, posts: Path, timeout: float = 120) -> dict:
+    """The sweep ``run``'s progress state once its cells are under way on the cluster (asserted). Polled, not
+    slept: the sweep posts once before its cluster starts, then beats only while it waits on the cluster's
+    workers, whose cells sleep for a minute — the second post says the cells are under way."""
+    from nfarm.infra import progress
+
+    deadline, first, state = time.monotonic() + timeout, None, None
+    while run.poll() is None and time.monotonic() < deadline:
+        state = progress.read(posts)
+        if state is not None and first is None:
+            first = state["posted"]
+        if state is not None and state["posted"] != first:
+            break
+        time.sleep(0.2)
+    assert run.poll() is None and state is not None and state["posted"] != first, "the cells run on the cluster"
+    return state
+
+
 @DASK
 def test_ctrl_c_inside_a_shared_cluster_stops_its_sweep_and_ends_every_process(tmp_path):
     """SIGINT to the whole process group while a sweep runs on a shared cluster: the sweep stops, the
@@ -376,15 +394,7 @@ except KeyboardInterrupt:
 """
     run = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            start_new_session=True, cwd=ROOT, env={**os.environ, progress.ENV: str(posts)})
-    deadline, first, state = time.monotonic() + 120, None, None
-    while run.poll() is None and time.monotonic() < deadline:
-        state = progress.read(posts)
-        if state is not None and first is None:
-            first = state["posted"]
-        if state is not None and state["posted"] != first:
-            break
-        time.sleep(0.2)
-    assert run.poll() is None and state is not None and state["posted"] != first, "the cells run on the cluster"
+    _wait_until_cells_run(run, posts)
     os.killpg(run.pid, signal.SIGINT)
     _, err = run.communicate(timeout=90)
     assert run.returncode == 130 and err.strip() == "stopped", err
@@ -642,17 +652,7 @@ def test_ctrl_c_stops_a_sweep_on_a_cluster_in_one_line(tmp_path):
     run = subprocess.Popen([sys.executable, "-m", "nfarm", "sweep", str(sweep_file), "--workers", "2",
                             "--out", str(tmp_path / "out")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True, start_new_session=True, cwd=ROOT, env={**os.environ, progress.ENV: str(posts)})
-    # Polled, not slept: the sweep posts once before its cluster starts, then beats only while it waits on the
-    # cluster's workers, whose cells sleep for a minute — the second post says the cells are under way.
-    deadline, first = time.monotonic() + 120, None
-    while run.poll() is None and time.monotonic() < deadline:
-        state = progress.read(posts)
-        if state is not None and first is None:
-            first = state["posted"]
-        if state is not None and state["posted"] != first:
-            break
-        time.sleep(0.2)
-    assert run.poll() is None and state["posted"] != first and state["done"] == 0, "the cells run on the cluster"
+    assert _wait_until_cells_run(run, posts)["done"] == 0
     os.killpg(run.pid, signal.SIGINT)
     _, err = run.communicate(timeout=90)
     assert run.returncode == 130 and err.strip() == "nfarm: interrupted", err
