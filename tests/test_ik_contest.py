@@ -112,7 +112,8 @@ def test_bad_best_shot_options_are_one_clear_error_before_training(data, kwargs,
 
 RIVALS = [("knn", {"neighbors": 3}), ("rbf", {"neighbors": 16}), ("rbf", {"neighbors": 32, "kernel": "quintic"}),
           ("mlp", {"hidden": [32, 32], "max_epochs": 300, "patience": 10}),
-          ("kernel_ridge", {"components": 200, "gamma": 5.0})]
+          ("kernel_ridge", {"components": 200, "gamma": 5.0}),
+          ("kernel_ridge", {"length_scales": "fitted", "subset": 150})]
 
 
 @pytest.fixture(scope="module", params=RIVALS, ids=lambda r: f"{r[0]}-{len(r[1])}")
@@ -184,6 +185,75 @@ def test_kernel_ridge_equals_scikit_learns_nystroem_and_ridge(data):
     Xv = model.encoder_.transform(data["val"]["T"])
     np.testing.assert_allclose(model.predict(data["val"]["T"]), pipe.predict(Xv) * model.y_scale_ + model.y_mean_,
                                rtol=0, atol=1e-8)
+
+
+@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")    # the reference's own fit
+@pytest.mark.parametrize("structure", ["whole", "arm"])
+def test_kernel_ridge_with_fitted_length_scales_is_scikit_learns_gaussian_process(data, structure):
+    """The fitted configuration's hyper-parameters are those scikit-learn's Gaussian process finds on
+    the same subset (inputs divided by their spread), and its prediction is that process's
+    posterior mean on all the training poses, computed by scikit-learn with those hyper-parameters."""
+    from sklearn.gaussian_process import GaussianProcessRegressor
+    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+    from nfarm.learning.ik_rivals import GP_BOUNDS
+
+    model = rival_ik("kernel_ridge", "arm_plane", {"length_scales": "fitted", "subset": 120}, random_state=5,
+                     structure=structure).fit(ROBOT, data["train"])
+    X = model.encoder_.transform(data["train"]["T"])
+    Z = (data["train"]["q"][:, model.learned_] - model.y_mean_) / model.y_scale_
+    spread = X.std(axis=0)
+    pick = np.sort(np.random.default_rng(5).permutation(len(X))[:120])
+    kernel = (ConstantKernel(1.0, GP_BOUNDS["amplitude"]) * RBF(np.ones(X.shape[1]), GP_BOUNDS["length_scale"])
+              + WhiteKernel(1e-4, GP_BOUNDS["noise"]))
+    found = GaussianProcessRegressor(kernel, random_state=5).fit(X[pick] / spread, Z[pick]).kernel_
+    np.testing.assert_allclose(model.length_scales_, spread * found.k1.k2.length_scale, rtol=1e-12)
+    assert model.amplitude_ == pytest.approx(found.k1.k1.constant_value, rel=1e-12)
+    fixed = (ConstantKernel(model.amplitude_, "fixed") * RBF(model.length_scales_, "fixed")
+             + WhiteKernel(model.noise_, "fixed"))
+    process = GaussianProcessRegressor(fixed, optimizer=None).fit(X, Z)
+    Xv = model.encoder_.transform(data["val"]["T"])
+    np.testing.assert_allclose(model._predict(Xv), process.predict(Xv), rtol=0, atol=1e-6)   # the learned joints, standardised
+    assert {k: model.options_[k] for k in ("length_scales", "subset", "restarts")} == \
+        {"length_scales": "fitted", "subset": 120, "restarts": 0}
+
+
+def test_a_fitted_kernel_ridge_predicts_in_blocks_as_at_once(data, monkeypatch):
+    model = rival_ik("kernel_ridge", "arm_plane", {"length_scales": "fitted", "subset": 80},
+                     random_state=1).fit(ROBOT, data["train"])
+    whole = model.predict(data["val"]["T"])
+    monkeypatch.setattr(type(model), "PREDICT_ROWS", 7)
+    # not bit for bit: BLAS sums a block's products in another order, and a near-interpolating
+    # process's weights are large and of both signs (1e-9 rad is 1e-7 degrees)
+    np.testing.assert_allclose(model.predict(data["val"]["T"]), whole, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"length_scales": "per_input"}, r"^kernel_ridge: length_scales must be 'shared' or 'fitted', got 'per_input'$"),
+    ({"length_scales": "fitted", "subset": 1}, r"^kernel_ridge: subset must be a whole number in \[2, 5000\], got 1$"),
+    ({"length_scales": "fitted", "restarts": -1}, r"^kernel_ridge: restarts must be a whole number in \[0, 20\], got -1$"),
+])
+def test_bad_gaussian_process_options_are_one_clear_error(data, options, message):
+    with pytest.raises(ValueError, match=message):
+        rival_ik("kernel_ridge", "arm_plane", options).fit(ROBOT, data["train"])
+
+
+@pytest.mark.parametrize("options, drop, add, message", [
+    ({"length_scales": "fitted", "subset": 60}, "length_scales", None,
+     r"state.length_scales: is required with length_scales 'fitted'"),
+    ({"components": 40, "gamma": 2.0}, None, ("noise", 1e-6),
+     r"state: length_scales, amplitude and noise belong to length_scales 'fitted'"),
+    ({"length_scales": "fitted", "subset": 60}, None, ("length_scales", [1.0, -1.0, 1.0, 1.0, 1.0, 1.0]),
+     r"state.length_scales: must be > 0"),
+])
+def test_a_saved_kernel_ridge_with_the_wrong_state_for_its_length_scales_is_refused(data, options, drop, add, message):
+    saved = rival_ik("kernel_ridge", "arm_plane", options, random_state=0).fit(ROBOT, data["train"]).to_dict()
+    if drop:
+        del saved["state"][drop]
+    if add:
+        saved["state"][add[0]] = add[1]
+    with pytest.raises(ParamsError, match=message):
+        RivalIK.from_dict(saved, ROBOT, "rival_ik.json")
 
 
 @pytest.mark.parametrize("kind, options, message", [

@@ -127,6 +127,7 @@ class RivalIK(SavedModel):
     needs_val: ClassVar[bool] = False
     #: The rival's arrays in the saved ``state`` (besides ``y_mean`` and ``y_scale``).
     _state_keys: ClassVar[tuple[str, ...]] = ()
+    _optional_state_keys: ClassVar[tuple[str, ...]] = ()     # state a subclass saves in some configurations only
 
     def __init__(self, *, encoding: str = "arm_plane", max_out_of_plane: float = math.pi,
                  random_state: int | None = None, structure: str = "whole", closure_tolerance: float = 1e-4,
@@ -315,8 +316,9 @@ class RivalIK(SavedModel):
         model.epochs_ = v.integer(data["epochs"], "epochs", lo=0)
         model.best_epoch_ = v.integer(data["best_epoch"], "best_epoch", lo=0)
         state = data["state"]
-        v.mapping(state, "state", dict.fromkeys((*(("y_mean", "y_scale") if rival.standardised else ()),
-                                                 *rival._state_keys), True))
+        v.mapping(state, "state", {**dict.fromkeys((*(("y_mean", "y_scale") if rival.standardised else ()),
+                                                    *rival._state_keys), True),
+                                   **dict.fromkeys(rival._optional_state_keys, False)})
         if rival.standardised:
             model.y_mean_ = v.array(state["y_mean"], "state.y_mean", (n_out,))
             model.y_scale_ = v.array(state["y_scale"], "state.y_scale", (n_out,))

@@ -18,9 +18,11 @@ it; what they share (the encoding, the structure, the checks of the common argum
   by ``min_improvement`` of its least value for ``patience`` epochs — the rule the ANFIS's early
   stopping follows, on the same validation poses;
 * ``"kernel_ridge"`` (:class:`KernelRidgeRival`) — kernel ridge regression with a Gaussian kernel
-  ``exp(−gamma·‖x − x'‖²)`` approximated by ``components`` Nyström landmarks (the approximate
-  Gaussian process of the contest; ``sklearn.kernel_approximation.Nystroem``, then
-  ``sklearn.linear_model.Ridge`` with ``alpha``) on standardised joint angles.
+  on standardised joint angles: ``exp(−gamma·‖x − x'‖²)`` approximated by ``components`` Nyström
+  landmarks (``sklearn.kernel_approximation.Nystroem``, then ``sklearn.linear_model.Ridge`` with
+  ``alpha``), or (``length_scales="fitted"``) a Gaussian process with one length scale per input,
+  its hyper-parameters by maximum marginal likelihood on ``subset`` poses
+  (``sklearn.gaussian_process.GaussianProcessRegressor``), its posterior mean exact on all of them.
 
 Outputs are the joint angles [rad]. Every random draw (the MLP's initialisation and batches, the
 Nyström landmarks) comes from ``random_state``. A new rival is one class here (its hyper-parameters,
@@ -52,9 +54,15 @@ from ..infra.reading import Validator, json_ready, show
 from .ik_rival_base import FILE_NAME, FORMAT, RIVALS, STRUCTURES, RivalIK, finite_number, rival_ik, whole_number
 
 __all__ = ["RivalIK", "RIVALS", "STRUCTURES", "FILE_NAME", "FORMAT", "rival_ik",
-           "KNNRival", "RBFRival", "MLPRival", "KernelRidgeRival"]
+           "KNNRival", "RBFRival", "MLPRival", "KernelRidgeRival", "GP_BOUNDS"]
 
 _RBF_KERNELS = ("thin_plate_spline", "cubic", "quintic", "linear")
+#: The bounds of a fitted Gaussian process's hyper-parameters (:class:`KernelRidgeRival`,
+#: ``length_scales="fitted"``): the kernel's variance ``s²`` and noise variance ``σ²`` of the
+#: standardised angles, the length scales of inputs divided by their spread.
+GP_BOUNDS = {"amplitude": (1e-2, 1e5), "length_scale": (1e-2, 1e3), "noise": (1e-10, 1e-1)}
+#: The most poses a fitted Gaussian process's marginal likelihood is computed on (its ``subset``).
+GP_MAX_SUBSET = 5000
 _ACTIVATIONS = {"relu": lambda a: np.maximum(a, 0, out=a), "tanh": lambda a: np.tanh(a, out=a)}
 
 
@@ -246,55 +254,152 @@ class MLPRival(RivalIK):
 
 @RIVALS.register
 class KernelRidgeRival(RivalIK):
-    """Nyström kernel ridge regression (module docstring). Learned: ``landmarks_ (m, d)``,
-    ``coef_ (m, n)`` (the ridge's weights with the Nyström normalisation folded in),
-    ``intercept_``, ``y_mean_``, ``y_scale_``."""
+    """Kernel ridge regression with a Gaussian kernel (module docstring), in one of two ways
+    (``length_scales``):
 
-    kind, label = "kernel_ridge", "kernel ridge (Nyström)"
+    * ``"shared"`` — one width for every input, ``exp(−gamma·‖x − x'‖²)``, approximated by
+      ``components`` Nyström landmarks, the ridge's ``alpha`` given;
+    * ``"fitted"`` — a Gaussian process: one length scale per input,
+      ``k(x, x') = s²·exp(−½ Σ_i ((x_i − x'_i)/ℓ_i)²)`` plus a noise variance ``σ²``, these
+      ``d + 2`` hyper-parameters chosen by maximising the log marginal likelihood on ``subset``
+      training poses drawn with ``random_state`` (``sklearn.gaussian_process.GaussianProcessRegressor``,
+      L-BFGS-B from ``ℓ = 1`` on inputs divided by their spread, ``restarts`` more starts drawn
+      in the bounds :data:`GP_BOUNDS`), then the posterior mean on **all** training poses
+      exactly, ``f(x) = k(x, X) (K + σ²I)⁻¹ Z`` (a Cholesky solve; ``components``, ``gamma`` and
+      ``alpha`` unused). Its cost grows as ``subset³`` an iteration and ``N³`` once.
+
+    Learned: ``landmarks_ (m, d)`` (the Nyström landmarks; fitted: every training pose, divided by
+    ``length_scales_``), ``coef_ (m, n)`` (the weights with the Nyström normalisation, or
+    ``s²``, folded in), ``intercept_``, ``y_mean_``, ``y_scale_``; fitted, also ``length_scales_
+    (d,)`` (in the inputs' units), ``amplitude_`` (``s²``) and ``noise_`` (``σ²``, of the
+    standardised angles).
+
+    Example (a fitted width follows what the data vary with):
+        >>> from nfarm.infra.paths import PARAMS
+        >>> from nfarm.model.robot import load_robot
+        >>> from nfarm.model.kinematics import fk
+        >>> robot = load_robot(PARAMS / "robots" / "intelbot5.yaml")
+        >>> q = np.random.default_rng(0).uniform(-0.5, 0.5, (300, 5))
+        >>> model = KernelRidgeRival(length_scales="fitted", subset=200, random_state=0).fit(robot, {"T": fk(robot, q), "q": q})
+        >>> bool(np.abs(model.predict(fk(robot, q[:50])) - q[:50]).max() < 0.01), model.length_scales_.shape
+        (True, (6,))
+    """
+
+    kind, label = "kernel_ridge", "kernel ridge"
     standardised = True
     _state_keys = ("landmarks", "coef", "intercept")
+    _optional_state_keys = ("length_scales", "amplitude", "noise")
+    #: Prediction's rows at a time (bounds the ``(rows, m)`` kernel matrix).
+    PREDICT_ROWS = 2048
 
     def __init__(self, components: int = 2000, gamma: float = 10.0, alpha: float = 1e-6, *,
+                 length_scales: str = "shared", subset: int = 500, restarts: int = 0,
                  encoding: str = "arm_plane", max_out_of_plane: float = math.pi, random_state: int | None = None,
                  structure: str = "whole", closure_tolerance: float = 1e-4, affine_ridge: float = 1e-8,
                  pitch_closure: bool = True):
         self.components = components
         self.gamma = gamma
         self.alpha = alpha
+        self.length_scales = length_scales
+        self.subset = subset
+        self.restarts = restarts
         super().__init__(encoding=encoding, max_out_of_plane=max_out_of_plane, random_state=random_state,
                          structure=structure, closure_tolerance=closure_tolerance, affine_ridge=affine_ridge,
                          pitch_closure=pitch_closure)
 
     def _checked(self) -> dict:
+        if self.length_scales not in ("shared", "fitted"):
+            raise ValueError(f"kernel_ridge: length_scales must be 'shared' or 'fitted', got {show(self.length_scales)}")
         whole_number(self.kind, "components", self.components, 1, 50_000)
         finite_number(self.kind, "gamma", self.gamma)
         finite_number(self.kind, "alpha", self.alpha)
-        return {"components": self.components, "gamma": self.gamma, "alpha": self.alpha}
+        whole_number(self.kind, "subset", self.subset, 2, GP_MAX_SUBSET)
+        whole_number(self.kind, "restarts", self.restarts, 0, 20)
+        return {"components": self.components, "gamma": self.gamma, "alpha": self.alpha,
+                "length_scales": self.length_scales, "subset": self.subset, "restarts": self.restarts}
 
     def _learn(self, o, X, Z, X_val, Z_val) -> None:
+        if o["length_scales"] == "fitted":
+            self._learn_process(o, X, Z)
+            return
         from sklearn.kernel_approximation import Nystroem
         from sklearn.linear_model import Ridge
 
         nystroem = Nystroem(kernel="rbf", gamma=o["gamma"], n_components=min(o["components"], len(X)),
                             random_state=self.random_state).fit(X)
         self.landmarks_ = nystroem.components_
+        self.length_scales_ = self.amplitude_ = self.noise_ = None
         ridge = Ridge(alpha=o["alpha"]).fit(self._kernel(X, o["gamma"]) @ nystroem.normalization_.T, Z)
         # The features' normalisation folded into the weights: one (m, n) matrix to keep.
         self.coef_, self.intercept_ = nystroem.normalization_.T @ ridge.coef_.T, ridge.intercept_
 
+    def _learn_process(self, o, X, Z) -> None:
+        """The Gaussian process's hyper-parameters on a subset, then its posterior mean on all of ``X``."""
+        import warnings
+
+        from scipy.linalg import cho_factor, cho_solve
+        from sklearn.exceptions import ConvergenceWarning
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+        spread = X.std(axis=0)
+        spread = np.where(spread > 0, spread, 1.0)
+        pick = np.sort(np.random.default_rng(self.random_state).permutation(len(X))[:min(o["subset"], len(X))])
+        kernel = (ConstantKernel(1.0, GP_BOUNDS["amplitude"]) * RBF(np.ones(X.shape[1]), GP_BOUNDS["length_scale"])
+                  + WhiteKernel(1e-4, GP_BOUNDS["noise"]))
+        with warnings.catch_warnings():         # a length scale at its bound: an input the angles do not vary with
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            process = GaussianProcessRegressor(kernel, n_restarts_optimizer=o["restarts"],
+                                               random_state=self.random_state).fit(X[pick] / spread, Z[pick])
+        fitted = process.kernel_
+        self.length_scales_ = spread * fitted.k1.k2.length_scale
+        self.amplitude_, self.noise_ = float(fitted.k1.k1.constant_value), float(fitted.k2.noise_level)
+        self.landmarks_ = X / self.length_scales_
+        K = self._kernel(X / self.length_scales_, 0.5)
+        K *= self.amplitude_
+        K[np.diag_indices_from(K)] += self.noise_ + process.alpha      # scikit-learn's own jitter too
+        factor = cho_factor(K, lower=True, overwrite_a=True, check_finite=False)
+        self.coef_ = self.amplitude_ * cho_solve(factor, Z, check_finite=False)
+        self.intercept_ = np.zeros(Z.shape[1])
+
     def _kernel(self, X: np.ndarray, gamma: float) -> np.ndarray:
-        """``K(X, landmarks) (N, m)``, the Gaussian kernel of scaled inputs ``X (N, d)``."""
-        d2 = (X ** 2).sum(1)[:, None] - 2 * X @ self.landmarks_.T + (self.landmarks_ ** 2).sum(1)[None, :]
-        return np.exp(-gamma * np.maximum(d2, 0))
+        """``K(X, landmarks) (N, m)``, the Gaussian kernel ``exp(−gamma·‖x − l‖²)`` of scaled inputs ``X (N, d)``."""
+        d2 = X @ self.landmarks_.T
+        d2 *= -2
+        d2 += (X ** 2).sum(1)[:, None]
+        d2 += (self.landmarks_ ** 2).sum(1)[None, :]
+        np.maximum(d2, 0, out=d2)
+        d2 *= -gamma
+        return np.exp(d2, out=d2)
 
     def _predict(self, X):
-        return self._kernel(X, self.options_["gamma"]) @ self.coef_ + self.intercept_
+        fitted = self.length_scales_ is not None
+        gamma = 0.5 if fitted else self.options_["gamma"]
+        out = np.empty((len(X), self.coef_.shape[1]))
+        for start in range(0, len(X), self.PREDICT_ROWS):
+            block = X[start:start + self.PREDICT_ROWS]
+            out[start:start + len(block)] = self._kernel(block / self.length_scales_ if fitted else block, gamma) @ self.coef_
+        return out + self.intercept_
 
     def _state(self) -> dict:
-        return {k: json_ready(getattr(self, f"{k}_")) for k in self._state_keys}
+        fitted = {} if self.length_scales_ is None else {
+            "length_scales": json_ready(self.length_scales_), "amplitude": self.amplitude_, "noise": self.noise_}
+        return {**{k: json_ready(getattr(self, f"{k}_")) for k in self._state_keys}, **fitted}
 
     def _read_state(self, v: Validator, state, d: int, n_out: int, o: dict) -> None:
         self.landmarks_ = v.array(state["landmarks"], "state.landmarks", (None, d))
         m = len(self.landmarks_)
         self.coef_ = v.array(state["coef"], "state.coef", (m, n_out))
         self.intercept_ = v.array(state["intercept"], "state.intercept", (n_out,))
+        self.length_scales_ = self.amplitude_ = self.noise_ = None
+        if o["length_scales"] == "fitted":
+            for key in self._optional_state_keys:
+                if key not in state:
+                    v.fail(f"state.{key}", "is required with length_scales 'fitted'")
+            self.length_scales_ = v.array(state["length_scales"], "state.length_scales", (d,))
+            if not (self.length_scales_ > 0).all():
+                v.fail("state.length_scales", "must be > 0")
+            self.amplitude_ = v.number(state["amplitude"], "state.amplitude", lo=0, lo_open=True)
+            self.noise_ = v.number(state["noise"], "state.noise", lo=0)
+        elif any(key in state for key in self._optional_state_keys):
+            v.fail("state", "length_scales, amplitude and noise belong to length_scales 'fitted'")
