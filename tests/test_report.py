@@ -191,6 +191,47 @@ def test_bad_notebooks_and_chapter_choices_are_one_line(project, capsys):
     assert "--only needs chapter numbers" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("change, kept", [
+    ("nothing but the seconds", True),
+    ("a result", False),
+    ("a column", False),
+    ("the caption", True),
+])
+def test_a_published_tables_measurements_stay_while_every_other_cell_agrees(tmp_path, change, kept):
+    """A table's measured columns (seconds) keep the published values when a chapter publishes the
+    same results again, so a build that reproduces the study leaves figures/ byte for byte; any other
+    change publishes the new table whole. The Markdown takes the new caption either way."""
+    from nfarm.presentation.tables import measured
+
+    figures = tmp_path / "figures"
+
+    def stage(name, fits, seconds, caption, extra=False):
+        s = tmp_path / name
+        columns = ["learner", "fits", measured("training [s]"), *(["passes"] if extra else [])]
+        rows = [["MLP", fits, seconds, *([3] if extra else [])], ["RBF", 2, seconds / 3, *([1] if extra else [])]]
+        Table(columns, rows, floatfmt=".3g", caption=caption).save(s, "01_budget")
+        Table(["a"], [[seconds]], caption="no measurements").save(s, "01_plain")
+        return s
+
+    manifest.publish_chapter(stage("first", 4, 12.0, "Budget"), figures, "01")
+    first = {n: (figures / "tables" / n).read_bytes() for n in ("01_budget.csv", "01_budget.md")}
+    again = {"nothing but the seconds": lambda: stage("second", 4, 13.1, "Budget"),
+             "a result": lambda: stage("second", 5, 13.1, "Budget"),
+             "a column": lambda: stage("second", 4, 13.1, "Budget", extra=True),
+             "the caption": lambda: stage("second", 4, 13.1, "The budget, reworded")}[change]()
+    manifest.publish_chapter(again, figures, "01")
+    csv_text = (figures / "tables" / "01_budget.csv").read_text()
+    md_text = (figures / "tables" / "01_budget.md").read_text()
+    assert ("12" in csv_text and "13.1" not in csv_text) is kept
+    assert ("| MLP | 4 | 12 |" in md_text) is kept
+    if change == "nothing but the seconds":
+        assert {n: (figures / "tables" / n).read_bytes() for n in first} == first
+    if change == "the caption":
+        assert md_text.startswith("*The budget, reworded*\n") and csv_text.encode() == first["01_budget.csv"]
+    assert (figures / "tables" / "01_plain.csv").read_text() == "a\n13.1\n"        # no measured column: replaced
+    assert verify_manifest(figures) == []
+
+
 def test_publishing_is_atomic_at_every_step(tmp_path, monkeypatch):
     """A crash after any file operation of a publish leaves figures/ as it was before or as
     it is after, its manifest matching; the next publish cleans up."""

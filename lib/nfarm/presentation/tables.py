@@ -2,6 +2,13 @@
 notebooks, byte-reproducible; numbers at the level of floating-point noise shown as such
 (:func:`shown`); a part of a project document shown from its one source
 (:func:`markdown_section`).
+
+**Measurements** (seconds): a column whose name ends in :data:`MEASURED` (:func:`measured`) holds
+values that depend on the machine and its load. A published table keeps the measurements of the
+build that first published it for as long as every other cell comes out the same
+(:func:`keep_measurements`, applied when a chapter is published), so that a build which reproduces
+the results reproduces the published files byte for byte, and the seconds published are those
+measured when the results were computed (delete the published table to publish a new build's).
 """
 
 from __future__ import annotations
@@ -19,7 +26,10 @@ import numpy as np
 from ..infra.paths import atomic_path, shown_path
 from .numbering import anchor, number
 
-__all__ = ["Table", "shown", "markdown_section", "DOCUMENTS"]
+__all__ = ["Table", "shown", "markdown_section", "DOCUMENTS", "MEASURED", "measured", "keep_measurements"]
+
+#: How the name of a column of measurements ends (module docstring).
+MEASURED = "(measured)"
 
 
 _NEGATIVE_ZERO = re.compile(r"^-(0(\.0*)?(e[+-]?0+)?)$")
@@ -117,6 +127,49 @@ class Table:
                 tmp.write_text(text, encoding="utf-8")
         self._name = name
         return self
+
+
+def measured(name: str) -> str:
+    """The name of a column of measurements (module docstring): ``measured("training [s]")`` is
+    ``"training [s] (measured)"``."""
+    return f"{name} {MEASURED}"
+
+
+def _csv_rows(text: str) -> list[list[str]]:
+    return list(csv.reader(io.StringIO(text)))
+
+
+def keep_measurements(csv_text: str, markdown: str, published_csv: str) -> tuple[str, str] | None:
+    """A table's CSV and Markdown (``csv_text``, ``markdown``, as :meth:`Table.save` writes them) with
+    the cells of its measured columns (:data:`MEASURED`) taken from the ``published_csv`` of the same
+    table, or ``None`` when the two differ in anything else — their columns, their rows, any cell
+    not measured — or the table has no measured column. The Markdown keeps this build's caption.
+
+    Example:
+        >>> old = Table(["learner", measured("training [s]")], [["MLP", 12.0]], floatfmt=".3g", caption="Old")
+        >>> new = Table(["learner", measured("training [s]")], [["MLP", 13.5]], floatfmt=".3g", caption="New")
+        >>> kept = keep_measurements(new.to_csv(), new.to_markdown(), old.to_csv())
+        >>> kept[0] == old.to_csv(), kept[1].splitlines()[0], kept[1].splitlines()[-1]
+        (True, '*New*', '| MLP | 12 |')
+        >>> other = Table(["learner", measured("training [s]")], [["RBF", 13.5]], floatfmt=".3g")
+        >>> keep_measurements(other.to_csv(), other.to_markdown(), old.to_csv()) is None
+        True
+    """
+    new, old = _csv_rows(csv_text), _csv_rows(published_csv)
+    if not new or not old or new[0] != old[0] or len(new) != len(old):
+        return None
+    columns = new[0]
+    kept = [k for k, name in enumerate(columns) if name.endswith(MEASURED)]
+    if not kept or any(len(a) != len(columns) or len(b) != len(columns) for a, b in zip(new, old)):
+        return None
+    if any(a[k] != b[k] for a, b in zip(new[1:], old[1:]) for k in range(len(columns)) if k not in kept):
+        return None
+    table_lines = Table(columns, new[1:])._lines()
+    lines = markdown.splitlines()
+    if table_lines[0] not in lines or lines[lines.index(table_lines[0]):] != table_lines:
+        return None            # not the Markdown this table's own rows make
+    head = lines[:lines.index(table_lines[0])]
+    return published_csv, "\n".join([*head, *Table(columns, old[1:])._lines()]) + "\n"
 
 
 DOCUMENTS = ("docs/STUDY.md",)   # project documents a chapter shows a part of (in every chapter's key)

@@ -5,7 +5,10 @@ A chapter that succeeds is published as one step: a copy of ``figures/`` with th
 files replaced and the manifest rewritten is built beside it (``.figures.new/``) and exchanged
 with ``figures/`` by one ``renameat2(..., RENAME_EXCHANGE)`` system call, under an ``flock`` on
 the figures directory's parent. At every instant ``figures/`` is a complete published state
-whose manifest matches it, whenever the run is killed.
+whose manifest matches it, whenever the run is killed. A table with measured columns (seconds)
+keeps the published measurements while every other cell comes out the same
+(:func:`nfarm.presentation.tables.keep_measurements`): a build that reproduces the results leaves
+the published files as they are.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from pathlib import Path
 
 from ..infra.notebook_runs import ReportError
 from ..infra.paths import FIGURES, atomic_path
+from ..presentation.tables import MEASURED, keep_measurements
 
 __all__ = ["write_manifest", "verify_manifest", "manifest_entries", "chapter_files", "publish_chapter", "publishing_lock",
            "recover_figures"]
@@ -205,10 +209,27 @@ def publishing_lock(figures_dir: Path):
         os.close(fd)            # releases the lock
 
 
+def _kept_measurements(stage: Path, made: list[Path], published: Path) -> dict[Path, str]:
+    """The texts to publish for ``made`` tables whose measured columns keep the published ones
+    (:func:`nfarm.presentation.tables.keep_measurements`: every other cell the same), by staged path."""
+    kept: dict[Path, str] = {}
+    for path in made:
+        twin, old = path.with_suffix(".md"), published / path.relative_to(stage)
+        if path.suffix != ".csv" or twin not in made or not old.is_file():
+            continue
+        text = path.read_text(encoding="utf-8")
+        if MEASURED not in text.partition("\n")[0]:
+            continue
+        merged = keep_measurements(text, twin.read_text(encoding="utf-8"), old.read_text(encoding="utf-8"))
+        if merged is not None:
+            kept[path], kept[twin] = merged
+    return kept
+
+
 def publish_chapter(stage: Path, figures_dir: Path, prefix: str, subdir: str = "") -> list[Path]:
     """Replace chapter ``prefix``'s files in ``figures_dir/subdir`` (an edition's directory,
-    ``""`` for the primary arm's) with those in ``stage`` and rewrite the manifest, as one
-    atomic step (module docstring)."""
+    ``""`` for the primary arm's) with those in ``stage`` (a table's measurements kept while the
+    rest agrees, module docstring) and rewrite the manifest, as one atomic step."""
     made = chapter_files(stage, prefix)
     strays = sorted(set(p for p in stage.rglob("*") if p.is_file()) - set(made))
     if strays:
@@ -225,13 +246,17 @@ def _publish_locked(stage: Path, made: list[Path], figures_dir: Path, prefix: st
         shutil.copytree(figures_dir, new)
     else:
         new.mkdir(parents=True)
+    kept = _kept_measurements(stage, made, new / subdir)
     for old in chapter_files(new / subdir, prefix):
         old.unlink()
     published = []
     for path in made:
         target = new / subdir / path.relative_to(stage)
         target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(path, target)
+        if path in kept:
+            target.write_text(kept[path], encoding="utf-8")
+        else:
+            shutil.copyfile(path, target)
         published.append(figures_dir / subdir / path.relative_to(stage))
     write_manifest(new)
     if not figures_dir.exists():

@@ -23,14 +23,14 @@ from ..learning.bases import TIERS, tier_of
 from ..model.dynamics import rnea
 from ..model.robot import Robot
 from ..presentation.plotting import plot_error_by_size, plot_joint_curves
-from ..presentation.tables import Table, shown
+from ..presentation.tables import Table, measured, shown
 from ..presentation.wording import listed, ordinal
 from . import contest
 from .id_comparison_report import ID_FLOOR
 from .statistics import resolved_joints
 from .sweep import CellResult, Replicates
 
-__all__ = ["pct", "worst_ends", "measured_validation", "newton_euler_rmse", "contest_table", "budget_table", "seconds_table",
+__all__ = ["pct", "worst_ends", "measured_validation", "newton_euler_rmse", "contest_table", "budget_table",
            "joints_table", "size_curves", "sizes_figure", "contest_prose", "nominal_anfis", "residual_figure"]
 
 STATES = ("q", "qd", "qdd")
@@ -83,26 +83,22 @@ def contest_table(idc: contest.IDContest) -> Table:
 
 
 def budget_table(idc: contest.IDContest) -> Table:
-    """The tuning budget each learner spent on seed 0, machine-independent (saved:
-    ``06_id_contest_budget``): configurations, fits and the training states times the passes over
-    them (:class:`nfarm.study.contest.Budget`). Its seconds are :func:`seconds_table`'s."""
-    return Table(["learner", "configurations", "fits", "training states × passes"],
+    """The tuning budget each learner spent on seed 0 (saved: ``06_id_contest_budget``):
+    configurations, fits and the training states times the passes over them
+    (:class:`nfarm.study.contest.Budget`), the same on any machine; and the seconds its models'
+    training and its cells took, measurements (:func:`nfarm.presentation.tables.measured`)."""
+    return Table(["learner", "configurations", "fits", "training states × passes",
+                  measured("training [s]"), measured("cells [s]")],
                  [[contest.id_label(name), idc.budgets[name].configurations, idc.budgets[name].fits,
-                   f"{idc.budgets[name].pose_passes:,}"] for name in idc.chosen],
+                   f"{idc.budgets[name].pose_passes:,}", idc.budgets[name].fit_seconds, idc.budgets[name].cell_seconds]
+                  for name in idc.chosen],
+                 floatfmt=["", "", "", "", ".3g", ".3g"],
                  caption="The tuning budget each learner spent on seed 0: configurations, the models trained and the "
                          "training states they saw times the passes over them (the epochs each joint's model ran, "
-                         "summed; boosting, one a tree of each joint; a fit in closed form, one pass). The same on any machine; the seconds "
-                         "are in the next table")
-
-
-def seconds_table(idc: contest.IDContest) -> Table:
-    """The tuning budget each learner spent on seed 0 in seconds: its models' training and its
-    cells'. Wall-clock times depend on the machine: shown, not saved."""
-    return Table(["learner", "configurations", "training [s]", "cells [s]"],
-                 [[contest.id_label(name), idc.budgets[name].configurations, idc.budgets[name].fit_seconds,
-                   idc.budgets[name].cell_seconds] for name in idc.chosen], floatfmt=["", "", ".3g", ".3g"],
-                 caption="The tuning budget each learner spent on seed 0: configurations, the seconds its models' "
-                         "training took and the seconds its cells took (not saved: they depend on the machine)")
+                         "summed; boosting, one a tree of each joint; a fit in closed form, one pass) — the same on any "
+                         "machine —, and the seconds its models' training and its cells took, on one core each, "
+                         "measured (the published seconds are those of the build that first computed these results; "
+                         "a build whose other columns agree keeps them)")
 
 
 def joints_table(idc: contest.IDContest, id_val: Mapping[str, np.ndarray], ne_rmse: np.ndarray, noise) -> Table:

@@ -23,13 +23,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..presentation.plotting import plot_spread
-from ..presentation.tables import Table, shown
+from ..presentation.tables import Table, measured, shown
 from ..presentation.wording import listed
 from . import contest
 from .sweep import CellResult, Replicates
 
 __all__ = ["MM_FLOOR", "DEG_FLOOR", "mm_text", "deg_text", "seeds_text", "configuration_text", "planar_note",
-           "contest_table", "budget_table", "seconds_table", "configurations_table", "spread_figure", "contest_prose"]
+           "contest_table", "budget_table", "configurations_table", "spread_figure", "contest_prose"]
 
 #: [mm] a tool position error below this is rounding (1 nm), shown as such.
 MM_FLOOR = 1e-6
@@ -101,34 +101,29 @@ def contest_table(ranked: Sequence[Replicates], spent: Mapping[str, tuple]) -> T
                          f"seed 0 by the 95th-percentile tool position error, then, if still in contention, its mean over {leader.n} "
                          f"seeds (each a draw of the training and validation poses and of the initialisation) and the least–largest "
                          f"over them; the last column is the difference from the leader seed by seed (the same draw for both), its mean "
-                         f"and range. The budget: the configurations tried (the fits and their seconds in the tables below)")
+                         f"and range. The budget: the configurations tried (the fits and their seconds in the table below)")
 
 
 def budget_table(ranked: Sequence[Replicates], spent: Mapping[str, contest.Budget]) -> Table:
-    """The contest's budget, machine-independent (saved: ``06_ik_contest_budget``), in the
-    standings' order: each contestant's configurations tried, the fits its tuning made (both rungs)
-    and the training poses times the passes over them (:class:`nfarm.study.contest.Budget`). Its
-    seconds are :func:`seconds_table`'s."""
-    return Table(["contestant", "configurations tried", "fits", "training poses × passes"],
-                 [[contest.label(name), spent[name].configurations, spent[name].fits, f"{spent[name].pose_passes:,}"]
+    """The contest's budget (saved: ``06_ik_contest_budget``), in the standings' order: each
+    contestant's configurations tried, the fits its tuning made (both rungs) and the training poses
+    times the passes over them (:class:`nfarm.study.contest.Budget`), the same on any machine; and
+    the seconds its tuning's training and its cells took, measurements
+    (:func:`nfarm.presentation.tables.measured`: published as the build that first computed these
+    results measured them)."""
+    return Table(["contestant", "configurations tried", "fits", "training poses × passes",
+                  measured("tuning's training [s]"), measured("tuning's cells [s]")],
+                 [[contest.label(name), spent[name].configurations, spent[name].fits, f"{spent[name].pose_passes:,}",
+                   spent[name].fit_seconds, spent[name].cell_seconds]
                   for name in (_name(g) for g in ranked)],
+                 floatfmt=["", "", "", "", ".3g", ".3g"],
                  caption="The contest's budget: each contestant's configurations tried, the models its tuning trained "
                          "(both rungs of successive halving, seed 0) and the training poses they saw times the passes "
-                         "over them (the epochs each joint's model ran, summed; a fit in closed form, one pass). The "
-                         "same on any machine; the seconds are in the next table")
-
-
-def seconds_table(ranked: Sequence[Replicates], spent: Mapping[str, contest.Budget]) -> Table:
-    """The contest's budget in seconds, in the standings' order: each contestant's tuning's
-    training and its cells' seconds. Wall-clock times depend on the machine and its load: a table
-    to show, not to save (the saved tables are byte-reproducible; :func:`budget_table` is saved)."""
-    return Table(["contestant", "configurations tried", "tuning's training [s]", "tuning's cells [s]"],
-                 [[contest.label(name), spent[name].configurations, spent[name].fit_seconds, spent[name].cell_seconds]
-                  for name in (_name(g) for g in ranked)],
-                 floatfmt=["", "", ".0f", ".0f"],
-                 caption="The contest's budget in seconds: each contestant's tuning, its training's and its cells' (training, "
-                         "validation predictions, data loading) when they ran, on one core each (not saved: it depends on the "
-                         "machine)")
+                         "over them (the epochs each joint's model ran, summed; a fit in closed form, one pass) — the "
+                         "same on any machine —, and the seconds its models' training and its cells (training, "
+                         "validation predictions, data loading) took, on one core each, measured (the published "
+                         "seconds are those of the build that first computed these results; a build whose other "
+                         "columns agree keeps them)")
 
 
 def configurations_table(rung_runs: Sequence[CellResult], tuning_runs: Sequence[CellResult],
