@@ -16,8 +16,9 @@ how each contestant's configuration is chosen, with what budget, and how they ar
   95th-percentile orientation error (:data:`RANKED_BY`).
 * **Spread**: each chosen configuration that is still in contention trained again on other
   draws of the data (:func:`spread_params`, seeds 1-2: each draws the training and validation
-  poses anew and seeds the learner). In contention: the two best on seed 0 and every contestant
-  within ``keep_within`` (2×) of the best's 95th percentile; the others are **pruned** after seed
+  poses anew and seeds the learner). In contention: the two best on seed 0, every contestant
+  within ``keep_within`` (2×) of the best's 95th percentile, and the best ANFIS whatever its gap
+  (the verdict's subject: its spread is the verdict's); the others are **pruned** after seed
   0 (successive halving's rule: their seed-0 error is further from the leader's than the seeds
   move any contestant — measured in chapter 6 — so more draws cannot change the ranking).
   :func:`standings` ranks the contestants in contention by the mean over the seeds, then the
@@ -503,13 +504,26 @@ def budgets(results: Iterable[CellResult], *, family_of=family) -> dict[str, Bud
 
 
 def contending(chosen: Mapping[str, CellResult], keep_within: float = KEEP_WITHIN) -> list[str]:
-    """The contestants still in contention after seed 0 (module docstring): the two best and every
-    one whose 95th percentile is within ``keep_within`` of the best's."""
+    """The contestants still in contention after seed 0 (module docstring): the two best, every
+    one whose 95th percentile is within ``keep_within`` of the best's, and the best ANFIS whatever
+    its gap — the verdict's subject, whose spread over the seeds the verdict needs.
+
+    Example (the ANFIS more than twice the best's 95th percentile, still kept):
+        >>> def cell(learner, p95):
+        ...     return CellResult(Cell({"learner": learner, "encoding": "arm_plane", "seed": 0}, learner), "ok",
+        ...                       {"position_p95_mm": p95, "orientation_p95_deg": 0.0}, 0.0, "local")
+        >>> chosen = {"kernel_ridge:arm": cell("kernel_ridge", 1.6), "kernel_ridge": cell("kernel_ridge", 2.5),
+        ...           "mlp": cell("mlp", 4.5), "anfis:arm_plane": cell("anfis", 5.4), "knn": cell("knn", 40.0)}
+        >>> contending(chosen)
+        ['kernel_ridge:arm', 'kernel_ridge', 'anfis:arm_plane']
+    """
     order = sorted(chosen, key=lambda name: _key(chosen[name]))
     if not order:
         return []
     best = chosen[order[0]].metrics[RANKED_BY[0]]
-    return [name for k, name in enumerate(order) if k < 2 or chosen[name].metrics[RANKED_BY[0]] <= keep_within * best]
+    anfis = next((name for name in order if name.startswith("anfis:")), None)
+    return [name for k, name in enumerate(order)
+            if k < 2 or chosen[name].metrics[RANKED_BY[0]] <= keep_within * best or name == anfis]
 
 
 def spread_params(chosen: Mapping[str, CellResult], seeds: Sequence[int] = SPREAD_SEEDS, *,

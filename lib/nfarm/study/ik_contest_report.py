@@ -206,8 +206,8 @@ def contest_prose(ranked: Sequence[Replicates], spent: Mapping[str, tuple], rung
              + ", ".join(f"{contest.label(k)} {v[0]}" for k, v in spent.items()) + ")")
     text += " (the table gives the seconds each spent)"
     pruned = [contest.label(_name(g)) for g in ranked if g.n == 1 and leader.n > 1]
-    text += (f"; pruned after seed 0, more than {contest.KEEP_WITHIN:g} times the best's 95th percentile: "
-             f"{listed(pruned)}." if pruned else ".")
+    text += (f"; pruned after seed 0, more than {contest.KEEP_WITHIN:g} times the best's 95th percentile (the best "
+             f"ANFIS is kept whatever its gap, for the verdict's spread): {listed(pruned)}." if pruned else ".")
     edges = contest.at_edge(rung_runs, chosen)
     text += (" At the edge of what its search tried (on the first rung's poses): "
              + contest.edges_text(rung_runs, edges, contest.RANKED_BY[0], label_of=contest.label, chosen=chosen)
