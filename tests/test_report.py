@@ -193,6 +193,7 @@ def test_bad_notebooks_and_chapter_choices_are_one_line(project, capsys):
 
 @pytest.mark.parametrize("change, kept", [
     ("nothing but the seconds", True),
+    ("the rows' order", True),
     ("a result", False),
     ("a column", False),
     ("the caption", True),
@@ -205,10 +206,11 @@ def test_a_published_tables_measurements_stay_while_every_other_cell_agrees(tmp_
 
     figures = tmp_path / "figures"
 
-    def stage(name, fits, seconds, caption, extra=False):
+    def stage(name, fits, seconds, caption, extra=False, swapped=False):
         s = tmp_path / name
         columns = ["learner", "fits", measured("training [s]"), *(["passes"] if extra else [])]
         rows = [["MLP", fits, seconds, *([3] if extra else [])], ["RBF", 2, seconds / 3, *([1] if extra else [])]]
+        rows = rows[::-1] if swapped else rows
         Table(columns, rows, floatfmt=".3g", caption=caption).save(s, "01_budget")
         Table(["a"], [[seconds]], caption="no measurements").save(s, "01_plain")
         return s
@@ -216,6 +218,7 @@ def test_a_published_tables_measurements_stay_while_every_other_cell_agrees(tmp_
     manifest.publish_chapter(stage("first", 4, 12.0, "Budget"), figures, "01")
     first = {n: (figures / "tables" / n).read_bytes() for n in ("01_budget.csv", "01_budget.md")}
     again = {"nothing but the seconds": lambda: stage("second", 4, 13.1, "Budget"),
+             "the rows' order": lambda: stage("second", 4, 13.1, "Budget", swapped=True),
              "a result": lambda: stage("second", 5, 13.1, "Budget"),
              "a column": lambda: stage("second", 4, 13.1, "Budget", extra=True),
              "the caption": lambda: stage("second", 4, 13.1, "The budget, reworded")}[change]()
@@ -228,6 +231,8 @@ def test_a_published_tables_measurements_stay_while_every_other_cell_agrees(tmp_
         assert {n: (figures / "tables" / n).read_bytes() for n in first} == first
     if change == "the caption":
         assert md_text.startswith("*The budget, reworded*\n") and csv_text.encode() == first["01_budget.csv"]
+    if change == "the rows' order":           # this build's order, the published seconds
+        assert csv_text.splitlines()[1:] == ["RBF,2,4", "MLP,4,12"]
     assert (figures / "tables" / "01_plain.csv").read_text() == "a\n13.1\n"        # no measured column: replaced
     assert verify_manifest(figures) == []
 

@@ -142,16 +142,18 @@ def _csv_rows(text: str) -> list[list[str]]:
 def keep_measurements(csv_text: str, markdown: str, published_csv: str) -> tuple[str, str] | None:
     """A table's CSV and Markdown (``csv_text``, ``markdown``, as :meth:`Table.save` writes them) with
     the cells of its measured columns (:data:`MEASURED`) taken from the ``published_csv`` of the same
-    table, or ``None`` when the two differ in anything else — their columns, their rows, any cell
-    not measured — or the table has no measured column. The Markdown keeps this build's caption.
+    table, row by row — each row matched to the published row whose every other cell is the same,
+    in this build's order —, or ``None`` when the two tables differ in anything else (their columns,
+    a row without its published twin) or the table has no measured column. The Markdown keeps this
+    build's caption.
 
     Example:
-        >>> old = Table(["learner", measured("training [s]")], [["MLP", 12.0]], floatfmt=".3g", caption="Old")
-        >>> new = Table(["learner", measured("training [s]")], [["MLP", 13.5]], floatfmt=".3g", caption="New")
+        >>> old = Table(["learner", measured("training [s]")], [["MLP", 12.0], ["RBF", 0.5]], floatfmt=".3g", caption="Old")
+        >>> new = Table(["learner", measured("training [s]")], [["RBF", 0.6], ["MLP", 13.5]], floatfmt=".3g", caption="New")
         >>> kept = keep_measurements(new.to_csv(), new.to_markdown(), old.to_csv())
-        >>> kept[0] == old.to_csv(), kept[1].splitlines()[0], kept[1].splitlines()[-1]
-        (True, '*New*', '| MLP | 12 |')
-        >>> other = Table(["learner", measured("training [s]")], [["RBF", 13.5]], floatfmt=".3g")
+        >>> kept[0].splitlines()[1:], kept[1].splitlines()[0], kept[1].splitlines()[-1]
+        (['RBF,0.5', 'MLP,12'], '*New*', '| MLP | 12 |')
+        >>> other = Table(["learner", measured("training [s]")], [["RBF", 0.6], ["kNN", 13.5]], floatfmt=".3g")
         >>> keep_measurements(other.to_csv(), other.to_markdown(), old.to_csv()) is None
         True
     """
@@ -160,16 +162,27 @@ def keep_measurements(csv_text: str, markdown: str, published_csv: str) -> tuple
         return None
     columns = new[0]
     kept = [k for k, name in enumerate(columns) if name.endswith(MEASURED)]
-    if not kept or any(len(a) != len(columns) or len(b) != len(columns) for a, b in zip(new, old)):
+    if not kept or any(len(row) != len(columns) for row in (*new, *old)):
         return None
-    if any(a[k] != b[k] for a, b in zip(new[1:], old[1:]) for k in range(len(columns)) if k not in kept):
-        return None
+
+    def rest(row):
+        return tuple(cell for k, cell in enumerate(row) if k not in kept)
+
+    published: dict[tuple, list[list[str]]] = {}
+    for row in old[1:]:
+        published.setdefault(rest(row), []).append(row)
+    rows = []
+    for row in new[1:]:
+        twins = published.get(rest(row))
+        if not twins:
+            return None
+        rows.append(twins.pop(0))
     table_lines = Table(columns, new[1:])._lines()
     lines = markdown.splitlines()
     if table_lines[0] not in lines or lines[lines.index(table_lines[0]):] != table_lines:
         return None            # not the Markdown this table's own rows make
-    head = lines[:lines.index(table_lines[0])]
-    return published_csv, "\n".join([*head, *Table(columns, old[1:])._lines()]) + "\n"
+    merged = Table(columns, rows)
+    return merged.to_csv(), "\n".join([*lines[:lines.index(table_lines[0])], *merged._lines()]) + "\n"
 
 
 DOCUMENTS = ("docs/STUDY.md",)   # project documents a chapter shows a part of (in every chapter's key)
