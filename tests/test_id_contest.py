@@ -117,13 +117,14 @@ def test_the_rigid_body_sweeps_keep_each_tiers_best_on_seed_0_over_the_resolved_
 
 
 def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
-    """Two configurations each (four each in the identification + learned tier); a least squares with nothing to
-    tune, one."""
+    """Two configurations each (four each in the two residual tiers, identification + learned and nominal model +
+    learned); a least squares with nothing to tune, one."""
     sweep = load_sweep(PARAMS / "sweeps" / "id_contest.yaml")
     tried = collections.Counter(contest.id_family(c.params) for c in sweep.cells
                                 if c.params["study_file"].endswith("intelbot5.yaml"))
     untunable = {"identification", "friction"}
-    widened = {n for n in tried if n.startswith("identification + learned:")}
+    widened = {n for n in tried if n.startswith(("identification + learned:", "nominal model + learned:"))
+               and n.rsplit(":", 1)[1] not in untunable}
     assert {n for n, k in tried.items() if k != 2} == {n for n in tried if n.rsplit(":", 1)[1] in untunable} | widened
     assert {tried[n] for n in widened} == {4}
     assert all(k == 1 for n, k in tried.items() if n.rsplit(":", 1)[1] in untunable)
@@ -140,12 +141,17 @@ def test_every_learner_of_a_tier_has_the_same_budget_in_the_sweep_file():
     # grid's resolution over q̇, beside fuzzy c-means rules)
     assert {n for n in tried if n.startswith("identification + learned:")} == {f"identification + learned:{k}" for k in (
         "anfis", "ridge", "kernel", "boosting", "mlp")}
-    for learner, option in (("ridge", "alpha"), ("kernel", "gamma"), ("boosting", "learning_rate"), ("mlp", "hidden"),
-                            ("anfis", "n_mfs")):
-        values = {json.dumps(c.params["options"].get(option)) for c in sweep.cells
-                  if contest.id_family(c.params) == f"identification + learned:{learner}"
-                  and c.params["study_file"].endswith("intelbot5.yaml") and option in c.params["options"]}
-        assert len(values) >= 3, (learner, values)
+    # ... and so does the nominal model + learned tier's, three of them on each joint's own state (ridge: on every joint's)
+    for tier in ("identification + learned", "nominal model + learned"):
+        for learner, option in (("ridge", "alpha"), ("kernel", "gamma"), ("boosting", "learning_rate"), ("mlp", "hidden"),
+                                ("anfis", "n_mfs")):
+            cells = [c for c in sweep.cells if contest.id_family(c.params) == f"{tier}:{learner}"
+                     and c.params["study_file"].endswith("intelbot5.yaml") and option in c.params["options"]]
+            values = {json.dumps(c.params["options"].get(option)) for c in cells}
+            assert len(values) >= 3, (tier, learner, values)
+            if learner != "ridge":
+                assert sum(c.params["options"].get("angles", c.params["options"].get("inputs")) == "own"
+                           for c in cells) == 3, (tier, learner)
 
 
 def test_the_job_fits_a_model_once_and_the_test_split_reads_it_frozen(tmp_path):

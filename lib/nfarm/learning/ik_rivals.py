@@ -25,7 +25,7 @@ it; what they share (the encoding, the structure, the checks of the common argum
   (``sklearn.gaussian_process.GaussianProcessRegressor``), its posterior mean exact on all of them.
 
 Outputs are the joint angles [rad]. Every random draw (the MLP's initialisation and batches, the
-Nyström landmarks) comes from ``random_state``. A new rival is one class here (its hyper-parameters,
+Nyström landmarks, a Gaussian process's subset and restarts) comes from ``random_state``. A new rival is one class here (its hyper-parameters,
 ``kind``, ``label`` and the hooks the base module's docstring lists, under ``@RIVALS.register``) and
 its cells in ``params/sweeps/ik_contest.yaml``.
 
@@ -274,7 +274,7 @@ class KernelRidgeRival(RivalIK):
     (d,)`` (in the inputs' units), ``amplitude_`` (``s²``) and ``noise_`` (``σ²``, of the
     standardised angles).
 
-    Example (a fitted width follows what the data vary with):
+    Example (a Gaussian process on 300 poses, its six length scales fitted on 200 of them):
         >>> from nfarm.infra.paths import PARAMS
         >>> from nfarm.model.robot import load_robot
         >>> from nfarm.model.kinematics import fk
@@ -285,7 +285,7 @@ class KernelRidgeRival(RivalIK):
         (True, (6,))
     """
 
-    kind, label = "kernel_ridge", "kernel ridge"
+    kind, label = "kernel_ridge", "kernel ridge / Gaussian process"
     standardised = True
     _state_keys = ("landmarks", "coef", "intercept")
     _optional_state_keys = ("length_scales", "amplitude", "noise")

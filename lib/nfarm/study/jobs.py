@@ -621,7 +621,7 @@ def id_baseline(p: dict) -> dict:
 
 def _epochs_run(epochs) -> int:
     """A baseline's epochs (``epochs_``: ``None``, a count, or one a joint's model), summed: 0 for none."""
-    return int(sum(epochs)) if isinstance(epochs, list) else int(epochs or 0)
+    return sum(_per_model(epochs))
 
 
 def _per_model(counts) -> list[int]:
