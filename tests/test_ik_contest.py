@@ -238,6 +238,16 @@ def test_bad_gaussian_process_options_are_one_clear_error(data, options, message
         rival_ik("kernel_ridge", "arm_plane", options).fit(ROBOT, data["train"])
 
 
+def test_a_gaussian_process_on_more_poses_than_it_can_hold_is_refused_before_any_work(data, monkeypatch):
+    from nfarm.learning import ik_rivals
+
+    monkeypatch.setattr(ik_rivals, "GP_MAX_POSES", 100)
+    with pytest.raises(ValueError, match=r"^kernel_ridge: length_scales 'fitted' solves on every training pose exactly, "
+                                         r"at most 100 \(an N x N kernel of 0 MB\), got \d+; for more, length_scales "
+                                         r"'shared' \(Nystrom\)$"):
+        rival_ik("kernel_ridge", "arm_plane", {"length_scales": "fitted", "subset": 50}).fit(ROBOT, data["train"])
+
+
 @pytest.mark.parametrize("options, drop, add, message", [
     ({"length_scales": "fitted", "subset": 60}, "length_scales", None,
      r"state.length_scales: is required with length_scales 'fitted'"),

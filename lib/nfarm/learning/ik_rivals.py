@@ -63,6 +63,9 @@ _RBF_KERNELS = ("thin_plate_spline", "cubic", "quintic", "linear")
 GP_BOUNDS = {"amplitude": (1e-2, 1e5), "length_scale": (1e-2, 1e3), "noise": (1e-10, 1e-1)}
 #: The most poses a fitted Gaussian process's marginal likelihood is computed on (its ``subset``).
 GP_MAX_SUBSET = 5000
+#: The most training poses a fitted Gaussian process solves on exactly: its ``N × N`` kernel matrix
+#: (800 MB at 10 000 poses); more poses want the shared length scales (Nyström).
+GP_MAX_POSES = 10_000
 _ACTIVATIONS = {"relu": lambda a: np.maximum(a, 0, out=a), "tanh": lambda a: np.tanh(a, out=a)}
 
 
@@ -266,7 +269,8 @@ class KernelRidgeRival(RivalIK):
       L-BFGS-B from ``ℓ = 1`` on inputs divided by their spread, ``restarts`` more starts drawn
       in the bounds :data:`GP_BOUNDS`), then the posterior mean on **all** training poses
       exactly, ``f(x) = k(x, X) (K + σ²I)⁻¹ Z`` (a Cholesky solve; ``components``, ``gamma`` and
-      ``alpha`` unused). Its cost grows as ``subset³`` an iteration and ``N³`` once.
+      ``alpha`` unused). Its cost grows as ``subset³`` an iteration and ``N³`` once, its memory as
+      ``N²`` (at most :data:`GP_MAX_POSES` training poses).
 
     Learned: ``landmarks_ (m, d)`` (the Nyström landmarks; fitted: every training pose, divided by
     ``length_scales_``), ``coef_ (m, n)`` (the weights with the Nyström normalisation, or
@@ -336,6 +340,11 @@ class KernelRidgeRival(RivalIK):
     def _learn_process(self, o, X, Z) -> None:
         """The Gaussian process's hyper-parameters on a subset, then its posterior mean on all of ``X``."""
         import warnings
+
+        if len(X) > GP_MAX_POSES:
+            raise ValueError(f"kernel_ridge: length_scales 'fitted' solves on every training pose exactly, at most "
+                             f"{GP_MAX_POSES} (an N x N kernel of {8 * GP_MAX_POSES ** 2 / 1e6:.0f} MB), got {len(X)}; "
+                             f"for more, length_scales 'shared' (Nystrom)")
 
         from scipy.linalg import cho_factor, cho_solve
         from sklearn.exceptions import ConvergenceWarning
